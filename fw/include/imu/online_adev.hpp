@@ -1,0 +1,314 @@
+// Streaming, fixed-memory, decimated overlapping Allan deviation.
+//
+// Input: one integer sample (int32 counts) at a time, or a block, or "missing" marks. The
+// physical value of a count is `lsb` (e.g. m/s^2 per count); a floating-point source is
+// converted by the caller with imu::quantize() and a stated LSB.
+//
+// Method (fw/README.md has the details and the proofs of the bounds):
+//  * phase x_n = sum of counts, kept as a wrapping uint64: second differences
+//    x_p - 2 x_{p-m} + x_{p-2m} are exact whenever their true value fits in int64, so the
+//    phase never overflows in a way that matters, even at full-scale int32 input;
+//  * level k (k = 0..L) holds the phase decimated by 2^k, i.e. the points x_{j 2^k}, in a ring
+//    of the last 2M points (the incoming point is the (2M+1)-th);
+//  * level 0 estimates tau = m Ts for m = 1..M, level k >= 1 estimates tau = m 2^k Ts for
+//    M/2 < m <= M, from overlapping terms at a stride of 2^k samples (between tau/M and 2tau/M),
+//    which gives M/2 taus per octave from Ts to 2^L M Ts;
+//  * squared second differences are summed in double in blocks of 2^16 terms (plain sum inside
+//    a block, block sums added to the total): relative rounding error <= (2^16 + n/2^16) u,
+//    1.4e-11 for n = 2^32 terms (u = 1.1e-16);
+//  * term counts are not incremented per sample: they are derived from the number of points in
+//    the current gap-free segment plus the terms of closed segments;
+//  * a missing sample breaks the phase: every level closes its segment, and terms that would
+//    span the gap are never formed. A level-k tau m recovers after 2m new level-k points, i.e.
+//    2 tau of clean data. Nothing already accumulated is lost or biased.
+//
+// Cost: push() is O(M) at level 0 plus O(M/2) at level k with probability 2^-k: amortised
+// O(1.5 M) multiply-adds per sample, constant in the record length. snapshot() is
+// O(number of taus * M) and does not disturb ingestion. No heap, no exceptions, not re-entrant
+// on one instance (one instance per channel; different instances are independent).
+#ifndef IMU_ONLINE_ADEV_HPP
+#define IMU_ONLINE_ADEV_HPP
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "imu/edf.hpp"
+
+namespace imu {
+
+/// One estimated tau. Units: `adev`, `ci_lo`, `ci_hi` in the channel's physical units
+/// (lsb units), `avar` in their square.
+struct AdevPoint {
+  double tau_s;
+  std::uint32_t af;      ///< averaging factor: tau / Ts
+  std::uint32_t stride;  ///< samples between successive terms (2^level)
+  std::uint64_t n_terms; ///< number of squared second differences in the sum
+  double avar;
+  double adev;
+  double edf;    ///< Greenhall-Riley EDF for the partially overlapping estimate
+  double ci_lo;  ///< 68.3 % interval (chi-square with `edf` degrees of freedom)
+  double ci_hi;
+};
+
+/// Result of converting a floating-point sample to counts.
+struct QuantizeResult {
+  std::int32_t counts;
+  bool saturated;  ///< the value did not fit in int32 (or was NaN): counts is clamped (NaN -> 0)
+};
+
+/// Round value / lsb_units to the nearest integer count (ties away from zero), saturating.
+[[nodiscard]] inline QuantizeResult quantize(double value, double lsb_units) {
+  const double c = value / lsb_units;
+  if (std::isnan(c)) {
+    return QuantizeResult{0, true};
+  }
+  constexpr double kMax = 2147483647.0;
+  constexpr double kMin = -2147483648.0;
+  const double r = c < 0.0 ? -std::floor(-c + 0.5) : std::floor(c + 0.5);
+  if (r > kMax) {
+    return QuantizeResult{2147483647, true};
+  }
+  if (r < kMin) {
+    return QuantizeResult{-2147483647 - 1, true};
+  }
+  return QuantizeResult{static_cast<std::int32_t>(r), false};
+}
+
+/// Online overlapping ADEV of one channel. M (taus per level, even) and L (decimation levels
+/// above level 0) fix the memory: sizeof() is the whole state, nothing else is allocated.
+template <std::size_t M = 8, std::size_t L = 22>
+class OnlineAdev {
+  static_assert(M >= 2 && M % 2 == 0 && M <= 64, "M must be even, 2..64");
+  static_assert(L >= 1 && L <= 40, "L must be 1..40 (tau up to 2^L M Ts)");
+
+ public:
+  static constexpr std::size_t kLevels = L + 1;
+  static constexpr std::size_t kRing = 2 * M;
+  static constexpr std::size_t kUpperTaus = M / 2;
+  /// Number of distinct taus this estimator can report.
+  static constexpr std::size_t kMaxPoints = M + L * kUpperTaus;
+  static constexpr std::uint64_t kBlockMask = 0xFFFF;  // block of 2^16 terms per partial sum
+
+  /// sample_period_s: Ts (> 0); lsb: physical value of one count (> 0).
+  explicit OnlineAdev(double sample_period_s = 0.01, double lsb = 1.0)
+      : sample_period_s_(sample_period_s), lsb_(lsb) {
+    reset();
+  }
+
+  /// Forget every sample; keeps Ts and LSB. O(L M).
+  void reset() {
+    n_ = 0;
+    x_ = 0;
+    missing_ = 0;
+    gaps_ = 0;
+    level0_ = Level<M, 0>{};
+    for (auto& lv : upper_) {
+      lv = Level<kUpperTaus, M / 2>{};
+    }
+    // x_0 = 0 is the first point of every level.
+    level0_.seg_points = 1;
+    for (auto& lv : upper_) {
+      lv.seg_points = 1;
+    }
+  }
+
+  /// Push one sample (counts). Amortised O(1), constant time apart from the cascade.
+  void push(std::int32_t counts) {
+    x_ += static_cast<std::uint64_t>(static_cast<std::int64_t>(counts));
+    ++n_;
+    cascade();
+  }
+
+  /// Push n samples. Equivalent to n calls of push().
+  void push_block(const std::int32_t* counts, std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      push(counts[i]);
+    }
+  }
+
+  /// Mark n_samples consecutive samples as missing (e.g. dropped frames). Time advances, no term
+  /// spans the gap. O(L M).
+  void mark_missing(std::uint64_t n_samples) {
+    if (n_samples == 0) {
+      return;
+    }
+    close_segment(level0_);
+    for (auto& lv : upper_) {
+      close_segment(lv);
+    }
+    n_ += n_samples;
+    missing_ += n_samples;
+    ++gaps_;
+    cascade();  // the current phase starts the new segment on every level it falls on
+  }
+
+  /// Write up to `capacity` estimated taus (ascending) to `out`; taus without a term are skipped.
+  /// noise_alpha selects the power-law noise assumed for the EDF (0 = white FM). Returns the count.
+  std::size_t snapshot(AdevPoint* out, std::size_t capacity, int noise_alpha = 0) const {
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < M && k < capacity; ++i) {
+      if (make_point(level0_, i, i + 1, 0, noise_alpha, out[k])) {
+        ++k;
+      }
+    }
+    for (std::size_t lv = 0; lv < L; ++lv) {
+      for (std::size_t i = 0; i < kUpperTaus && k < capacity; ++i) {
+        if (make_point(upper_[lv], i, M / 2 + 1 + i, lv + 1, noise_alpha, out[k])) {
+          ++k;
+        }
+      }
+    }
+    return k;
+  }
+
+  /// Change Ts and LSB (takes effect on the next snapshot; the sums are in counts).
+  void configure(double sample_period_s, double lsb) {
+    sample_period_s_ = sample_period_s;
+    lsb_ = lsb;
+  }
+
+  [[nodiscard]] std::uint64_t samples() const { return n_; }          ///< including missing
+  [[nodiscard]] std::uint64_t missing_samples() const { return missing_; }
+  [[nodiscard]] std::uint64_t gaps() const { return gaps_; }
+  [[nodiscard]] double sample_period_s() const { return sample_period_s_; }
+  [[nodiscard]] double lsb() const { return lsb_; }
+
+ private:
+  // kMLo: the level's taus are m = kMLo + 1 .. kMLo + kTaus.
+  template <std::size_t kTaus, std::size_t kMLo>
+  struct Level {
+    std::uint64_t ring[kRing] = {};       // wrapping phase points, slot = point index % kRing
+    double total[kTaus] = {};             // sum of closed blocks
+    double partial[kTaus] = {};           // sum of the current block (< 2^16 terms)
+    std::uint64_t terms_done[kTaus] = {}; // terms of closed segments
+    std::uint64_t seg_points = 0;         // points in the current gap-free segment
+  };
+
+  template <std::size_t kTaus, std::size_t kMLo>
+  static void push_point(Level<kTaus, kMLo>& lv, std::uint64_t p, std::uint64_t x) {
+    if (lv.seg_points >= kRing) {  // steady state: every tau of the level has its three points
+      for (std::size_t i = 0; i < kTaus; ++i) {
+        constexpr std::size_t kFirst = kMLo + 1;
+        const std::size_t m = kFirst + i;
+        const std::uint64_t a = lv.ring[(p - m) % kRing];
+        const std::uint64_t b = lv.ring[(p - 2 * m) % kRing];
+        const auto d = static_cast<double>(static_cast<std::int64_t>(x - 2 * a + b));
+        lv.partial[i] += d * d;
+      }
+    } else {
+      for (std::size_t i = 0; i < kTaus; ++i) {
+        const std::size_t m = kMLo + 1 + i;
+        if (lv.seg_points >= 2 * m) {
+          const std::uint64_t a = lv.ring[(p - m) % kRing];
+          const std::uint64_t b = lv.ring[(p - 2 * m) % kRing];
+          const auto d = static_cast<double>(static_cast<std::int64_t>(x - 2 * a + b));
+          lv.partial[i] += d * d;
+        }
+      }
+    }
+    lv.ring[p % kRing] = x;
+    ++lv.seg_points;
+    if ((p & kBlockMask) == 0) {
+      for (std::size_t i = 0; i < kTaus; ++i) {
+        lv.total[i] += lv.partial[i];
+        lv.partial[i] = 0.0;
+      }
+    }
+  }
+
+  template <std::size_t kTaus, std::size_t kMLo>
+  static void close_segment(Level<kTaus, kMLo>& lv) {
+    for (std::size_t i = 0; i < kTaus; ++i) {
+      lv.terms_done[i] += open_terms(lv, kMLo + 1 + i);
+    }
+    lv.seg_points = 0;
+  }
+
+  template <std::size_t kTaus, std::size_t kMLo>
+  static std::uint64_t open_terms(const Level<kTaus, kMLo>& lv, std::size_t m) {
+    return lv.seg_points > 2 * m ? lv.seg_points - 2 * m : 0;
+  }
+
+  // Push the current phase to every level whose grid contains sample index n_.
+  void cascade() {
+    push_point(level0_, n_, x_);
+    const std::uint64_t n = n_;
+    if (n == 0) {
+      return;
+    }
+    const auto tz = static_cast<std::size_t>(__builtin_ctzll(n));
+    const std::size_t top = tz < L ? tz : L;
+    for (std::size_t k = 1; k <= top; ++k) {
+      push_point(upper_[k - 1], n >> k, x_);
+    }
+  }
+
+  template <std::size_t kTaus, std::size_t kMLo>
+  bool make_point(const Level<kTaus, kMLo>& lv, std::size_t i, std::size_t m, std::size_t level,
+                  int noise_alpha, AdevPoint& out) const {
+    const std::uint64_t terms = lv.terms_done[i] + open_terms(lv, m);
+    if (terms == 0) {
+      return false;
+    }
+    const std::uint64_t stride = std::uint64_t{1} << level;
+    const double af = static_cast<double>(m) * static_cast<double>(stride);
+    const double sum = lv.total[i] + lv.partial[i];
+    const double n_terms = static_cast<double>(terms);
+    out.tau_s = af * sample_period_s_;
+    out.af = static_cast<std::uint32_t>(m * stride);
+    out.stride = static_cast<std::uint32_t>(stride);
+    out.n_terms = terms;
+    out.avar = lsb_ * lsb_ * sum / (2.0 * af * af * n_terms);
+    out.adev = std::sqrt(out.avar);
+    out.edf = edf_greenhall(noise_alpha, 2, af, static_cast<double>(m), n_terms);
+    const DevInterval ci = deviation_interval(out.adev, out.edf);
+    out.ci_lo = ci.lo;
+    out.ci_hi = ci.hi;
+    return true;
+  }
+
+  double sample_period_s_;
+  double lsb_;
+  std::uint64_t n_ = 0;        // samples so far, missing ones included (= index of newest point)
+  std::uint64_t x_ = 0;        // wrapping phase in counts
+  std::uint64_t missing_ = 0;
+  std::uint64_t gaps_ = 0;
+  Level<M, 0> level0_;
+  Level<kUpperTaus, M / 2> upper_[L];
+};
+
+/// The online ADEV of every channel of an IMU (6 by default), one estimator per channel.
+template <std::size_t kChannels = 6, std::size_t M = 8, std::size_t L = 22>
+class MultiAdev {
+ public:
+  using Channel = OnlineAdev<M, L>;
+  static constexpr std::size_t kNumChannels = kChannels;
+
+  /// Push one sample of every channel.
+  void push(const std::int32_t (&counts)[kChannels]) {
+    for (std::size_t c = 0; c < kChannels; ++c) {
+      ch_[c].push(counts[c]);
+    }
+  }
+  /// Mark n consecutive samples missing on every channel.
+  void mark_missing(std::uint64_t n_samples) {
+    for (auto& c : ch_) {
+      c.mark_missing(n_samples);
+    }
+  }
+  void reset() {
+    for (auto& c : ch_) {
+      c.reset();
+    }
+  }
+  Channel& channel(std::size_t c) { return ch_[c]; }
+  const Channel& channel(std::size_t c) const { return ch_[c]; }
+
+ private:
+  Channel ch_[kChannels];
+};
+
+}  // namespace imu
+
+#endif  // IMU_ONLINE_ADEV_HPP

@@ -1,0 +1,355 @@
+// Tests of the online ADEV (fw/include/imu/online_adev.hpp) through its public API, against an
+// independent brute-force reference written here from MODELS.md's formula.
+#include "imu/online_adev.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace {
+
+__extension__ using Int128 = __int128;  // exact phase for the reference
+using Adev = imu::OnlineAdev<8, 22>;
+
+// Brute-force AVAR at averaging factor af with a stride of `stride` samples, from the phase
+// points of gap-free segments. Sample i is missing when missing[i] is true. Terms start at phase
+// indices that are multiples of the stride (the online estimator's decimation grid).
+// Accumulates in long double from exact int64 second differences.
+struct RefPoint {
+  double avar;
+  std::uint64_t terms;
+};
+RefPoint brute_avar(const std::vector<std::int32_t>& y, const std::vector<bool>& missing,
+                    std::uint64_t af, std::uint64_t stride, double lsb) {
+  const std::size_t n = y.size();
+  // phase[i] valid flag: x_i is in the same segment as x_j iff no missing sample in [i, j).
+  std::vector<Int128> x(n + 1, 0);
+  std::vector<std::uint64_t> seg(n + 1, 0);  // segment id of each phase point
+  std::uint64_t id = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (missing[i]) {
+      ++id;
+      x[i + 1] = x[i];
+    } else {
+      x[i + 1] = x[i] + y[i];
+    }
+    seg[i + 1] = id;
+  }
+  long double sum = 0;
+  std::uint64_t terms = 0;
+  for (std::size_t k = 0; k + 2 * af <= n; k += stride) {
+    if (seg[k] != seg[k + 2 * af]) {
+      continue;
+    }
+    // x_k belongs to the segment that starts after the gap: the segment of x_k is seg[k], and a
+    // missing sample i (between x_i and x_{i+1}) gives x_{i+1} a new id, so equal ids at both
+    // ends mean no gap inside.
+    const Int128 d = x[k + 2 * af] - 2 * x[k + af] + x[k];
+    const auto dl = static_cast<long double>(d);
+    sum += dl * dl;
+    ++terms;
+  }
+  if (terms == 0) {
+    return {0.0, 0};
+  }
+  const auto afl = static_cast<long double>(af);
+  return {static_cast<double>(static_cast<long double>(lsb) * lsb * sum / (2 * afl * afl * terms)),
+          terms};
+}
+
+std::vector<imu::AdevPoint> snap(const Adev& a) {
+  std::vector<imu::AdevPoint> pts(Adev::kMaxPoints);
+  pts.resize(a.snapshot(pts.data(), pts.size()));
+  return pts;
+}
+
+std::vector<std::int32_t> white_plus_walk(std::size_t n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> g(0.0, 30.0);
+  std::vector<std::int32_t> y(n);
+  double walk = 0.0;
+  for (auto& v : y) {
+    walk += 0.05 * g(rng) / 30.0;
+    v = static_cast<std::int32_t>(std::lround(g(rng) + walk));
+  }
+  return y;
+}
+
+// The estimator is exactly the partially overlapping estimator on the decimation grid.
+TEST(OnlineAdev, MatchesBruteForceOnTheSameGrid) {
+  const auto y = white_plus_walk(50000, 1);
+  const std::vector<bool> missing(y.size(), false);
+  Adev a(0.01, 0.5);
+  a.push_block(y.data(), y.size());
+  const auto pts = snap(a);
+  ASSERT_GT(pts.size(), 30U);
+  for (const auto& p : pts) {
+    const RefPoint r = brute_avar(y, missing, p.af, p.stride, 0.5);
+    ASSERT_EQ(p.n_terms, r.terms) << "af " << p.af;
+    // Reason for 1e-12: double accumulation of up to 5e4 exact squares vs long double.
+    EXPECT_NEAR(p.avar, r.avar, 1e-12 * r.avar) << "af " << p.af;
+    EXPECT_NEAR(p.tau_s, 0.01 * p.af, 1e-12);
+  }
+}
+
+// Against the fully overlapping estimator (stride 1), issue 2's criterion: within 1 % or a
+// quarter of the 68 % interval's relative half-width, for taus up to a tenth of the record.
+// The two estimators legitimately differ: the partial one uses a subset of the full one's terms,
+// so their relative difference has a standard deviation of about
+// 0.5 sqrt(2/edf_partial - 2/edf_full), which is 0.14 to 0.22 of the relative half-width (EDF
+// ratio 0.95..0.98, see test_edf). The criterion is therefore a ~1.5 sigma bound at long tau; the
+// test requires it at >= 85 % of the taus and a 3-sigma bound at every tau, and prints the worst.
+TEST(OnlineAdev, AgreesWithFullyOverlappingReference) {
+  const auto y = white_plus_walk(200000, 2);
+  const std::vector<bool> missing(y.size(), false);
+  Adev a(0.01, 1.0);
+  a.push_block(y.data(), y.size());
+  int total = 0;
+  int strict_ok = 0;
+  double worst_ratio = 0.0;
+  for (const auto& p : snap(a)) {
+    if (p.af > y.size() / 10) {
+      continue;
+    }
+    const RefPoint full = brute_avar(y, missing, p.af, 1, 1.0);
+    const double ref = std::sqrt(full.avar);
+    const double rel = std::fabs(p.adev / ref - 1.0);
+    const double half = 0.5 * (p.ci_hi - p.ci_lo) / p.adev;
+    const double bound = std::max(0.01, 0.25 * half);
+    const double edf_full = imu::edf_greenhall(0, 2, p.af, p.af, static_cast<double>(full.terms));
+    const double sigma = 0.5 * std::sqrt(std::max(0.0, 2.0 / p.edf - 2.0 / edf_full));
+    ++total;
+    strict_ok += rel <= bound ? 1 : 0;
+    worst_ratio = std::max(worst_ratio, rel / bound);
+    EXPECT_LE(rel, std::max(bound, 3.0 * sigma)) << "af " << p.af;
+  }
+  std::printf("within 1%%/quarter-half-width: %d of %d taus; worst rel/bound %.3f\n", strict_ok,
+              total, worst_ratio);
+  EXPECT_GE(strict_ok, (85 * total) / 100);
+}
+
+TEST(OnlineAdev, TauGridHasFourPerOctave) {
+  Adev a;
+  std::vector<std::int32_t> y(5000, 0);
+  std::mt19937 rng(3);
+  for (auto& v : y) {
+    v = static_cast<std::int32_t>(rng() % 100);
+  }
+  a.push_block(y.data(), y.size());
+  const auto pts = snap(a);
+  const std::uint32_t expect[] = {1, 2, 3, 4, 5, 6, 7, 8, 10, 12, 14, 16, 20, 24, 28, 32, 40};
+  ASSERT_GE(pts.size(), std::size(expect));
+  for (std::size_t i = 0; i < std::size(expect); ++i) {
+    EXPECT_EQ(pts[i].af, expect[i]);
+  }
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    EXPECT_GT(pts[i].tau_s, pts[i - 1].tau_s);
+    EXPECT_GE(pts[i].stride * 8, pts[i].af);  // stride >= tau / M
+    if (pts[i].af > 4) {                      // level 0 keeps stride 1 for m <= M/2 too
+      EXPECT_LE(pts[i].stride * 8, 2 * pts[i].af);  // stride <= 2 tau / M
+    }
+  }
+}
+
+TEST(OnlineAdev, DefaultReachesFortyEightHoursAtHundredHertz) {
+  constexpr double kMaxTau = (1ULL << 22) * 8 * 0.01;
+  EXPECT_GE(kMaxTau, 48.0 * 3600.0);
+  EXPECT_EQ(Adev::kMaxPoints, 8U + 22U * 4U);
+}
+
+TEST(OnlineAdev, GapsAreNotSpanned) {
+  auto y = white_plus_walk(60000, 4);
+  std::vector<bool> missing(y.size(), false);
+  // A gap at the very start, single drops, a long gap, and a gap at the very end.
+  for (std::size_t i : {0UL, 1UL, 777UL, 12345UL, 59999UL}) {
+    missing[i] = true;
+  }
+  for (std::size_t i = 30000; i < 30500; ++i) {
+    missing[i] = true;
+  }
+  Adev a(0.01, 1.0);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    if (missing[i]) {
+      a.mark_missing(1);
+    } else {
+      a.push(y[i]);
+    }
+  }
+  EXPECT_EQ(a.samples(), y.size());
+  EXPECT_EQ(a.missing_samples(), 505U);
+  for (const auto& p : snap(a)) {
+    const RefPoint r = brute_avar(y, missing, p.af, p.stride, 1.0);
+    ASSERT_EQ(p.n_terms, r.terms) << "af " << p.af;
+    EXPECT_NEAR(p.avar, r.avar, 1e-12 * r.avar) << "af " << p.af;
+  }
+}
+
+// A gap must not bias: a big step hidden inside a gap leaves the white-noise ADEV untouched,
+// whereas pushing it as data would not.
+TEST(OnlineAdev, GapHidesOffsetJump) {
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g(0.0, 10.0);
+  Adev gapped;
+  Adev clean;
+  for (int i = 0; i < 100000; ++i) {
+    const double offset = i < 50000 ? 0.0 : 100000.0;
+    const auto c = static_cast<std::int32_t>(std::lround(g(rng)));
+    clean.push(c);
+    if (i == 50000) {
+      gapped.mark_missing(3);
+    }
+    gapped.push(static_cast<std::int32_t>(c + offset));
+  }
+  const auto pg = snap(gapped);
+  const auto pc = snap(clean);
+  // Taus longer than half of each segment have no term in the gapped run (they would span it).
+  ASSERT_LT(pg.size(), pc.size());
+  ASSERT_GT(pg.size(), 40U);
+  for (std::size_t i = 0; i < pg.size(); ++i) {
+    ASSERT_EQ(pg[i].af, pc[i].af);
+    // A leaked jump would add (1e5)^2 to a term and multiply the short-tau ADEV by ~20.
+    // Reason for the tolerance: both are estimates of the same noise from nearly the same terms.
+    EXPECT_NEAR(pg[i].adev, pc[i].adev, 0.05 * pc[i].adev + 1.5 * (pg[i].ci_hi - pg[i].ci_lo))
+        << "af " << pc[i].af;
+  }
+}
+
+TEST(OnlineAdev, FewerSamplesThanOneTau) {
+  Adev a;
+  EXPECT_EQ(snap(a).size(), 0U);
+  a.push(5);
+  EXPECT_EQ(snap(a).size(), 0U);  // 2 phase points: no second difference yet
+  a.push(7);
+  const auto pts = snap(a);
+  ASSERT_EQ(pts.size(), 1U);
+  EXPECT_EQ(pts[0].af, 1U);
+  EXPECT_EQ(pts[0].n_terms, 1U);
+  EXPECT_DOUBLE_EQ(pts[0].avar, 4.0 / 2.0);  // (7 - 5)^2 / 2
+}
+
+TEST(OnlineAdev, ConstantInputGivesExactlyZero) {
+  Adev a(0.01, 0.033);
+  for (int i = 0; i < 300000; ++i) {
+    a.push(123456);
+  }
+  const auto pts = snap(a);
+  ASSERT_FALSE(pts.empty());
+  for (const auto& p : pts) {
+    EXPECT_EQ(p.adev, 0.0) << "af " << p.af;
+    EXPECT_EQ(p.ci_hi, 0.0);
+  }
+}
+
+TEST(OnlineAdev, FullScaleInt32IsExact) {
+  // Constant full scale: the phase wraps many times, second differences stay exactly zero.
+  Adev c;
+  for (int i = 0; i < 100000; ++i) {
+    c.push(std::numeric_limits<std::int32_t>::max());
+  }
+  for (const auto& p : snap(c)) {
+    EXPECT_EQ(p.adev, 0.0);
+  }
+  // Alternating extremes and random full-scale values against the exact reference.
+  std::mt19937 rng(6);
+  std::vector<std::int32_t> y(40000);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    y[i] = (i % 3 == 0) ? std::numeric_limits<std::int32_t>::min()
+                        : static_cast<std::int32_t>(rng());
+  }
+  const std::vector<bool> missing(y.size(), false);
+  Adev a;
+  a.push_block(y.data(), y.size());
+  for (const auto& p : snap(a)) {
+    const RefPoint r = brute_avar(y, missing, p.af, p.stride, 1.0);
+    EXPECT_NEAR(p.avar, r.avar, 1e-12 * r.avar) << "af " << p.af;
+  }
+}
+
+TEST(OnlineAdev, ResetForgetsEverything) {
+  const auto y = white_plus_walk(20000, 7);
+  Adev a;
+  a.push_block(y.data(), 5000);
+  a.mark_missing(10);
+  a.reset();
+  EXPECT_EQ(a.samples(), 0U);
+  EXPECT_EQ(a.gaps(), 0U);
+  EXPECT_EQ(snap(a).size(), 0U);
+  a.push_block(y.data(), y.size());
+  Adev fresh;
+  fresh.push_block(y.data(), y.size());
+  const auto pa = snap(a);
+  const auto pf = snap(fresh);
+  ASSERT_EQ(pa.size(), pf.size());
+  for (std::size_t i = 0; i < pa.size(); ++i) {
+    EXPECT_EQ(pa[i].avar, pf[i].avar);
+    EXPECT_EQ(pa[i].n_terms, pf[i].n_terms);
+  }
+}
+
+TEST(OnlineAdev, GapAtTheEndChangesNothing) {
+  const auto y = white_plus_walk(30000, 8);
+  Adev a;
+  a.push_block(y.data(), y.size());
+  const auto before = snap(a);
+  a.mark_missing(1000);
+  const auto after = snap(a);
+  ASSERT_EQ(before.size(), after.size());
+  for (std::size_t i = 0; i < before.size(); ++i) {
+    EXPECT_EQ(before[i].avar, after[i].avar);
+    EXPECT_EQ(before[i].n_terms, after[i].n_terms);
+  }
+}
+
+TEST(OnlineAdev, SnapshotDoesNotDisturbIngestion) {
+  const auto y = white_plus_walk(40000, 9);
+  Adev a;
+  Adev b;
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    a.push(y[i]);
+    b.push(y[i]);
+    if (i % 997 == 0) {
+      (void)snap(a);
+    }
+  }
+  const auto pa = snap(a);
+  const auto pb = snap(b);
+  ASSERT_EQ(pa.size(), pb.size());
+  for (std::size_t i = 0; i < pa.size(); ++i) {
+    EXPECT_EQ(pa[i].avar, pb[i].avar);
+  }
+}
+
+TEST(OnlineAdev, SnapshotRespectsCapacity) {
+  const auto y = white_plus_walk(10000, 10);
+  Adev a;
+  a.push_block(y.data(), y.size());
+  imu::AdevPoint pts[3];
+  EXPECT_EQ(a.snapshot(pts, 3), 3U);
+  EXPECT_EQ(pts[2].af, 3U);
+  EXPECT_EQ(a.snapshot(pts, 0), 0U);
+}
+
+TEST(OnlineAdev, StateIsSmallAndFixed) {
+  // Issue 2 budget: at most 6 KiB per channel for L = 24, M = 8.
+  EXPECT_LE(sizeof(imu::OnlineAdev<8, 24>), 6U * 1024U);
+  EXPECT_EQ(sizeof(imu::MultiAdev<6, 8, 22>), 6 * sizeof(imu::OnlineAdev<8, 22>));
+}
+
+TEST(Quantize, RoundsAndSaturates) {
+  EXPECT_EQ(imu::quantize(0.0333, 0.0333).counts, 1);
+  EXPECT_EQ(imu::quantize(-2.5, 1.0).counts, -3);
+  EXPECT_EQ(imu::quantize(2.49, 1.0).counts, 2);
+  EXPECT_FALSE(imu::quantize(2.49, 1.0).saturated);
+  EXPECT_TRUE(imu::quantize(1e12, 1.0).saturated);
+  EXPECT_EQ(imu::quantize(1e12, 1.0).counts, std::numeric_limits<std::int32_t>::max());
+  EXPECT_EQ(imu::quantize(-1e12, 1.0).counts, std::numeric_limits<std::int32_t>::min());
+  EXPECT_TRUE(imu::quantize(std::nan(""), 1.0).saturated);
+}
+
+}  // namespace

@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages a job needs, only those missing. Usage:
+#   toolchains/install-deps.sh core     # build + run imu-sim / imu-fw (g++, cmake, libgpiod)
+#   toolchains/install-deps.sh test     # core + GoogleTest, Benchmark, clang, fuzzing, cross, VM
+set -euo pipefail
+group=${1:-core}
+core=(cmake ninja-build g++ make pkg-config libgpiod-dev gpiod gnuplot-nox)
+test=(clang clang-tidy libclang-rt-14-dev libfuzzer-14-dev libgtest-dev libbenchmark-dev
+      binutils gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
+      g++-aarch64-linux-gnu qemu-user qemu-system-x86 qemu-system-arm busybox-static can-utils
+      iproute2 kmod cpio xz-utils)
+case "$group" in
+  core) want=("${core[@]}") ;;
+  test) want=("${core[@]}" "${test[@]}") ;;
+  *) echo "install-deps.sh: unknown group '$group' (core|test)" >&2; exit 2 ;;
+esac
+missing=()
+for p in "${want[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  exit 0
+fi
+SUDO=""
+if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
+echo "install-deps: installing ${missing[*]}"
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
