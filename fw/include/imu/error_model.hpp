@@ -1,0 +1,166 @@
+// Stochastic error models of one IMU channel: the seed's first-order Gauss-Markov conversion,
+// general fixed-capacity continuous models built from terms, exact (Van Loan) discretisation and
+// the analytic Allan variance of every term (../shared/docs/MODELS.md).
+//
+// Continuous model:  x' = F x + w,  E[w(t) w(s)^T] = Qc delta(t - s),  z = H x + n + q,
+//   n: white measurement noise of PSD Sn = N^2 (velocity/angle random walk N),
+//   q: quantization noise Q, white in the INTEGRAL of z (AVAR 3 Q^2 / tau^2). Sampled at Ts it is
+//      the first difference q_k = Q (u_k - u_{k-1}) / Ts of unit white noise u (an MA(1)
+//      sequence): the simulator produces exactly that. The Kalman filters do NOT model the MA(1)
+//      correlation: they treat it as extra white measurement variance 2 Q^2 / Ts^2
+//      (DiscreteModel::r_filter()), a documented approximation that overstates the short-term
+//      noise and is harmless when Q^2/Ts << N^2 (true for the ADIS16405 and the seed).
+// Terms and their states (appended in call order, kMaxStates in total):
+//   white N (no state), quantization Q (no state),
+//   first-order GM (Sb, Tb): 1 state, b' = -b/Tb + w, PSD(w) = Sb, prior Pss = Sb Tb / 2,
+//   rate random walk K: 1 state, r' = w, PSD(w) = K^2, prior variance 0 (starts at 0),
+//   ramp R: 2 states (d, s): d' = s, s' = 0, H picks d; prior var(s) = R^2 so that
+//           E[AVAR] = R^2 tau^2 / 2,
+//   sinusoid A sin(2 pi f0 t + random phase): 2-state undamped oscillator, prior A^2/2 per state.
+// Analytic AVAR: sum of the MODELS.md formulas (model_avar). For the sampled model the white,
+// quantization and ramp formulas are exact at tau = m Ts; the GM, RRW and sinusoid formulas are
+// the continuous-time ones (their sampled values differ by O(Ts/tau), < 1e-3 relative for
+// tau >= 10 Ts on the seed's model).
+//
+// Cost: model_avar O(number of terms), a few exp(); discretize() O((2n)^3 log) once per model,
+// never per sample. No heap, re-entrant.
+#ifndef IMU_ERROR_MODEL_HPP
+#define IMU_ERROR_MODEL_HPP
+
+#include <cstddef>
+#include <cstdint>
+
+#include "imu/linalg.hpp"
+
+namespace imu {
+
+enum class ModelStatus : std::uint8_t {
+  kOk = 0,
+  kBadParameter,  ///< a parameter is negative, zero where it must be positive, or not finite
+  kCapacity,      ///< the term does not fit in kMaxStates (or kMaxGmTerms)
+  kNumerical,     ///< the matrix exponential or a factorisation failed
+};
+
+/// ADEV peak of a first-order GM: 0.4365 sqrt(Sb Tb) at tau = 1.89 Tb (MODELS.md, CSM eqn. 62).
+inline constexpr double kGmPeakAdevFactor = 0.4365;
+inline constexpr double kGmPeakTauFactor = 1.89;
+
+/// The seed's first-order model (MODELS.md "From ASD parameters to the first-order model").
+struct FirstOrderGm {
+  // inputs
+  double n;      ///< velocity random walk N [unit/sqrt(Hz)]
+  double b;      ///< bias instability B [unit]
+  double tp_s;   ///< delay of the model's ADEV peak [s]
+  double fs_hz;  ///< sample rate [Hz]
+  // continuous model
+  double tb_s;      ///< correlation time Tb = Tp / 1.89 [s]
+  double mu_per_s;  ///< 1 / Tb [1/s]
+  double sn;        ///< PSD of the white measurement noise, N^2
+  double sb;        ///< PSD of the bias drive, B^2 / (0.4365^2 Tb)
+  double pss;       ///< steady-state bias variance Sb / (2 mu)
+  // discrete model (Ts = 1 / fs)
+  double ts_s;
+  double phi;    ///< exp(-mu Ts)
+  double qn;     ///< measurement noise variance Sn Fs
+  double qw;     ///< bias process noise variance (Van Loan, = (1 - phi^2) Sb / (2 mu))
+  double pss_d;  ///< Qw / (1 - phi^2)
+};
+
+/// Seed conversion N, B, Tp, Fs -> continuous and discrete first-order model. Qw is computed by
+/// Van Loan (expm), not by the closed form, so the test of the closed form is independent.
+/// Returns kBadParameter unless every input is finite and > 0.
+[[nodiscard]] ModelStatus first_order_gm_from_asd(double n, double b, double tp_s, double fs_hz,
+                                                  FirstOrderGm& out);
+
+inline constexpr std::size_t kMaxGmTerms = 2;
+
+struct GmParam {
+  double sb;    ///< drive PSD [unit^2 / s]
+  double tb_s;  ///< correlation time [s]
+};
+
+/// Physical parameters of a model (the fit's output). A zero parameter means "term absent".
+struct ModelParams {
+  double n = 0.0;  ///< white noise N [unit/sqrt(Hz)], AVAR N^2/tau
+  double q = 0.0;  ///< quantization Q [unit s], AVAR 3 Q^2/tau^2
+  std::size_t n_gm = 0;
+  GmParam gm[kMaxGmTerms] = {};
+  double k = 0.0;          ///< rate random walk K [unit/sqrt(s)], AVAR K^2 tau/3
+  double r = 0.0;          ///< ramp R [unit/s], AVAR R^2 tau^2/2
+  double sin_a = 0.0;      ///< sinusoid amplitude A [unit]
+  double sin_f0_hz = 0.0;  ///< sinusoid frequency f0 [Hz]
+};
+
+// AVAR of each term at tau_s > 0 (MODELS.md table).
+[[nodiscard]] double avar_white(double n, double tau_s);
+[[nodiscard]] double avar_quantization(double q, double tau_s);
+/// First-order GM; accurate for every tau/Tb (series for tau/Tb < 1e-3, expm1 above).
+[[nodiscard]] double avar_gauss_markov(double sb, double tb_s, double tau_s);
+[[nodiscard]] double avar_rrw(double k, double tau_s);
+[[nodiscard]] double avar_ramp(double r, double tau_s);
+[[nodiscard]] double avar_sinusoid(double a, double f0_hz, double tau_s);
+/// Sum of the terms present in p.
+[[nodiscard]] double model_avar(const ModelParams& p, double tau_s);
+
+/// Continuous model with at most kMaxStates states. Terms are appended; a term that does not fit
+/// or has a bad parameter returns an error and leaves the model unchanged.
+template <std::size_t kMaxStates = 6>
+struct ContinuousModel {
+  static_assert(kMaxStates >= 1 && kMaxStates <= 16, "kMaxStates must be 1..16");
+  static constexpr std::size_t kCapacity = kMaxStates;
+  using Square = Mat<double, kMaxStates, kMaxStates>;
+
+  std::size_t n_states = 0;
+  Square f{};   ///< dynamics F
+  Square qc{};  ///< process noise spectral density (G Q G^T)
+  Square p0{};  ///< state covariance at t = 0
+  Mat<double, 1, kMaxStates> h{};
+  double sn = 0.0;      ///< white measurement PSD N^2
+  double q = 0.0;       ///< quantization Q
+  ModelParams params{};  ///< the same terms as physical parameters (for the analytic AVAR)
+
+  [[nodiscard]] ModelStatus add_white(double n);
+  [[nodiscard]] ModelStatus add_quantization(double q_units_s);
+  [[nodiscard]] ModelStatus add_gauss_markov(double sb, double tb_s);
+  /// prior_var: variance of the random-walk state at t = 0 (0: starts at zero).
+  [[nodiscard]] ModelStatus add_rrw(double k, double prior_var = 0.0);
+  [[nodiscard]] ModelStatus add_ramp(double r);
+  [[nodiscard]] ModelStatus add_sinusoid(double a, double f0_hz);
+
+  [[nodiscard]] double avar(double tau_s) const { return model_avar(params, tau_s); }
+};
+
+/// Build a continuous model from parameters: terms in the order white, quantization, GMs, RRW,
+/// ramp, sinusoid; zero parameters are skipped.
+template <std::size_t kMaxStates>
+[[nodiscard]] ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out);
+
+/// Exact discrete equivalent at period ts_s: x_{k+1} = Phi x_k + w_k, cov(w_k) = Qd,
+/// z_k = H x_k + n_k + q_k, var(n_k) = Sn / Ts, q_k = Q (u_k - u_{k-1}) / Ts.
+template <std::size_t kMaxStates = 6>
+struct DiscreteModel {
+  using Square = Mat<double, kMaxStates, kMaxStates>;
+  std::size_t n_states = 0;
+  double ts_s = 0.0;
+  Square phi{};
+  Square qd{};
+  Square p0{};
+  Mat<double, 1, kMaxStates> h{};
+  double r_white = 0.0;  ///< var(n_k) = Sn / Ts
+  double q = 0.0;        ///< quantization Q (phase noise std) [unit s]
+  ModelParams params{};
+
+  /// Measurement variance the Kalman filters use: white part plus the quantization MA(1)
+  /// variance 2 Q^2 / Ts^2 treated as white (see the file comment).
+  [[nodiscard]] double r_filter() const { return r_white + 2.0 * q * q / (ts_s * ts_s); }
+};
+
+/// Van Loan: expm([[-F, Qc], [0, F^T]] Ts) = [[., M12], [0, M22]], Phi = M22^T, Qd = Phi M12.
+/// Returns kBadParameter for ts_s <= 0 or an empty model, kNumerical if expm fails.
+template <std::size_t kMaxStates>
+[[nodiscard]] ModelStatus discretize(const ContinuousModel<kMaxStates>& c, double ts_s,
+                                     DiscreteModel<kMaxStates>& out);
+
+}  // namespace imu
+
+#endif  // IMU_ERROR_MODEL_HPP

@@ -1,0 +1,299 @@
+// Error model: seed conversion, term AVARs, model building and Van Loan discretisation.
+// The templates are defined here and instantiated for kMaxStates = 1, 2, 4, 6 (the sizes the
+// project uses); add a line at the bottom for another size.
+#include "imu/error_model.hpp"
+
+#include <cmath>
+
+namespace imu {
+namespace {
+
+bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
+bool nonneg_finite(double v) { return std::isfinite(v) && v >= 0.0; }
+constexpr double kPi = 3.14159265358979323846;
+
+}  // namespace
+
+ModelStatus first_order_gm_from_asd(double n, double b, double tp_s, double fs_hz,
+                                    FirstOrderGm& out) {
+  if (!positive_finite(n) || !positive_finite(b) || !positive_finite(tp_s) ||
+      !positive_finite(fs_hz)) {
+    return ModelStatus::kBadParameter;
+  }
+  FirstOrderGm m{};
+  m.n = n;
+  m.b = b;
+  m.tp_s = tp_s;
+  m.fs_hz = fs_hz;
+  m.tb_s = tp_s / kGmPeakTauFactor;
+  m.mu_per_s = 1.0 / m.tb_s;
+  m.sn = n * n;
+  m.sb = b * b / (kGmPeakAdevFactor * kGmPeakAdevFactor * m.tb_s);
+  m.pss = m.sb / (2.0 * m.mu_per_s);
+  m.ts_s = 1.0 / fs_hz;
+  ContinuousModel<1> c;
+  if (c.add_gauss_markov(m.sb, m.tb_s) != ModelStatus::kOk) {
+    return ModelStatus::kBadParameter;
+  }
+  DiscreteModel<1> d;
+  const ModelStatus st = discretize(c, m.ts_s, d);
+  if (st != ModelStatus::kOk) {
+    return st;
+  }
+  m.phi = d.phi(0, 0);
+  m.qn = m.sn * fs_hz;
+  m.qw = d.qd(0, 0);
+  m.pss_d = m.qw / (1.0 - m.phi * m.phi);
+  out = m;
+  return ModelStatus::kOk;
+}
+
+double avar_white(double n, double tau_s) { return n * n / tau_s; }
+
+double avar_quantization(double q, double tau_s) { return 3.0 * q * q / (tau_s * tau_s); }
+
+double avar_gauss_markov(double sb, double tb_s, double tau_s) {
+  const double x = tau_s / tb_s;
+  double bracket = 0.0;
+  if (x < 1e-3) {
+    // 1 - (3 - 4 e^-x + e^-2x) / (2x) = x^2/3 - x^3/4 + 7 x^4/60 - O(x^5): avoids cancellation.
+    bracket = x * x * (1.0 / 3.0 - x / 4.0 + 7.0 * x * x / 60.0);
+  } else {
+    const double num = -4.0 * std::expm1(-x) + std::expm1(-2.0 * x);  // 3 - 4e^-x + e^-2x
+    bracket = 1.0 - num / (2.0 * x);
+  }
+  return sb * tb_s * tb_s / tau_s * bracket;
+}
+
+double avar_rrw(double k, double tau_s) { return k * k * tau_s / 3.0; }
+
+double avar_ramp(double r, double tau_s) { return r * r * tau_s * tau_s / 2.0; }
+
+double avar_sinusoid(double a, double f0_hz, double tau_s) {
+  const double x = kPi * f0_hz * tau_s;
+  if (x < 1e-8) {
+    return a * a * x * x;  // sin^4(x)/x^2 -> x^2
+  }
+  const double s = std::sin(x);
+  return a * a * s * s * s * s / (x * x);
+}
+
+double model_avar(const ModelParams& p, double tau_s) {
+  double v = 0.0;
+  if (p.n > 0.0) {
+    v += avar_white(p.n, tau_s);
+  }
+  if (p.q > 0.0) {
+    v += avar_quantization(p.q, tau_s);
+  }
+  for (std::size_t i = 0; i < p.n_gm && i < kMaxGmTerms; ++i) {
+    if (p.gm[i].sb > 0.0 && p.gm[i].tb_s > 0.0) {
+      v += avar_gauss_markov(p.gm[i].sb, p.gm[i].tb_s, tau_s);
+    }
+  }
+  if (p.k > 0.0) {
+    v += avar_rrw(p.k, tau_s);
+  }
+  if (p.r > 0.0) {
+    v += avar_ramp(p.r, tau_s);
+  }
+  if (p.sin_a > 0.0 && p.sin_f0_hz > 0.0) {
+    v += avar_sinusoid(p.sin_a, p.sin_f0_hz, tau_s);
+  }
+  return v;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_white(double n) {
+  if (!nonneg_finite(n)) {
+    return ModelStatus::kBadParameter;
+  }
+  sn += n * n;
+  params.n = std::sqrt(sn);
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_quantization(double q_units_s) {
+  if (!nonneg_finite(q_units_s)) {
+    return ModelStatus::kBadParameter;
+  }
+  q = std::sqrt(q * q + q_units_s * q_units_s);
+  params.q = q;
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_gauss_markov(double sb, double tb_s) {
+  if (!positive_finite(sb) || !positive_finite(tb_s)) {
+    return ModelStatus::kBadParameter;
+  }
+  if (n_states + 1 > kMaxStates || params.n_gm >= kMaxGmTerms) {
+    return ModelStatus::kCapacity;
+  }
+  const std::size_t i = n_states;
+  f(i, i) = -1.0 / tb_s;
+  qc(i, i) = sb;
+  p0(i, i) = sb * tb_s / 2.0;
+  h(0, i) = 1.0;
+  params.gm[params.n_gm] = GmParam{sb, tb_s};
+  ++params.n_gm;
+  ++n_states;
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_rrw(double k, double prior_var) {
+  if (!positive_finite(k) || !nonneg_finite(prior_var)) {
+    return ModelStatus::kBadParameter;
+  }
+  if (n_states + 1 > kMaxStates || params.k > 0.0) {
+    return ModelStatus::kCapacity;
+  }
+  const std::size_t i = n_states;
+  qc(i, i) = k * k;
+  p0(i, i) = prior_var;
+  h(0, i) = 1.0;
+  params.k = k;
+  ++n_states;
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_ramp(double r) {
+  if constexpr (kMaxStates < 2) {  // a 2-state term never fits (also silences -Warray-bounds)
+    return ModelStatus::kCapacity;
+  }
+  if (!positive_finite(r)) {
+    return ModelStatus::kBadParameter;
+  }
+  if (n_states + 2 > kMaxStates || params.r > 0.0) {
+    return ModelStatus::kCapacity;
+  }
+  const std::size_t i = n_states;
+  f(i, i + 1) = 1.0;  // d' = s
+  p0(i + 1, i + 1) = r * r;
+  h(0, i) = 1.0;
+  params.r = r;
+  n_states += 2;
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_sinusoid(double a, double f0_hz) {
+  if constexpr (kMaxStates < 2) {  // a 2-state term never fits (also silences -Warray-bounds)
+    return ModelStatus::kCapacity;
+  }
+  if (!positive_finite(a) || !positive_finite(f0_hz)) {
+    return ModelStatus::kBadParameter;
+  }
+  if (n_states + 2 > kMaxStates || params.sin_a > 0.0) {
+    return ModelStatus::kCapacity;
+  }
+  const std::size_t i = n_states;
+  const double w = 2.0 * kPi * f0_hz;
+  f(i, i + 1) = w;
+  f(i + 1, i) = -w;
+  p0(i, i) = a * a / 2.0;
+  p0(i + 1, i + 1) = a * a / 2.0;
+  h(0, i) = 1.0;
+  params.sin_a = a;
+  params.sin_f0_hz = f0_hz;
+  n_states += 2;
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out) {
+  ContinuousModel<kMaxStates> m;
+  ModelStatus st = ModelStatus::kOk;
+  if (p.n > 0.0) {
+    st = m.add_white(p.n);
+  }
+  if (st == ModelStatus::kOk && p.q > 0.0) {
+    st = m.add_quantization(p.q);
+  }
+  for (std::size_t i = 0; st == ModelStatus::kOk && i < p.n_gm; ++i) {
+    if (i >= kMaxGmTerms) {
+      st = ModelStatus::kCapacity;
+    } else if (p.gm[i].sb > 0.0) {
+      st = m.add_gauss_markov(p.gm[i].sb, p.gm[i].tb_s);
+    }
+  }
+  if (st == ModelStatus::kOk && p.k > 0.0) {
+    st = m.add_rrw(p.k);
+  }
+  if (st == ModelStatus::kOk && p.r > 0.0) {
+    st = m.add_ramp(p.r);
+  }
+  if (st == ModelStatus::kOk && p.sin_a > 0.0) {
+    st = m.add_sinusoid(p.sin_a, p.sin_f0_hz);
+  }
+  if (st == ModelStatus::kOk) {
+    out = m;
+  }
+  return st;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus discretize(const ContinuousModel<kMaxStates>& c, double ts_s,
+                       DiscreteModel<kMaxStates>& out) {
+  if (!positive_finite(ts_s)) {
+    return ModelStatus::kBadParameter;
+  }
+  DiscreteModel<kMaxStates> d;
+  d.n_states = c.n_states;
+  d.ts_s = ts_s;
+  d.p0 = c.p0;
+  d.h = c.h;
+  d.r_white = c.sn / ts_s;
+  d.q = c.q;
+  d.params = c.params;
+  const std::size_t n = c.n_states;
+  if (n > 0) {
+    constexpr std::size_t k2 = 2 * kMaxStates;
+    Mat<double, k2, k2> a{};
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < n; ++j) {
+        a(i, j) = -c.f(i, j) * ts_s;
+        a(i, n + j) = c.qc(i, j) * ts_s;
+        a(n + i, n + j) = c.f(j, i) * ts_s;
+      }
+    }
+    Mat<double, k2, k2> e{};
+    if (!expm(a, e, 2 * n)) {
+      return ModelStatus::kNumerical;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < n; ++j) {
+        d.phi(i, j) = e(n + j, n + i);  // M22^T
+      }
+    }
+    Mat<double, kMaxStates, kMaxStates> m12{};
+    for (std::size_t i = 0; i < n; ++i) {
+      for (std::size_t j = 0; j < n; ++j) {
+        m12(i, j) = e(i, n + j);
+      }
+    }
+    d.qd = d.phi * m12;
+    symmetrize(d.qd);
+  }
+  out = d;
+  return ModelStatus::kOk;
+}
+
+#define IMU_INSTANTIATE_MODEL(N)                                                              \
+  template struct ContinuousModel<N>;                                                         \
+  template struct DiscreteModel<N>;                                                           \
+  template ModelStatus build_model<N>(const ModelParams&, ContinuousModel<N>&);               \
+  template ModelStatus discretize<N>(const ContinuousModel<N>&, double, DiscreteModel<N>&);
+
+// NOLINTBEGIN(cppcoreguidelines-macro-usage)
+IMU_INSTANTIATE_MODEL(1)
+IMU_INSTANTIATE_MODEL(2)
+IMU_INSTANTIATE_MODEL(4)
+IMU_INSTANTIATE_MODEL(6)
+// NOLINTEND(cppcoreguidelines-macro-usage)
+#undef IMU_INSTANTIATE_MODEL
+
+}  // namespace imu

@@ -1,0 +1,198 @@
+// Tests of imu/error_model.hpp and imu/linalg.hpp (expm, solve): the seed's printed numbers,
+// closed forms written here from MODELS.md, and Van Loan against known discretisations.
+#include "imu/error_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "imu/linalg.hpp"
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Relative agreement to the 5 significant digits of a %.4e print: half a unit in the last
+// printed digit is 5e-5 relative at worst (mantissa 1.0000).
+void expect_printed(double value, double printed) {
+  EXPECT_NEAR(value, printed, 0.5e-4 * std::fabs(printed) * 1.0001) << "printed " << printed;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4e", value);
+  char want[32];
+  std::snprintf(want, sizeof want, "%.4e", printed);
+  EXPECT_STREQ(buf, want);
+}
+
+TEST(ErrorModel, SeedFirstOrderNumbersMatchThePrintedSeed) {
+  imu::FirstOrderGm m{};
+  ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, m), imu::ModelStatus::kOk);
+  // Values typed from ../shared/seed/000_*.txt section 4 and MODELS.md.
+  expect_printed(m.mu_per_s, 6.3000e-03);
+  expect_printed(m.sn, 1.0890e-05);
+  expect_printed(m.sb, 2.6783e-08);
+  expect_printed(m.pss, 2.1256e-06);
+  expect_printed(m.qn, 1.0890e-03);
+  expect_printed(std::sqrt(m.qn), 3.3000e-02);
+  expect_printed(m.qw, 2.6781e-10);
+  expect_printed(std::sqrt(m.qw), 1.6365e-05);
+  expect_printed(m.pss_d, 2.1256e-06);
+  char phi[16];
+  std::snprintf(phi, sizeof phi, "%.4f", m.phi);
+  EXPECT_STREQ(phi, "0.9999");
+  // MODELS.md: phi = 0.99993700...; exp(-6.3e-5) to 1e-12 (double rounding).
+  EXPECT_NEAR(m.phi, 0.99993700198, 1e-11);
+}
+
+TEST(ErrorModel, VanLoanMatchesClosedFormForFirstOrderGm) {
+  imu::FirstOrderGm m{};
+  ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, m), imu::ModelStatus::kOk);
+  const double closed = (1.0 - m.phi * m.phi) * m.sb / (2.0 * m.mu_per_s);
+  // expm in double: relative error a few ulp times the squarings; 1e-10 is generous.
+  EXPECT_NEAR(m.qw, closed, 1e-10 * closed);
+  EXPECT_NEAR(m.pss_d, m.pss, 1e-8 * m.pss);
+}
+
+TEST(ErrorModel, RejectsBadInputs) {
+  imu::FirstOrderGm m{};
+  EXPECT_EQ(imu::first_order_gm_from_asd(-1.0, 9e-4, 300.0, 100.0, m),
+            imu::ModelStatus::kBadParameter);
+  EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 0.0, 100.0, m),
+            imu::ModelStatus::kBadParameter);
+  EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, NAN, 300.0, 100.0, m),
+            imu::ModelStatus::kBadParameter);
+  imu::ContinuousModel<2> c;
+  EXPECT_EQ(c.add_gauss_markov(1e-8, 100.0), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.add_ramp(1e-6), imu::ModelStatus::kCapacity);  // needs 2 states, 1 left
+  EXPECT_EQ(c.n_states, 1U);
+  EXPECT_EQ(c.add_rrw(0.0), imu::ModelStatus::kBadParameter);
+  imu::DiscreteModel<2> d;
+  EXPECT_EQ(imu::discretize(c, 0.0, d), imu::ModelStatus::kBadParameter);
+}
+
+TEST(ErrorModel, GmPeakMatchesTheTableConstants) {
+  // MODELS.md: peak ADEV 0.4365 sqrt(Sb Tb) at tau = 1.89 Tb (4 printed digits).
+  const double sb = 2e-8;
+  const double tb = 50.0;
+  double best = 0.0;
+  double best_tau = 0.0;
+  for (double tau = 10.0; tau < 1000.0; tau *= 1.0005) {
+    const double a = std::sqrt(imu::avar_gauss_markov(sb, tb, tau));
+    if (a > best) {
+      best = a;
+      best_tau = tau;
+    }
+  }
+  EXPECT_NEAR(best / std::sqrt(sb * tb), 0.4365, 1e-4);  // the table rounds to 4 digits
+  EXPECT_NEAR(best_tau / tb, 1.89, 0.01);                // flat peak: 1.89 is 3 digits
+}
+
+TEST(ErrorModel, GmSmallTauSeriesIsContinuousWithTheExactForm) {
+  // Across the switch at tau/Tb = 1e-3 the two forms must agree: the series is truncated at x^4
+  // (relative error ~ x^3 = 1e-9), the expm1 form loses ~1e-16/x^2 = 1e-10 relative.
+  const double tb = 100.0;
+  const double lo = imu::avar_gauss_markov(1.0, tb, 0.1 * (1.0 - 1e-12));
+  const double hi = imu::avar_gauss_markov(1.0, tb, 0.1 * (1.0 + 1e-12));
+  EXPECT_NEAR(lo, hi, 1e-8 * hi);
+  // Short tau: Sb (tau/3 - tau^2/(4 Tb)) from the Taylor expansion of the MODELS.md formula;
+  // the next term is O((tau/Tb)^2) = 1e-12 relative.
+  const double tau = 1e-4;
+  const double want = tau / 3.0 - tau * tau / (4.0 * tb);
+  EXPECT_NEAR(imu::avar_gauss_markov(1.0, tb, tau), want, 1e-11 * want);
+}
+
+TEST(ErrorModel, TermFormulas) {
+  EXPECT_DOUBLE_EQ(imu::avar_white(2.0, 4.0), 1.0);
+  EXPECT_DOUBLE_EQ(imu::avar_quantization(1.0, 3.0), 1.0 / 3.0);
+  EXPECT_DOUBLE_EQ(imu::avar_rrw(3.0, 2.0), 6.0);
+  EXPECT_DOUBLE_EQ(imu::avar_ramp(2.0, 3.0), 18.0);
+  // Sinusoid: zero at tau = 1/f0, A^2 sin^4(pi/2)/(pi/2)^2 at tau = 1/(2 f0).
+  EXPECT_NEAR(imu::avar_sinusoid(1.0, 2.0, 0.5), 0.0, 1e-30);
+  EXPECT_NEAR(imu::avar_sinusoid(1.0, 2.0, 0.25), 4.0 / (kPi * kPi), 1e-15);
+  imu::ModelParams p;
+  p.n = 2.0;
+  p.k = 3.0;
+  EXPECT_DOUBLE_EQ(imu::model_avar(p, 2.0), 2.0 + 6.0);
+}
+
+TEST(Linalg, ExpmOfRotationAndNilpotent) {
+  // expm([[0, w], [-w, 0]] t) = [[cos, sin], [-sin, cos]] (w t = 2.5 rad, needs squarings).
+  imu::Mat<double, 3, 3> a{};
+  a(0, 1) = 2.5;
+  a(1, 0) = -2.5;
+  imu::Mat<double, 3, 3> e{};
+  ASSERT_TRUE(imu::expm(a, e, 2));
+  // Pade [6/6] with scaling: accurate to a few ulp times 2^s; 1e-13 leaves margin.
+  EXPECT_NEAR(e(0, 0), std::cos(2.5), 1e-13);
+  EXPECT_NEAR(e(0, 1), std::sin(2.5), 1e-13);
+  EXPECT_NEAR(e(1, 0), -std::sin(2.5), 1e-13);
+  EXPECT_NEAR(e(2, 2), 0.0, 1e-300);  // outside the leading block: untouched zero
+  // Nilpotent [[0, 1], [0, 0]] * 7: exact [[1, 7], [0, 1]].
+  imu::Mat<double, 2, 2> nil{};
+  nil(0, 1) = 7.0;
+  imu::Mat<double, 2, 2> en{};
+  ASSERT_TRUE(imu::expm(nil, en));
+  EXPECT_NEAR(en(0, 1), 7.0, 1e-13);
+  EXPECT_NEAR(en(0, 0), 1.0, 1e-14);
+}
+
+TEST(Linalg, LuSolveReportsSingular) {
+  imu::Mat<double, 2, 2> a{};
+  a(0, 0) = 1.0;
+  a(0, 1) = 2.0;
+  a(1, 0) = 2.0;
+  a(1, 1) = 4.0;
+  imu::Mat<double, 2, 1> b{};
+  b(0, 0) = 1.0;
+  imu::Mat<double, 2, 1> x{};
+  x(0, 0) = 42.0;
+  EXPECT_FALSE(imu::lu_solve(a, b, x));
+  EXPECT_NEAR(x(0, 0), 42.0, 0.0);  // untouched on failure
+  a(1, 1) = 5.0;
+  b(1, 0) = 1.0;  // [1 2; 2 5] x = [1; 1] -> x = [3, -1]
+  ASSERT_TRUE(imu::lu_solve(a, b, x));
+  EXPECT_NEAR(x(0, 0), 3.0, 1e-14);
+  EXPECT_NEAR(x(1, 0), -1.0, 1e-14);
+}
+
+TEST(ErrorModel, VanLoanForRampAndRrwIsExact) {
+  // Ramp: Phi = [[1, Ts], [0, 1]], no process noise. RRW: Phi = 1, Qd = K^2 Ts.
+  imu::ContinuousModel<6> c;
+  ASSERT_EQ(c.add_rrw(2e-3), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_ramp(1e-5), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_sinusoid(1e-3, 0.5), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.n_states, 5U);
+  imu::DiscreteModel<6> d;
+  ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
+  // All entries are O(1): 1e-14 absolute is ~100 ulp.
+  EXPECT_NEAR(d.phi(0, 0), 1.0, 1e-14);
+  EXPECT_NEAR(d.qd(0, 0), 4e-6 * 0.01, 1e-20);
+  EXPECT_NEAR(d.phi(1, 2), 0.01, 1e-14);
+  EXPECT_NEAR(d.phi(1, 1), 1.0, 1e-14);
+  EXPECT_NEAR(d.qd(1, 1), 0.0, 1e-25);
+  const double wt = 2.0 * kPi * 0.5 * 0.01;
+  EXPECT_NEAR(d.phi(3, 3), std::cos(wt), 1e-14);
+  EXPECT_NEAR(d.phi(3, 4), std::sin(wt), 1e-14);
+  EXPECT_NEAR(d.phi(4, 3), -std::sin(wt), 1e-14);
+  EXPECT_NEAR(d.phi(0, 3), 0.0, 1e-14);
+}
+
+TEST(ErrorModel, BuildModelRoundTripsParams) {
+  imu::ModelParams p;
+  p.n = 3.3e-3;
+  p.q = 1e-5;
+  p.n_gm = 2;
+  p.gm[0] = {2e-8, 50.0};
+  p.gm[1] = {1e-9, 500.0};
+  p.k = 1e-4;
+  imu::ContinuousModel<6> c;
+  ASSERT_EQ(imu::build_model(p, c), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.n_states, 3U);
+  for (double tau : {0.01, 1.0, 100.0, 1000.0}) {
+    EXPECT_NEAR(c.avar(tau), imu::model_avar(p, tau), 1e-15 * imu::model_avar(p, tau));
+  }
+  p.n_gm = 3;  // more GM terms than kMaxGmTerms
+  EXPECT_EQ(imu::build_model(p, c), imu::ModelStatus::kCapacity);
+}
+
+}  // namespace
