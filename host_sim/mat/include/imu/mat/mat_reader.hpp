@@ -1,0 +1,117 @@
+// MAT-file level 5 reader (MATLAB -v6/-v7, Octave, scipy.io.savemat), standard library only.
+//
+// Supported: little- and big-endian files ("IM"/"MI"), compressed (miCOMPRESSED, zlib) and
+// uncompressed (miMATRIX) variables; numeric classes double, single, int8..int64, uint8..uint64
+// (and logical) with any numeric storage type (e.g. class double stored as miUINT8 is
+// converted); char arrays (miUTF8, miUINT16/miUTF16, miUINT8, miUTF32). Other classes (cell,
+// struct, object, sparse, function handles) are listed and skipped by their byte size; reading
+// one is an error. Complex arrays are an error ("complex not supported"). N-d arrays are seen as
+// rows = dims[0], cols = product of the other dimensions. int64/uint64 values beyond 2^53 are
+// rounded to the nearest double.
+//
+// Errors: every failure is a MatError whose message is one line naming the file, the variable
+// and the problem (not a MAT-file, v7.3/HDF5 "re-save with -v7", truncated, corrupt zlib stream,
+// dimensions that do not fit the data, variable not found with the list of variables, ...).
+// Claimed sizes are checked against the bytes actually present (uncompressed) or against the
+// inflated size limit (compressed) before anything is allocated from them.
+//
+// Cost: only the requested variable is decoded. Other uncompressed variables are skipped by
+// their tag; other compressed variables cost one partial inflate of at most 4 KiB (their name is
+// inside the zlib stream). Reading a compressed N-element double column costs one inflate of the
+// variable (about 8 N bytes of scratch) and one copy of the selected column.
+//
+// Thread safety: a MatFile is immutable after construction; const member functions may run
+// concurrently.
+#ifndef IMU_MAT_MAT_READER_HPP
+#define IMU_MAT_MAT_READER_HPP
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "imu/mat/result.hpp"
+
+namespace imu::mat {
+
+/// What list_variables() reports for each top-level variable, in file order.
+struct VariableInfo {
+  std::string name;
+  std::string class_name;  ///< "double", "single", "int8".."uint64", "char", "logical", "cell", ...
+  std::uint64_t rows = 0;  ///< dims[0]
+  std::uint64_t cols = 0;  ///< product of dims[1..]
+  std::uint32_t n_dims = 0;
+  bool complex = false;
+  bool compressed = false;        ///< stored as miCOMPRESSED
+  std::uint64_t file_offset = 0;  ///< byte offset of the variable's tag in the file
+  std::uint64_t file_bytes = 0;   ///< bytes it takes in the file, tag included
+};
+
+namespace detail {
+struct Element;  // a top-level data element (implementation detail)
+struct Matrix;   // a parsed miMATRIX (implementation detail)
+}  // namespace detail
+
+/// A MAT-file image in memory: owned (open()) or borrowed (from_memory()).
+class MatFile {
+ public:
+  /// Read the whole file at `path` into memory and check its 128-byte header.
+  [[nodiscard]] static Result<MatFile> open(const std::string& path);
+
+  /// Use `size` bytes at `data` as a MAT-file image. No copy: the caller keeps the bytes alive
+  /// (and unchanged) for the life of the MatFile. `display_name` prefixes error messages.
+  [[nodiscard]] static Result<MatFile> from_memory(std::string display_name,
+                                                   const std::uint8_t* data, std::size_t size);
+
+  MatFile(MatFile&& other) noexcept;
+  MatFile& operator=(MatFile&& other) noexcept;
+  MatFile(const MatFile&) = delete;
+  MatFile& operator=(const MatFile&) = delete;
+  ~MatFile() = default;
+
+  /// Every top-level variable with its class and size. Fails on the first corrupt element.
+  [[nodiscard]] Result<std::vector<VariableInfo>> list_variables() const;
+
+  /// Column `column` of a numeric matrix, converted to double. A vector (rows == 1 or
+  /// cols == 1, i.e. row or column vector, or a scalar) is returned whole for column 0.
+  [[nodiscard]] Result<std::vector<double>> read_column(std::string_view name,
+                                                        std::size_t column = 0) const;
+
+  /// Same, into a caller-owned vector (its capacity is reused). `out` is cleared on error.
+  [[nodiscard]] Status read_column_into(std::string_view name, std::size_t column,
+                                        std::vector<double>& out) const;
+
+  /// The value of a numeric variable with exactly one element.
+  [[nodiscard]] Result<double> read_scalar(std::string_view name) const;
+
+  /// A char array as UTF-8. A multi-row char matrix gives its rows joined by '\n'.
+  [[nodiscard]] Result<std::string> read_string(std::string_view name) const;
+
+  [[nodiscard]] const std::string& display_name() const { return name_; }
+  [[nodiscard]] bool big_endian() const { return swap_; }
+
+ private:
+  MatFile() = default;
+  [[nodiscard]] Status find(std::string_view name, detail::Element& elem) const;
+  [[nodiscard]] Status load(std::string_view name, const detail::Element& elem,
+                            std::vector<std::uint8_t>& scratch, detail::Matrix& m) const;
+
+  std::string name_;
+  std::vector<std::uint8_t> owned_;
+  const std::uint8_t* data_ = nullptr;
+  std::size_t size_ = 0;
+  bool swap_ = false;  ///< file byte order differs from little-endian
+};
+
+/// Convenience wrappers: open `path` and do one read.
+[[nodiscard]] Result<std::vector<VariableInfo>> list_variables(const std::string& path);
+[[nodiscard]] Result<std::vector<double>> read_column(const std::string& path,
+                                                      std::string_view name,
+                                                      std::size_t column = 0);
+[[nodiscard]] Result<double> read_scalar(const std::string& path, std::string_view name);
+[[nodiscard]] Result<std::string> read_string(const std::string& path, std::string_view name);
+
+}  // namespace imu::mat
+
+#endif  // IMU_MAT_MAT_READER_HPP

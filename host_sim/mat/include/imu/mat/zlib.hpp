@@ -1,0 +1,85 @@
+// RFC 1951 inflate (stored, fixed and dynamic Huffman blocks) with the RFC 1950 zlib wrapper,
+// and a stored-block (level 0) zlib writer. Standard library only, host code.
+//
+// Decoding is table-driven: a 10-bit first-level lookup resolves almost every literal/length and
+// distance code in one step; longer codes fall back to canonical (count/symbol) decoding.
+// Validation follows zlib: over-subscribed code sets are rejected, incomplete sets are accepted
+// only when they have at most one code, a symbol outside the set, a distance before the start of
+// the output, length symbols 286/287 and distance symbols 30/31 are errors.
+//
+// Output is bounded: never more than `max_out` bytes are produced or allocated (the buffer
+// grows geometrically up to min(max_out, what the stream actually produces), starting from
+// `size_hint` when the caller knows the expected size).
+//
+// Cost: O(input + output); one table build per dynamic block (O(2^10 + 288)). Re-entrant: no
+// global state.
+#ifndef IMU_MAT_ZLIB_HPP
+#define IMU_MAT_ZLIB_HPP
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace imu::mat {
+
+enum class InflateStatus : std::uint8_t {
+  ok,
+  truncated_input,    ///< the stream ends before its final block (or before the Adler-32)
+  bad_zlib_header,    ///< CM != 8, CINFO > 7 or the header check bits are wrong
+  preset_dictionary,  ///< FDICT set: a preset dictionary is not supported
+  bad_block_type,     ///< BTYPE == 3
+  bad_stored_length,  ///< LEN != ~NLEN in a stored block
+  bad_code_lengths,   ///< invalid or over-subscribed/incomplete Huffman code set
+  bad_symbol,         ///< a code not in the set, or length symbol 286/287, distance 30/31
+  bad_distance,       ///< a distance reaching before the start of the output
+  output_limit,       ///< the stream inflates to more than max_out bytes
+  adler_mismatch,     ///< Adler-32 of the output differs from the stream's trailer
+};
+
+/// Short, lower-case description of a status ("corrupt zlib stream: ..." prefixes are the
+/// caller's business).
+[[nodiscard]] const char* describe(InflateStatus status);
+
+enum class InflateMode : std::uint8_t {
+  whole,   ///< decode the whole stream; more than max_out bytes is output_limit
+  prefix,  ///< stop with ok once max_out bytes are produced (no Adler-32 check then)
+};
+
+struct InflateResult {
+  InflateStatus status;
+  std::size_t in_consumed;  ///< input bytes used (up to and including the trailer when whole)
+};
+
+/// Inflate a zlib (RFC 1950) stream. `out` is replaced by the produced bytes (also on error:
+/// what was decoded so far). Bytes after the Adler-32 trailer are ignored (in_consumed says
+/// where the stream ended).
+[[nodiscard]] InflateResult inflate_zlib(const std::uint8_t* in, std::size_t in_size,
+                                         std::size_t max_out, InflateMode mode,
+                                         std::vector<std::uint8_t>& out,
+                                         std::size_t size_hint = 0);
+
+/// Inflate a raw deflate (RFC 1951) stream, no wrapper, no check value.
+[[nodiscard]] InflateResult inflate_raw(const std::uint8_t* in, std::size_t in_size,
+                                        std::size_t max_out, InflateMode mode,
+                                        std::vector<std::uint8_t>& out, std::size_t size_hint = 0);
+
+/// Adler-32 (RFC 1950) of `size` bytes, continuing from `adler` (1 for a new checksum).
+[[nodiscard]] std::uint32_t adler32(const std::uint8_t* data, std::size_t size,
+                                    std::uint32_t adler = 1U);
+
+/// Wrap `size` bytes in a valid zlib stream made of stored blocks (no compression, 5 bytes of
+/// overhead per 65535 bytes + 6). Any RFC 1950 decoder accepts it.
+[[nodiscard]] std::vector<std::uint8_t> zlib_store(const std::uint8_t* data, std::size_t size);
+
+/// Upper bound of the inflated size of `compressed_size` bytes of deflate data: a length/distance
+/// pair takes at least 2 bits (1-bit length code, 1-bit distance code) and yields at most 258
+/// bytes, so 1032 bytes per input byte, plus a margin.
+[[nodiscard]] constexpr std::size_t max_inflated_size(std::size_t compressed_size) {
+  return compressed_size > (static_cast<std::size_t>(-1) - 1024U) / 1032U
+             ? static_cast<std::size_t>(-1)
+             : compressed_size * 1032U + 1024U;
+}
+
+}  // namespace imu::mat
+
+#endif  // IMU_MAT_ZLIB_HPP

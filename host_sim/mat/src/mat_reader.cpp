@@ -1,0 +1,914 @@
+// MAT-file level 5 reader. See imu/mat/mat_reader.hpp for the contract.
+#include "imu/mat/mat_reader.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <utility>
+
+#include "imu/mat/zlib.hpp"
+
+namespace imu::mat {
+namespace {
+
+// Data types (MAT-file format, table 1-1).
+constexpr std::uint32_t kMiInt8 = 1;
+constexpr std::uint32_t kMiUint8 = 2;
+constexpr std::uint32_t kMiInt16 = 3;
+constexpr std::uint32_t kMiUint16 = 4;
+constexpr std::uint32_t kMiInt32 = 5;
+constexpr std::uint32_t kMiUint32 = 6;
+constexpr std::uint32_t kMiSingle = 7;
+constexpr std::uint32_t kMiDouble = 9;
+constexpr std::uint32_t kMiInt64 = 12;
+constexpr std::uint32_t kMiUint64 = 13;
+constexpr std::uint32_t kMiMatrix = 14;
+constexpr std::uint32_t kMiCompressed = 15;
+constexpr std::uint32_t kMiUtf8 = 16;
+constexpr std::uint32_t kMiUtf16 = 17;
+constexpr std::uint32_t kMiUtf32 = 18;
+
+// Array classes.
+constexpr std::uint32_t kMxChar = 4;
+constexpr std::uint32_t kMxDouble = 6;
+constexpr std::uint32_t kMxUint64 = 15;
+
+constexpr std::size_t kHeaderBytes = 128;
+constexpr std::size_t kPeekBytes = 4096;  // partial inflate of a compressed variable's header
+constexpr std::size_t kMaxDims = 32;
+constexpr std::array<std::uint8_t, 8> kHdf5Signature = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1A, '\n'};
+
+bool host_little_endian() {
+  const std::uint16_t one = 1;
+  std::uint8_t first = 0;
+  std::memcpy(&first, &one, 1);
+  return first == 1U;
+}
+
+const char* class_name(std::uint32_t cls, bool logical) {
+  if (logical) {
+    return "logical";
+  }
+  switch (cls) {
+    case 1: return "cell";
+    case 2: return "struct";
+    case 3: return "object";
+    case 4: return "char";
+    case 5: return "sparse";
+    case 6: return "double";
+    case 7: return "single";
+    case 8: return "int8";
+    case 9: return "uint8";
+    case 10: return "int16";
+    case 11: return "uint16";
+    case 12: return "int32";
+    case 13: return "uint32";
+    case 14: return "int64";
+    case 15: return "uint64";
+    case 16: return "function_handle";
+    case 17: return "opaque";
+    default: return "unknown";
+  }
+}
+
+const char* type_name(std::uint32_t type) {
+  switch (type) {
+    case kMiInt8: return "miINT8";
+    case kMiUint8: return "miUINT8";
+    case kMiInt16: return "miINT16";
+    case kMiUint16: return "miUINT16";
+    case kMiInt32: return "miINT32";
+    case kMiUint32: return "miUINT32";
+    case kMiSingle: return "miSINGLE";
+    case kMiDouble: return "miDOUBLE";
+    case kMiInt64: return "miINT64";
+    case kMiUint64: return "miUINT64";
+    case kMiMatrix: return "miMATRIX";
+    case kMiCompressed: return "miCOMPRESSED";
+    case kMiUtf8: return "miUTF8";
+    case kMiUtf16: return "miUTF16";
+    case kMiUtf32: return "miUTF32";
+    default: return "unknown type";
+  }
+}
+
+// Bytes per element of a numeric storage type; 0 if not numeric.
+std::size_t numeric_size(std::uint32_t type) {
+  switch (type) {
+    case kMiInt8:
+    case kMiUint8: return 1;
+    case kMiInt16:
+    case kMiUint16: return 2;
+    case kMiInt32:
+    case kMiUint32:
+    case kMiSingle: return 4;
+    case kMiDouble:
+    case kMiInt64:
+    case kMiUint64: return 8;
+    default: return 0;
+  }
+}
+
+// Bytes per code unit of a char storage type; 0 if not usable for char.
+std::size_t char_unit_size(std::uint32_t type) {
+  switch (type) {
+    case kMiInt8:
+    case kMiUint8:
+    case kMiUtf8: return 1;
+    case kMiUint16:
+    case kMiInt16:
+    case kMiUtf16: return 2;
+    case kMiUint32:
+    case kMiInt32:
+    case kMiUtf32: return 4;
+    default: return 0;
+  }
+}
+
+std::uint64_t load_uint(const std::uint8_t* p, std::size_t n, bool big_endian) {
+  std::uint64_t v = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t k = big_endian ? i : n - 1U - i;
+    v = (v << 8U) | p[k];
+  }
+  return v;
+}
+
+std::uint32_t load_u32(const std::uint8_t* p, bool big_endian) {
+  return static_cast<std::uint32_t>(load_uint(p, 4, big_endian));
+}
+
+template <class T>
+T load_as(const std::uint8_t* p, bool big_endian) {
+  static_assert(sizeof(T) <= 8, "scalar types only");
+  const std::uint64_t bits = load_uint(p, sizeof(T), big_endian);
+  T v{};
+  if constexpr (sizeof(T) == 1) {
+    const auto b = static_cast<std::uint8_t>(bits);
+    std::memcpy(&v, &b, 1);
+  } else if constexpr (sizeof(T) == 2) {
+    const auto b = static_cast<std::uint16_t>(bits);
+    std::memcpy(&v, &b, 2);
+  } else if constexpr (sizeof(T) == 4) {
+    const auto b = static_cast<std::uint32_t>(bits);
+    std::memcpy(&v, &b, 4);
+  } else {
+    std::memcpy(&v, &bits, 8);
+  }
+  return v;
+}
+
+template <class T>
+void convert_as(const std::uint8_t* p, std::size_t n, bool big_endian, double* out) {
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] = static_cast<double>(load_as<T>(p + i * sizeof(T), big_endian));
+  }
+}
+
+// Convert n elements of numeric storage `type` to double.
+void convert(const std::uint8_t* p, std::uint32_t type, std::size_t n, bool big_endian, double* out) {
+  switch (type) {
+    case kMiDouble:
+      if (!big_endian && host_little_endian()) {
+        std::memcpy(out, p, n * sizeof(double));  // fast path: the file's bytes are host doubles
+      } else {
+        convert_as<double>(p, n, big_endian, out);
+      }
+      break;
+    case kMiSingle: convert_as<float>(p, n, big_endian, out); break;
+    case kMiInt8: convert_as<std::int8_t>(p, n, big_endian, out); break;
+    case kMiUint8: convert_as<std::uint8_t>(p, n, big_endian, out); break;
+    case kMiInt16: convert_as<std::int16_t>(p, n, big_endian, out); break;
+    case kMiUint16: convert_as<std::uint16_t>(p, n, big_endian, out); break;
+    case kMiInt32: convert_as<std::int32_t>(p, n, big_endian, out); break;
+    case kMiUint32: convert_as<std::uint32_t>(p, n, big_endian, out); break;
+    case kMiInt64: convert_as<std::int64_t>(p, n, big_endian, out); break;
+    case kMiUint64: convert_as<std::uint64_t>(p, n, big_endian, out); break;
+    default: break;  // unreachable: the caller checked numeric_size(type) != 0
+  }
+}
+
+void append_utf8(std::string& s, std::uint32_t cp) {
+  if (cp > 0x10FFFFU || (cp >= 0xD800U && cp <= 0xDFFFU)) {
+    cp = 0xFFFDU;  // replacement character for values that are not Unicode scalars
+  }
+  if (cp < 0x80U) {
+    s.push_back(static_cast<char>(cp));
+  } else if (cp < 0x800U) {
+    s.push_back(static_cast<char>(0xC0U | (cp >> 6U)));
+    s.push_back(static_cast<char>(0x80U | (cp & 0x3FU)));
+  } else if (cp < 0x10000U) {
+    s.push_back(static_cast<char>(0xE0U | (cp >> 12U)));
+    s.push_back(static_cast<char>(0x80U | ((cp >> 6U) & 0x3FU)));
+    s.push_back(static_cast<char>(0x80U | (cp & 0x3FU)));
+  } else {
+    s.push_back(static_cast<char>(0xF0U | (cp >> 18U)));
+    s.push_back(static_cast<char>(0x80U | ((cp >> 12U) & 0x3FU)));
+    s.push_back(static_cast<char>(0x80U | ((cp >> 6U) & 0x3FU)));
+    s.push_back(static_cast<char>(0x80U | (cp & 0x3FU)));
+  }
+}
+
+// One sub-element tag inside a matrix payload.
+struct Sub {
+  std::uint32_t type = 0;
+  std::size_t bytes = 0;     // declared data bytes
+  std::size_t data_off = 0;  // offset of the data in the payload
+  std::size_t next = 0;      // offset of the next tag (after 8-byte padding, clamped)
+};
+
+enum class Parse : std::uint8_t { ok, need_more, corrupt };
+
+// Read the tag at `off`. `allow_short_data`: the data may extend past the view (partial view of
+// a compressed variable); the tag itself must be inside it.
+Parse read_sub(const std::uint8_t* p, std::size_t n, std::size_t off, bool big_endian,
+               bool partial, bool allow_short_data, Sub& s, std::string& problem) {
+  if (off > n || n - off < 8U) {
+    problem = "matrix element ends inside a sub-element tag";
+    return partial ? Parse::need_more : Parse::corrupt;
+  }
+  const std::uint32_t w0 = load_u32(p + off, big_endian);
+  if ((w0 >> 16U) != 0U) {  // small data element: type and size packed in 4 bytes
+    s.type = w0 & 0xFFFFU;
+    s.bytes = w0 >> 16U;
+    if (s.bytes > 4U) {
+      problem = "small data element claims more than 4 bytes";
+      return Parse::corrupt;
+    }
+    s.data_off = off + 4U;
+    s.next = off + 8U;
+    return Parse::ok;
+  }
+  s.type = w0;
+  s.bytes = load_u32(p + off + 4U, big_endian);
+  s.data_off = off + 8U;
+  if (s.bytes > n - s.data_off) {
+    if (partial) {
+      if (allow_short_data) {
+        s.next = n;
+        return Parse::ok;
+      }
+      return Parse::need_more;
+    }
+    problem = std::string(type_name(s.type)) + " sub-element claims " + std::to_string(s.bytes) +
+              " bytes, only " + std::to_string(n - s.data_off) + " remain in the matrix";
+    return Parse::corrupt;
+  }
+  const std::size_t padded = s.bytes + ((8U - s.bytes % 8U) % 8U);
+  s.next = padded > n - s.data_off ? n : s.data_off + padded;
+  return Parse::ok;
+}
+
+std::string dims_text(const std::vector<std::uint64_t>& dims) {
+  std::string t;
+  for (std::size_t i = 0; i < dims.size(); ++i) {
+    if (i > 0U) {
+      t += 'x';
+    }
+    t += std::to_string(dims[i]);
+  }
+  return t;
+}
+
+}  // namespace
+
+// A top-level data element.
+namespace detail {
+struct Element {
+  std::size_t offset = 0;  // tag offset in the file
+  std::uint32_t type = 0;
+  std::size_t payload_off = 0;
+  std::size_t payload_bytes = 0;
+  std::size_t next = 0;
+};
+
+// A parsed matrix: header, and (full parse) the location of the real part.
+struct Matrix {
+  std::uint32_t cls = 0;
+  bool complex = false;
+  bool logical = false;
+  std::vector<std::uint64_t> dims;
+  std::uint64_t rows = 0;
+  std::uint64_t cols = 0;
+  std::uint64_t n_elems = 0;
+  bool n_overflow = false;
+  std::string name;
+  bool has_data = false;  // numeric or char: a real-part tag was read
+  std::uint32_t data_type = 0;
+  std::size_t data_bytes = 0;
+  const std::uint8_t* data = nullptr;  // only after a full parse
+  std::size_t data_present = 0;        // bytes of the real part inside the view
+};
+}  // namespace detail
+
+using detail::Element;
+using detail::Matrix;
+
+namespace {
+
+// Parse a miMATRIX payload of n bytes (partial: n is only a prefix of it).
+
+Parse parse_matrix(const std::uint8_t* p, std::size_t n, bool big_endian, bool partial,
+                   Matrix& m, std::string& problem) {
+  Sub s;
+  Parse r = read_sub(p, n, 0, big_endian, partial, false, s, problem);
+  if (r != Parse::ok) {
+    return r;
+  }
+  if (s.type != kMiUint32 || s.bytes != 8U) {
+    problem = "array flags are not an 8-byte miUINT32 element";
+    return Parse::corrupt;
+  }
+  const std::uint32_t flags = load_u32(p + s.data_off, big_endian);
+  m.cls = flags & 0xFFU;
+  m.complex = (flags & 0x800U) != 0U;
+  m.logical = (flags & 0x200U) != 0U;
+
+  r = read_sub(p, n, s.next, big_endian, partial, false, s, problem);
+  if (r != Parse::ok) {
+    return r;
+  }
+  if (s.type != kMiInt32 || s.bytes % 4U != 0U || s.bytes < 8U) {
+    problem = "dimensions are not a miINT32 element of at least 2 values";
+    return Parse::corrupt;
+  }
+  if (s.bytes / 4U > kMaxDims) {
+    problem = std::to_string(s.bytes / 4U) + " dimensions (more than " + std::to_string(kMaxDims) +
+              " not supported)";
+    return Parse::corrupt;
+  }
+  m.dims.clear();
+  m.n_elems = 1;
+  m.n_overflow = false;
+  for (std::size_t i = 0; i < s.bytes / 4U; ++i) {
+    const auto d = static_cast<std::int32_t>(load_u32(p + s.data_off + 4U * i, big_endian));
+    if (d < 0) {
+      problem = "negative dimension " + std::to_string(d);
+      return Parse::corrupt;
+    }
+    const auto du = static_cast<std::uint64_t>(d);
+    m.dims.push_back(du);
+    if (du != 0U && m.n_elems > std::numeric_limits<std::uint64_t>::max() / du) {
+      m.n_overflow = true;
+    }
+    m.n_elems *= du;  // meaningful only when !n_overflow (or when a dimension is 0)
+  }
+  if (std::find(m.dims.begin(), m.dims.end(), 0U) != m.dims.end()) {
+    m.n_overflow = false;
+    m.n_elems = 0;
+  }
+  m.rows = m.dims[0];
+  m.cols = 1;
+  for (std::size_t i = 1; i < m.dims.size(); ++i) {
+    m.cols = m.dims[i] != 0U && m.cols > std::numeric_limits<std::uint64_t>::max() / m.dims[i]
+                 ? std::numeric_limits<std::uint64_t>::max()
+                 : m.cols * m.dims[i];
+  }
+
+  r = read_sub(p, n, s.next, big_endian, partial, false, s, problem);
+  if (r != Parse::ok) {
+    return r;
+  }
+  if (s.type != kMiInt8 && s.type != kMiUint8 && s.type != kMiUtf8) {
+    problem = "array name is not a miINT8 element";
+    return Parse::corrupt;
+  }
+  m.name.assign(reinterpret_cast<const char*>(p + s.data_off), s.bytes);  // NOLINT: bytes as text
+  const std::size_t nul = m.name.find('\0');
+  if (nul != std::string::npos) {
+    m.name.resize(nul);
+  }
+
+  m.has_data = false;
+  const bool numeric = (m.cls >= kMxDouble && m.cls <= kMxUint64) || m.cls == kMxChar;
+  if (!numeric) {
+    return Parse::ok;  // other classes: header only, skipped by size
+  }
+  if (s.next >= n && !partial) {
+    problem = "real part is missing";
+    return Parse::corrupt;
+  }
+  r = read_sub(p, n, s.next, big_endian, partial, true, s, problem);
+  if (r != Parse::ok) {
+    return r;
+  }
+  m.has_data = true;
+  m.data_type = s.type;
+  m.data_bytes = s.bytes;
+  m.data = p + s.data_off;
+  m.data_present = std::min(s.bytes, n - std::min(n, s.data_off));
+  return Parse::ok;
+}
+
+}  // namespace
+
+MatFile::MatFile(MatFile&& other) noexcept
+    : name_(std::move(other.name_)),
+      owned_(std::move(other.owned_)),
+      data_(other.data_),
+      size_(other.size_),
+      swap_(other.swap_) {}
+
+MatFile& MatFile::operator=(MatFile&& other) noexcept {
+  if (this != &other) {
+    name_ = std::move(other.name_);
+    owned_ = std::move(other.owned_);  // moving a vector keeps its buffer: data_ stays valid
+    data_ = other.data_;
+    size_ = other.size_;
+    swap_ = other.swap_;
+  }
+  return *this;
+}
+
+Result<MatFile> MatFile::from_memory(std::string display_name, const std::uint8_t* data,
+                                     std::size_t size) {
+  const auto fail = [&display_name](const std::string& what) {
+    return MatError{display_name + ": " + what};
+  };
+  const auto starts_with = [data, size](std::size_t at, const std::uint8_t* sig, std::size_t n) {
+    return size >= at + n && std::memcmp(data + at, sig, n) == 0;
+  };
+  static constexpr char kV73[] = "MATLAB 7.3";
+  if (starts_with(0, kHdf5Signature.data(), kHdf5Signature.size()) ||
+      starts_with(512, kHdf5Signature.data(), kHdf5Signature.size()) ||
+      starts_with(0, reinterpret_cast<const std::uint8_t*>(kV73), sizeof(kV73) - 1U)) {  // NOLINT
+    return fail("MATLAB v7.3 (HDF5) MAT-file is not supported: re-save with -v7");
+  }
+  if (size < kHeaderBytes) {
+    return fail("not a MAT-file: " + std::to_string(size) +
+                " bytes, shorter than the 128-byte level 5 header");
+  }
+  bool big_endian = false;
+  if (data[126] == 'I' && data[127] == 'M') {
+    big_endian = false;
+  } else if (data[126] == 'M' && data[127] == 'I') {
+    big_endian = true;
+  } else {
+    return fail("not a MAT-file: no level 5 header (endian indicator 'IM'/'MI' missing; "
+                "v4 and other formats are not supported)");
+  }
+  const auto version = static_cast<unsigned>(load_uint(data + 124, 2, big_endian));
+  if (version != 0x0100U) {
+    char text[64];
+    std::snprintf(text, sizeof text, "unsupported MAT-file version 0x%04x (expected 0x0100)",
+                  version);
+    return fail(text);
+  }
+  MatFile f;
+  f.name_ = std::move(display_name);
+  f.data_ = data;
+  f.size_ = size;
+  f.swap_ = big_endian;
+  return f;
+}
+
+Result<MatFile> MatFile::open(const std::string& path) {
+  std::FILE* fp = std::fopen(path.c_str(), "rb");
+  if (fp == nullptr) {
+    return MatError{path + ": cannot open: " + std::strerror(errno)};
+  }
+  std::vector<std::uint8_t> bytes;
+  std::array<std::uint8_t, 1U << 16U> chunk{};
+  if (std::fseek(fp, 0, SEEK_END) == 0) {
+    const long end = std::ftell(fp);
+    if (end > 0) {
+      bytes.reserve(static_cast<std::size_t>(end));
+    }
+    std::rewind(fp);
+  }
+  for (;;) {
+    const std::size_t got = std::fread(chunk.data(), 1, chunk.size(), fp);
+    bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(got));
+    if (got < chunk.size()) {
+      break;
+    }
+  }
+  const bool read_error = std::ferror(fp) != 0;
+  std::fclose(fp);
+  if (read_error) {
+    return MatError{path + ": read error"};
+  }
+  Result<MatFile> r = from_memory(path, bytes.data(), bytes.size());
+  if (!r.ok()) {
+    return r;
+  }
+  MatFile f = std::move(r).value();
+  f.owned_ = std::move(bytes);  // the buffer does not move: data_ stays valid
+  f.data_ = f.owned_.data();
+  return f;
+}
+
+namespace {
+
+// Read the top-level element tag at `off`.
+Status next_element(const std::string& file, const std::uint8_t* data, std::size_t size,
+                    std::size_t off, bool big_endian, std::uint32_t& type, std::size_t& payload,
+                    std::size_t& bytes, std::size_t& next) {
+  if (size - off < 8U) {
+    return MatError{file + ": truncated: " + std::to_string(size - off) +
+                    " stray bytes at offset " + std::to_string(off) + " (an element tag is 8)"};
+  }
+  type = load_u32(data + off, big_endian);
+  bytes = load_u32(data + off + 4U, big_endian);
+  payload = off + 8U;
+  if (bytes > size - payload) {
+    return MatError{file + ": truncated: element at offset " + std::to_string(off) + " declares " +
+                    std::to_string(bytes) + " bytes, only " + std::to_string(size - payload) +
+                    " remain"};
+  }
+  std::size_t padded = bytes;
+  if (type != kMiCompressed) {
+    padded += (8U - bytes % 8U) % 8U;  // uncompressed elements are 8-byte aligned
+  }
+  next = padded > size - payload ? size : payload + padded;
+  return Status{};
+}
+
+// Parse the header of the element (partial inflate when compressed) into m.
+Status peek_header(const std::string& file, const std::uint8_t* data, bool big_endian,
+                   std::uint32_t type, std::size_t offset, std::size_t payload, std::size_t bytes,
+                   std::vector<std::uint8_t>& scratch, Matrix& m) {
+  const std::string where = file + ": element at offset " + std::to_string(offset) + ": ";
+  std::string problem;
+  if (type == kMiMatrix) {
+    const Parse r = parse_matrix(data + payload, bytes, big_endian, true, m, problem);
+    if (r != Parse::ok) {
+      return MatError{where + (r == Parse::need_more ? "matrix header is truncated" : problem)};
+    }
+    return Status{};
+  }
+  // miCOMPRESSED: inflate just enough to see the inner miMATRIX header.
+  const std::size_t cap = std::min(kPeekBytes, max_inflated_size(bytes));
+  InflateResult ir = inflate_zlib(data + payload, bytes, cap, InflateMode::prefix, scratch);
+  if (ir.status != InflateStatus::ok) {
+    return MatError{where + "corrupt zlib stream (" + describe(ir.status) + ")"};
+  }
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (scratch.size() < 8U) {
+      return MatError{where + "compressed data holds " + std::to_string(scratch.size()) +
+                      " bytes, not a matrix"};
+    }
+    const std::uint32_t inner = load_u32(scratch.data(), big_endian);
+    if (inner != kMiMatrix) {
+      return MatError{where + "compressed data holds a " + type_name(inner) +
+                      " element, not miMATRIX"};
+    }
+    const std::size_t inner_bytes = load_u32(scratch.data() + 4, big_endian);
+    const bool partial = scratch.size() - 8U < inner_bytes;
+    const std::size_t view = std::min(inner_bytes, scratch.size() - 8U);
+    const Parse r = parse_matrix(scratch.data() + 8, view, big_endian, partial, m, problem);
+    if (r == Parse::ok) {
+      return Status{};
+    }
+    if (r == Parse::corrupt || attempt == 1 || scratch.size() < cap) {
+      return MatError{where + (r == Parse::need_more ? "matrix header is truncated" : problem)};
+    }
+    // Header longer than the peek (very long name or many dimensions): inflate it all.
+    ir = inflate_zlib(data + payload, bytes, max_inflated_size(bytes), InflateMode::whole, scratch);
+    if (ir.status != InflateStatus::ok) {
+      return MatError{where + "corrupt zlib stream (" + describe(ir.status) + ")"};
+    }
+  }
+  return MatError{where + "matrix header is truncated"};
+}
+
+}  // namespace
+
+namespace {
+
+// Check the real part of a numeric or char matrix against its dimensions.
+Status check_data(const std::string& where, const Matrix& m, std::size_t unit) {
+  if (m.complex) {
+    return MatError{where + "complex not supported (" + class_name(m.cls, m.logical) + " " +
+                    dims_text(m.dims) + ")"};
+  }
+  if (unit == 0U) {
+    return MatError{where + "corrupt: storage type " + type_name(m.data_type) + " (" +
+                    std::to_string(m.data_type) + ") is not valid for class " +
+                    class_name(m.cls, m.logical)};
+  }
+  const bool utf8 = m.data_type == kMiUtf8;
+  if (m.data_bytes % unit != 0U) {
+    return MatError{where + "corrupt: " + std::to_string(m.data_bytes) + " bytes of " +
+                    type_name(m.data_type) + " is not a whole number of elements"};
+  }
+  const std::uint64_t have = m.data_bytes / unit;
+  if (m.n_overflow || (!utf8 && have != m.n_elems) || (utf8 && have < m.n_elems)) {
+    return MatError{where + "dimensions " + dims_text(m.dims) + " do not fit the data (" +
+                    std::to_string(have) + " elements of " + type_name(m.data_type) + ")"};
+  }
+  return Status{};
+}
+
+// Storage unit of the real part for the matrix's class (0: not valid for it).
+std::size_t data_unit(const Matrix& m) {
+  return m.cls == kMxChar ? char_unit_size(m.data_type) : numeric_size(m.data_type);
+}
+
+}  // namespace
+
+Result<std::vector<VariableInfo>> MatFile::list_variables() const {
+  std::vector<VariableInfo> vars;
+  std::vector<std::uint8_t> scratch;
+  std::size_t off = kHeaderBytes;
+  while (off < size_) {
+    std::uint32_t type = 0;
+    std::size_t payload = 0;
+    std::size_t bytes = 0;
+    std::size_t next = 0;
+    Status st = next_element(name_, data_, size_, off, swap_, type, payload, bytes, next);
+    if (!st.ok()) {
+      return st.error();
+    }
+    if (type == kMiMatrix || type == kMiCompressed) {
+      Matrix m;
+      st = peek_header(name_, data_, swap_, type, off, payload, bytes, scratch, m);
+      if (!st.ok()) {
+        return st.error();
+      }
+      if (!m.name.empty()) {
+        VariableInfo v;
+        v.name = m.name;
+        v.class_name = class_name(m.cls, m.logical);
+        v.rows = m.rows;
+        v.cols = m.cols;
+        v.n_dims = static_cast<std::uint32_t>(m.dims.size());
+        v.complex = m.complex;
+        v.compressed = type == kMiCompressed;
+        v.file_offset = off;
+        v.file_bytes = next - off;
+        vars.push_back(std::move(v));
+      }
+    }
+    off = next;
+  }
+  return vars;
+}
+
+Status MatFile::find(std::string_view name, Element& elem) const {
+  std::vector<std::uint8_t> scratch;
+  std::string seen;
+  std::size_t off = kHeaderBytes;
+  while (off < size_) {
+    Element e;
+    e.offset = off;
+    Status st = next_element(name_, data_, size_, off, swap_, e.type, e.payload_off,
+                             e.payload_bytes, e.next);
+    if (!st.ok()) {
+      return st;
+    }
+    if (e.type == kMiMatrix || e.type == kMiCompressed) {
+      Matrix m;
+      st = peek_header(name_, data_, swap_, e.type, off, e.payload_off, e.payload_bytes, scratch, m);
+      if (!st.ok()) {
+        return st;
+      }
+      if (m.name == name && !m.name.empty()) {
+        elem = e;
+        return Status{};
+      }
+      if (!m.name.empty()) {
+        seen += (seen.empty() ? "" : ", ") + m.name;
+      }
+    }
+    off = e.next;
+  }
+  return MatError{name_ + ": variable '" + std::string(name) + "' not found; variables: " +
+                  (seen.empty() ? std::string("(none)") : seen)};
+}
+
+Status MatFile::load(std::string_view name, const Element& elem, std::vector<std::uint8_t>& scratch,
+                     Matrix& m) const {
+  const std::string where = name_ + ": variable '" + std::string(name) + "': ";
+  std::string problem;
+  const std::uint8_t* p = data_ + elem.payload_off;
+  std::size_t n = elem.payload_bytes;
+  if (elem.type == kMiCompressed) {
+    // The header was peeked by find(): re-peek to get the declared sizes, check them, and only
+    // then inflate the whole variable.
+    Status st = peek_header(name_, data_, swap_, elem.type, elem.offset, elem.payload_off,
+                            elem.payload_bytes, scratch, m);
+    if (!st.ok()) {
+      return st;
+    }
+    if (m.has_data) {
+      st = check_data(where, m, data_unit(m));  // before inflating anything sized by the claim
+      if (!st.ok()) {
+        return st;
+      }
+    }
+    const std::size_t inner_bytes = load_u32(scratch.data() + 4, swap_);
+    const std::size_t limit = max_inflated_size(elem.payload_bytes);
+    if (inner_bytes > limit - 8U) {
+      return MatError{where + "corrupt: declares " + std::to_string(inner_bytes) +
+                      " bytes, more than " + std::to_string(elem.payload_bytes) +
+                      " compressed bytes can hold"};
+    }
+    const std::size_t want = inner_bytes + 8U;
+    const InflateResult ir = inflate_zlib(p, n, want, InflateMode::whole, scratch, want);
+    if (ir.status != InflateStatus::ok) {
+      return MatError{where + "corrupt zlib stream (" + describe(ir.status) + ")"};
+    }
+    if (scratch.size() < want) {
+      return MatError{where + "truncated: zlib stream inflates to " +
+                      std::to_string(scratch.size()) + " bytes, the matrix declares " +
+                      std::to_string(want)};
+    }
+    p = scratch.data() + 8;
+    n = inner_bytes;
+  }
+  const Parse r = parse_matrix(p, n, swap_, false, m, problem);
+  if (r != Parse::ok) {
+    return MatError{where + "corrupt: " + problem};
+  }
+  return Status{};
+}
+
+
+Status MatFile::read_column_into(std::string_view name, std::size_t column,
+                                 std::vector<double>& out) const {
+  out.clear();
+  const std::string where = name_ + ": variable '" + std::string(name) + "': ";
+  Element elem;
+  Status st = find(name, elem);
+  if (!st.ok()) {
+    return st;
+  }
+  std::vector<std::uint8_t> scratch;
+  Matrix m;
+  st = load(name, elem, scratch, m);
+  if (!st.ok()) {
+    return st;
+  }
+  if (!m.has_data || m.cls == kMxChar) {
+    return MatError{where + "is a " + class_name(m.cls, m.logical) +
+                    " array, not numeric (double, single, int8..uint64)"};
+  }
+  st = check_data(where, m, numeric_size(m.data_type));
+  if (!st.ok()) {
+    return st;
+  }
+  if (m.n_elems == 0U) {
+    return MatError{where + "is empty (" + dims_text(m.dims) + ")"};
+  }
+  std::uint64_t first = 0;
+  std::uint64_t count = m.n_elems;
+  if (m.rows == 1U || m.cols == 1U) {
+    if (column != 0U) {
+      return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
+                      std::to_string(column) + " does not exist"};
+    }
+  } else {
+    if (column >= m.cols) {
+      return MatError{where + "has " + std::to_string(m.cols) + " columns (" + dims_text(m.dims) +
+                      "): column " + std::to_string(column) + " does not exist"};
+    }
+    first = static_cast<std::uint64_t>(column) * m.rows;
+    count = m.rows;
+  }
+  const std::size_t unit = numeric_size(m.data_type);
+  out.resize(static_cast<std::size_t>(count));
+  convert(m.data + first * unit, m.data_type, out.size(), swap_, out.data());
+  return Status{};
+}
+
+Result<std::vector<double>> MatFile::read_column(std::string_view name, std::size_t column) const {
+  std::vector<double> out;
+  Status st = read_column_into(name, column, out);
+  if (!st.ok()) {
+    return st.error();
+  }
+  return out;
+}
+
+Result<double> MatFile::read_scalar(std::string_view name) const {
+  const std::string where = name_ + ": variable '" + std::string(name) + "': ";
+  Element elem;
+  Status st = find(name, elem);
+  if (!st.ok()) {
+    return st.error();
+  }
+  std::vector<std::uint8_t> scratch;
+  Matrix m;
+  st = load(name, elem, scratch, m);
+  if (!st.ok()) {
+    return st.error();
+  }
+  if (!m.has_data || m.cls == kMxChar) {
+    return MatError{where + "is a " + class_name(m.cls, m.logical) + " array, not a numeric scalar"};
+  }
+  st = check_data(where, m, numeric_size(m.data_type));
+  if (!st.ok()) {
+    return st.error();
+  }
+  if (m.n_elems != 1U) {
+    return MatError{where + "is " + dims_text(m.dims) + ", not a scalar"};
+  }
+  double v = 0.0;
+  convert(m.data, m.data_type, 1, swap_, &v);
+  return v;
+}
+
+Result<std::string> MatFile::read_string(std::string_view name) const {
+  const std::string where = name_ + ": variable '" + std::string(name) + "': ";
+  Element elem;
+  Status st = find(name, elem);
+  if (!st.ok()) {
+    return st.error();
+  }
+  std::vector<std::uint8_t> scratch;
+  Matrix m;
+  st = load(name, elem, scratch, m);
+  if (!st.ok()) {
+    return st.error();
+  }
+  if (m.cls != kMxChar) {
+    return MatError{where + "is a " + class_name(m.cls, m.logical) + " array, not char"};
+  }
+  const std::size_t unit = char_unit_size(m.data_type);
+  st = check_data(where, m, unit);
+  if (!st.ok()) {
+    return st.error();
+  }
+  std::string text;
+  if (m.data_type == kMiUtf8) {
+    if (m.rows <= 1U || m.data_bytes == m.n_elems) {
+      const auto* c = reinterpret_cast<const char*>(m.data);  // NOLINT: bytes as text
+      if (m.rows <= 1U) {
+        return std::string(c, m.data_bytes);
+      }
+      for (std::uint64_t r = 0; r < m.rows; ++r) {
+        if (r > 0U) {
+          text += '\n';
+        }
+        for (std::uint64_t col = 0; col < m.cols; ++col) {
+          text += c[col * m.rows + r];
+        }
+      }
+      return text;
+    }
+    return MatError{where + "multi-row char array with non-ASCII UTF-8 is not supported"};
+  }
+  const std::uint64_t rows = std::max<std::uint64_t>(m.rows, 1U);
+  const std::uint64_t cols = m.rows == 0U ? 0U : m.cols;
+  for (std::uint64_t r = 0; r < rows && m.n_elems > 0U; ++r) {
+    if (r > 0U) {
+      text += '\n';
+    }
+    for (std::uint64_t col = 0; col < cols; ++col) {
+      const std::uint64_t i = col * m.rows + r;
+      auto cp = static_cast<std::uint32_t>(load_uint(m.data + i * unit, unit, swap_));
+      if (unit == 1U) {
+        cp &= 0xFFU;  // Latin-1
+      }
+      if (unit == 2U && cp >= 0xD800U && cp < 0xDC00U && col + 1U < cols) {
+        const auto lo = static_cast<std::uint32_t>(
+            load_uint(m.data + (i + m.rows) * unit, unit, swap_));
+        if (lo >= 0xDC00U && lo < 0xE000U) {  // UTF-16 surrogate pair
+          cp = 0x10000U + ((cp - 0xD800U) << 10U) + (lo - 0xDC00U);
+          ++col;
+        }
+      }
+      append_utf8(text, cp);
+    }
+  }
+  return text;
+}
+
+Result<std::vector<VariableInfo>> list_variables(const std::string& path) {
+  Result<MatFile> f = MatFile::open(path);
+  if (!f.ok()) {
+    return f.error();
+  }
+  return f.value().list_variables();
+}
+
+Result<std::vector<double>> read_column(const std::string& path, std::string_view name,
+                                        std::size_t column) {
+  Result<MatFile> f = MatFile::open(path);
+  if (!f.ok()) {
+    return f.error();
+  }
+  return f.value().read_column(name, column);
+}
+
+Result<double> read_scalar(const std::string& path, std::string_view name) {
+  Result<MatFile> f = MatFile::open(path);
+  if (!f.ok()) {
+    return f.error();
+  }
+  return f.value().read_scalar(name);
+}
+
+Result<std::string> read_string(const std::string& path, std::string_view name) {
+  Result<MatFile> f = MatFile::open(path);
+  if (!f.ok()) {
+    return f.error();
+  }
+  return f.value().read_string(name);
+}
+
+}  // namespace imu::mat
