@@ -1,0 +1,97 @@
+// Reset and fault handlers and the vector table for the Cortex-M4F test image (mps2-an386).
+// Reset: enable the FPU, copy .data, zero .bss, paint the stack (for the high-water mark), run
+// static constructors, call imu_m4_main(), exit through semihosting with its return value.
+// No newlib crt0 (the image links with -nostartfiles), so nothing calls _sbrk or atexit.
+#include <cstddef>
+#include <cstdint>
+
+#include "semihost.hpp"
+#include "startup.hpp"
+
+extern "C" {
+// Linker script symbols: addresses only, never read as values.
+extern std::uint32_t _sidata[];
+extern std::uint32_t _sdata[];
+extern std::uint32_t _edata[];
+extern std::uint32_t _sbss[];
+extern std::uint32_t _ebss[];
+extern std::uint32_t _sstack[];
+extern std::uint32_t _estack[];
+extern void (*__init_array_start[])();
+extern void (*__init_array_end[])();
+
+int imu_m4_main();  // the program (ISO C++ forbids calling main())
+[[noreturn]] void Reset_Handler();
+[[noreturn]] void Fault_Handler();
+}
+
+namespace {
+
+constexpr std::uint32_t kStackPaint = 0xA5A5A5A5u;
+constexpr std::uintptr_t kScbCpacr = 0xE000ED88u;  // Coprocessor Access Control Register
+constexpr std::uint32_t kCp10Cp11Full = 0xFu << 20;
+
+using Vector = void (*)();
+
+}  // namespace
+
+// Vector table: initial stack pointer, then the handlers (Cortex-M exceptions 1..15).
+// The stack pointer entry is an address, not a function: the cast is what every Cortex-M
+// startup does; it is resolved by the linker.
+__attribute__((section(".isr_vector"), used)) const Vector g_vector_table[16] = {
+    reinterpret_cast<Vector>(_estack),  // NOLINT(cppcoreguidelines-pro-type-reinterpret-cast)
+    Reset_Handler,  Fault_Handler,  Fault_Handler, Fault_Handler, Fault_Handler, Fault_Handler,
+    nullptr,        nullptr,        nullptr,       nullptr,
+    Fault_Handler,  // SVCall
+    Fault_Handler,  // DebugMonitor
+    nullptr,
+    Fault_Handler,  // PendSV
+    Fault_Handler,  // SysTick
+};
+
+void Reset_Handler() {
+  // 1. FPU: full access to CP10/CP11 before any floating-point instruction.
+  auto* cpacr = reinterpret_cast<volatile std::uint32_t*>(kScbCpacr);  // NOLINT
+  *cpacr = *cpacr | kCp10Cp11Full;
+  asm volatile("dsb\n\tisb" ::: "memory");
+  // 2. .data from its load address in flash, .bss to zero.
+  for (std::uint32_t *src = _sidata, *dst = _sdata; dst < _edata; ++src, ++dst) {
+    *dst = *src;
+  }
+  for (std::uint32_t* dst = _sbss; dst < _ebss; ++dst) {
+    *dst = 0;
+  }
+  // 3. Paint the stack below the current frame (64 bytes of margin for this function).
+  std::uint32_t* sp = nullptr;
+  asm volatile("mov %0, sp" : "=r"(sp));
+  for (std::uint32_t* p = _sstack; p < sp - 16; ++p) {
+    *p = kStackPaint;
+  }
+  // 4. Static constructors.
+  for (Vector* f = __init_array_start; f < __init_array_end; ++f) {
+    (*f)();
+  }
+  const int rc = imu_m4_main();
+  imu::m4::semihost_exit(static_cast<std::uint32_t>(rc));
+}
+
+void Fault_Handler() {
+  imu::m4::semihost_write0("IMU-M4 FAULT: processor exception\n");
+  imu::m4::semihost_exit(3);
+}
+
+namespace imu::m4 {
+
+std::size_t stack_high_water_bytes() {
+  const std::uint32_t* p = _sstack;
+  while (p < _estack && *p == kStackPaint) {
+    ++p;
+  }
+  return static_cast<std::size_t>(_estack - p) * sizeof(std::uint32_t);
+}
+
+std::size_t stack_size_bytes() {
+  return static_cast<std::size_t>(_estack - _sstack) * sizeof(std::uint32_t);
+}
+
+}  // namespace imu::m4
