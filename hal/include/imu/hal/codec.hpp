@@ -1,0 +1,200 @@
+// IMU frame protocol: frame type, CRC-32C, record layouts, encoders and record parsers.
+//
+// Platform-free and allocation-free (plain C++17, no heap, no exceptions, no OS headers): the
+// same code runs in host_sim, in the Linux co-processor node and, later, on a Cortex-M4. The
+// protocol itself is specified in hal/README.md; this header is its single implementation.
+//
+// Byte order on the wire is little-endian for every multi-byte field, written byte by byte, so
+// the encoding does not depend on the host. Every record ends with a CRC-32C (Castagnoli) of
+// all its preceding bytes. A record goes out either as one CAN FD frame (Layout::kFd) or as
+// ceil(len / 7) classic 8-byte frames (Layout::kClassic) whose first byte carries a 4-bit
+// transfer counter and a 4-bit fragment index.
+#ifndef IMU_HAL_CODEC_HPP
+#define IMU_HAL_CODEC_HPP
+
+#include <cstddef>
+#include <cstdint>
+
+namespace imu::hal {
+
+// ---- The frame: byte-for-byte the kernel's struct canfd_frame (linux/can.h) ----------------
+
+inline constexpr std::uint32_t kCanEffFlag = 0x80000000U;  ///< CAN_EFF_FLAG: 29-bit identifier
+inline constexpr std::uint32_t kCanRtrFlag = 0x40000000U;  ///< CAN_RTR_FLAG: remote request
+inline constexpr std::uint32_t kCanErrFlag = 0x20000000U;  ///< CAN_ERR_FLAG: error frame
+inline constexpr std::uint32_t kCanSffMask = 0x000007FFU;  ///< CAN_SFF_MASK
+inline constexpr std::uint32_t kCanErrMask = 0x1FFFFFFFU;  ///< CAN_ERR_MASK
+inline constexpr std::uint8_t kCanFdBrs = 0x01;            ///< CANFD_BRS: bit rate switch
+inline constexpr std::uint8_t kCanFdEsi = 0x02;            ///< CANFD_ESI
+inline constexpr std::uint8_t kCanFdFdf = 0x04;            ///< CANFD_FDF: frame is CAN FD
+inline constexpr std::size_t kCanMtu = 16;                 ///< sizeof(struct can_frame)
+inline constexpr std::size_t kCanFdMtu = 72;               ///< sizeof(struct canfd_frame)
+/// Error-frame classes (linux/can/error.h, bits of can_id): TX_TIMEOUT, LOSTARB, CRTL, PROT,
+/// TRX, ACK, BUSOFF, BUSERROR, RESTARTED, CNT. RxStats::err_class[i] counts bit i.
+inline constexpr std::size_t kErrClasses = 10;
+
+/// Same layout as struct canfd_frame; a classic frame is the first 16 bytes (struct can_frame,
+/// whose `len` byte is can_dlc and whose `flags` byte is __pad).
+struct CanFrame {
+  std::uint32_t can_id;  ///< identifier plus EFF/RTR/ERR flags, host byte order as in the kernel
+  std::uint8_t len;      ///< payload bytes: 0..8 classic, 0..8,12,16,20,24,32,48,64 FD
+  std::uint8_t flags;    ///< CANFD_* flags (0 for classic)
+  std::uint8_t res0;
+  std::uint8_t res1;
+  alignas(8) std::uint8_t data[64];
+};
+static_assert(sizeof(CanFrame) == kCanFdMtu, "CanFrame must mirror struct canfd_frame");
+
+/// Bytes to write for this frame: kCanFdMtu if it is an FD frame (FDF flag or len > 8),
+/// otherwise kCanMtu. Constant time.
+[[nodiscard]] inline std::size_t wire_size(const CanFrame& f) {
+  return ((f.flags & kCanFdFdf) != 0 || f.len > 8) ? kCanFdMtu : kCanMtu;
+}
+
+/// Smallest valid CAN FD payload length >= n (n <= 64), e.g. 41 -> 48. Constant time.
+[[nodiscard]] std::uint8_t fd_len_for(std::size_t n);
+
+// ---- CRC ---------------------------------------------------------------------------------
+
+/// CRC-32C (Castagnoli): polynomial 0x1EDC6F41 (reflected 0x82F63B78), init 0xFFFFFFFF, input
+/// and output reflected, final xor 0xFFFFFFFF; check value crc32c("123456789") = 0xE3069283.
+/// Table driven (1 KiB constant table), O(n), re-entrant.
+[[nodiscard]] std::uint32_t crc32c(const std::uint8_t* data, std::size_t n);
+
+// ---- Identifiers and records ---------------------------------------------------------------
+
+enum class Layout : std::uint8_t { kFd, kClassic };
+
+/// Record kinds. Each has an 11-bit identifier per layout (FD id even, classic id = FD id + 1);
+/// a lower identifier wins arbitration, so configuration beats samples beats telemetry.
+enum class RecordKind : std::uint8_t { kConfig, kSample, kAdev, kBias, kMonitor, kStats };
+inline constexpr std::size_t kRecordKinds = 6;
+
+inline constexpr std::uint32_t kIdConfigFd = 0x080;
+inline constexpr std::uint32_t kIdSampleFd = 0x100;
+inline constexpr std::uint32_t kIdAdevFd = 0x200;
+inline constexpr std::uint32_t kIdBiasFd = 0x210;
+inline constexpr std::uint32_t kIdMonitorFd = 0x220;
+inline constexpr std::uint32_t kIdStatsFd = 0x230;
+
+inline constexpr std::size_t kChannels = 6;  ///< ax, ay, az (accelerometer), gx, gy, gz (gyro)
+inline constexpr std::size_t kClassicPayload = 7;  ///< record bytes per classic frame
+inline constexpr std::size_t kMaxRecordLen = 64;
+inline constexpr std::size_t kMaxFragments = 10;   ///< ceil(64 / 7)
+
+/// Sensor information; sent at start-up and periodically (e.g. 1 Hz). 64 bytes.
+struct ConfigRecord {
+  std::uint8_t cfg_id;           ///< changes whenever rate or an LSB changes
+  double rate_hz;                ///< output data rate (Ts = 1 / rate_hz)
+  double lsb[kChannels];         ///< physical value of one count: m/s^2 (acc), rad/s (gyro)
+};
+
+/// One IMU sample. 42 bytes.
+struct SampleRecord {
+  std::uint32_t seq;             ///< +1 per sample, wraps at 2^32
+  std::uint64_t t_sensor_ns;     ///< sensor clock at the sample instant
+  std::int32_t counts[kChannels];///< value / lsb, rounded to nearest (imu::quantize)
+  std::uint8_t cfg_id;           ///< ConfigRecord::cfg_id these counts refer to
+  std::uint8_t sat_mask;         ///< bit c set: channel c was clipped to int32 range
+};
+
+/// One point of an ADEV curve computed by the co-processor. 28 bytes. float32 fields carry
+/// 24-bit mantissas: relative precision 6e-8, far below any confidence interval width.
+struct AdevRecord {
+  std::uint8_t channel;          ///< 0..5 as in SampleRecord::counts
+  std::uint8_t index;            ///< point index in the curve, 0..n_points-1
+  std::uint8_t n_points;         ///< points in the curve being sent
+  float tau_s;
+  float adev;                    ///< channel units (m/s^2 or rad/s)
+  float ci_lo;
+  float ci_hi;
+  std::uint32_t n_terms;         ///< saturates at 2^32-1
+};
+
+/// Bias estimate and its variance for all channels, as of sample `seq`. 60 bytes.
+struct BiasRecord {
+  std::uint32_t seq;
+  float bias[kChannels];         ///< channel units
+  float var[kChannels];          ///< channel units squared
+  std::uint8_t flags;            ///< bit 0: "static" input active (filter updating)
+};
+
+/// Residual-monitor state as of sample `seq`. 20 bytes.
+struct MonitorRecord {
+  std::uint32_t seq;
+  float nis_mean;                ///< running mean of the normalised innovation squared
+  float whiteness;               ///< whiteness statistic (e.g. normalised autocorrelation)
+  std::uint16_t flags;           ///< bit 0 CUSUM alarm, bit 1 whiteness failed, bit 2 alarm line set
+  std::uint8_t cusum_mask;       ///< bit c: CUSUM alarm on channel c
+};
+
+/// Frame statistics of the sender's own receiver (see RxStats). 44 bytes. Counters saturate.
+struct StatsRecord {
+  std::uint32_t frames;
+  std::uint32_t samples;
+  std::uint32_t missing;
+  std::uint32_t crc_errors;
+  std::uint32_t bad_mtu_or_dlc;
+  std::uint32_t unknown_id;
+  std::uint32_t duplicates;
+  std::uint32_t truncated;
+  std::uint32_t error_frames;
+  std::uint32_t kernel_drops;
+};
+
+/// Record lengths in bytes on the wire, CRC included.
+inline constexpr std::size_t kConfigLen = 64;
+inline constexpr std::size_t kSampleLen = 42;
+inline constexpr std::size_t kAdevLen = 28;
+inline constexpr std::size_t kBiasLen = 60;
+inline constexpr std::size_t kMonitorLen = 20;
+inline constexpr std::size_t kStatsLen = 44;
+
+/// Wire length of a record kind; FD identifier of a kind. Constant time.
+[[nodiscard]] std::size_t record_len(RecordKind k);
+[[nodiscard]] std::uint32_t fd_id(RecordKind k);
+/// Kind of an identifier (FD or classic), false if the id is not part of the protocol.
+[[nodiscard]] bool kind_of_id(std::uint32_t can_id, RecordKind& kind, Layout& layout);
+
+// ---- Encoders --------------------------------------------------------------------------------
+
+/// Frames of one encoded record: 1 (FD) or ceil(len / 7) (classic).
+struct EncodedFrames {
+  CanFrame frame[kMaxFragments];
+  std::size_t count;
+};
+
+/// Encode a record into `out` (overwritten). `transfer_id` is the 4-bit counter of the classic
+/// layout (samples use seq & 0xF); ignored for FD. FD frames get flags FDF|BRS. Never fails:
+/// every record fits both layouts by construction. O(record length), re-entrant.
+void encode(const ConfigRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
+void encode(const SampleRecord& r, Layout layout, EncodedFrames& out);
+void encode(const AdevRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
+void encode(const BiasRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
+void encode(const MonitorRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
+void encode(const StatsRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
+
+// ---- Record serialisation (used by the encoders and by Receiver) ------------------------------
+
+/// Write a record's wire bytes, CRC included, into buf (at least record_len bytes).
+void serialize(const ConfigRecord& r, std::uint8_t* buf);
+void serialize(const SampleRecord& r, std::uint8_t* buf);
+void serialize(const AdevRecord& r, std::uint8_t* buf);
+void serialize(const BiasRecord& r, std::uint8_t* buf);
+void serialize(const MonitorRecord& r, std::uint8_t* buf);
+void serialize(const StatsRecord& r, std::uint8_t* buf);
+
+/// True if the last 4 bytes of buf[0, len) are the CRC-32C of the bytes before them.
+[[nodiscard]] bool crc_ok(const std::uint8_t* buf, std::size_t len);
+
+/// Parse wire bytes (CRC already checked by the caller). Constant time.
+void parse(const std::uint8_t* buf, ConfigRecord& r);
+void parse(const std::uint8_t* buf, SampleRecord& r);
+void parse(const std::uint8_t* buf, AdevRecord& r);
+void parse(const std::uint8_t* buf, BiasRecord& r);
+void parse(const std::uint8_t* buf, MonitorRecord& r);
+void parse(const std::uint8_t* buf, StatsRecord& r);
+
+}  // namespace imu::hal
+
+#endif  // IMU_HAL_CODEC_HPP

@@ -1,0 +1,223 @@
+// imu/hal/codec.hpp: CRC, frame layouts (byte positions written out by hand from the protocol
+// table in hal/README.md), record round trips in both layouts, LSB exactness.
+#include "imu/hal/codec.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#include "imu/online_adev.hpp"
+
+namespace {
+
+using imu::hal::CanFrame;
+using imu::hal::EncodedFrames;
+using imu::hal::Layout;
+
+std::uint32_t le32(const std::uint8_t* p) {
+  return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
+         (static_cast<std::uint32_t>(p[2]) << 16) | (static_cast<std::uint32_t>(p[3]) << 24);
+}
+
+imu::hal::SampleRecord make_sample() {
+  imu::hal::SampleRecord s{};
+  s.seq = 0x01020304U;
+  s.t_sensor_ns = 0x1122334455667788ULL;
+  const std::int32_t c[6] = {1, -1, 300, -300, 0x7FFFFFFF, -2147483647 - 1};
+  for (int i = 0; i < 6; ++i) {
+    s.counts[i] = c[i];
+  }
+  s.cfg_id = 7;
+  s.sat_mask = 0x30;
+  return s;
+}
+
+TEST(Crc32c, CheckValueOfTheCatalogue) {
+  // CRC catalogue (reveng) entry CRC-32/ISCSI: check = 0xE3069283 for "123456789".
+  const char* msg = "123456789";
+  EXPECT_EQ(imu::hal::crc32c(reinterpret_cast<const std::uint8_t*>(msg), 9), 0xE3069283U);
+  // RFC 3720 B.4: 32 bytes of zeros -> 0x8A9136AA.
+  std::uint8_t zeros[32] = {};
+  EXPECT_EQ(imu::hal::crc32c(zeros, sizeof zeros), 0x8A9136AAU);
+}
+
+TEST(Codec, FdLengthsAreTheValidCanFdLengths) {
+  EXPECT_EQ(imu::hal::fd_len_for(0), 0);
+  EXPECT_EQ(imu::hal::fd_len_for(8), 8);
+  EXPECT_EQ(imu::hal::fd_len_for(9), 12);
+  EXPECT_EQ(imu::hal::fd_len_for(20), 20);
+  EXPECT_EQ(imu::hal::fd_len_for(21), 24);
+  EXPECT_EQ(imu::hal::fd_len_for(42), 48);
+  EXPECT_EQ(imu::hal::fd_len_for(60), 64);
+}
+
+TEST(Codec, SampleFdFrameLayoutMatchesTheTable) {
+  EncodedFrames out{};
+  imu::hal::encode(make_sample(), Layout::kFd, out);
+  ASSERT_EQ(out.count, 1U);
+  const CanFrame& f = out.frame[0];
+  EXPECT_EQ(f.can_id, 0x100U);
+  EXPECT_EQ(f.len, 48);
+  EXPECT_EQ(f.flags, imu::hal::kCanFdFdf | imu::hal::kCanFdBrs);
+  EXPECT_EQ(imu::hal::wire_size(f), 72U);
+  const std::uint8_t expect_head[] = {0x04, 0x03, 0x02, 0x01,                          // seq
+                                      0x88, 0x77, 0x66, 0x55, 0x44, 0x33, 0x22, 0x11,  // t_ns
+                                      0x01, 0x00, 0x00, 0x00,                          // ax = 1
+                                      0xFF, 0xFF, 0xFF, 0xFF,                          // ay = -1
+                                      0x2C, 0x01, 0x00, 0x00,                          // az = 300
+                                      0xD4, 0xFE, 0xFF, 0xFF,                          // gx = -300
+                                      0xFF, 0xFF, 0xFF, 0x7F,                          // gy = max
+                                      0x00, 0x00, 0x00, 0x80,                          // gz = min
+                                      0x07, 0x30};                                     // cfg, sat
+  ASSERT_EQ(sizeof expect_head, 38U);
+  for (std::size_t i = 0; i < sizeof expect_head; ++i) {
+    EXPECT_EQ(f.data[i], expect_head[i]) << "byte " << i;
+  }
+  EXPECT_EQ(le32(f.data + 38), imu::hal::crc32c(expect_head, 38));
+  for (std::size_t i = 42; i < 64; ++i) {
+    EXPECT_EQ(f.data[i], 0) << "padding byte " << i;
+  }
+}
+
+TEST(Codec, SampleClassicFramesCarrySevenBytesAndACounter) {
+  EncodedFrames fd{};
+  EncodedFrames cc{};
+  const auto s = make_sample();
+  imu::hal::encode(s, Layout::kFd, fd);
+  imu::hal::encode(s, Layout::kClassic, cc);
+  ASSERT_EQ(cc.count, 6U);  // 42 bytes / 7
+  for (std::size_t k = 0; k < cc.count; ++k) {
+    const CanFrame& f = cc.frame[k];
+    EXPECT_EQ(f.can_id, 0x101U);
+    EXPECT_EQ(f.len, 8);
+    EXPECT_EQ(f.flags, 0);
+    EXPECT_EQ(imu::hal::wire_size(f), 16U);
+    EXPECT_EQ(f.data[0], 0x40U | k) << "counter = seq & 0xF = 4, fragment k";
+    for (std::size_t i = 0; i < 7; ++i) {
+      EXPECT_EQ(f.data[1 + i], fd.frame[0].data[7 * k + i]);
+    }
+  }
+}
+
+TEST(Codec, FrameCountsPerRecordKind) {
+  EncodedFrames out{};
+  imu::hal::encode(imu::hal::ConfigRecord{}, Layout::kClassic, 0, out);
+  EXPECT_EQ(out.count, 10U);  // 64 bytes
+  imu::hal::encode(imu::hal::ConfigRecord{}, Layout::kFd, 0, out);
+  EXPECT_EQ(out.frame[0].len, 64);
+  imu::hal::encode(imu::hal::AdevRecord{}, Layout::kClassic, 0, out);
+  EXPECT_EQ(out.count, 4U);  // 28 bytes
+  imu::hal::encode(imu::hal::AdevRecord{}, Layout::kFd, 0, out);
+  EXPECT_EQ(out.frame[0].len, 32);
+  imu::hal::encode(imu::hal::BiasRecord{}, Layout::kClassic, 0, out);
+  EXPECT_EQ(out.count, 9U);  // 60 bytes
+  imu::hal::encode(imu::hal::MonitorRecord{}, Layout::kFd, 0, out);
+  EXPECT_EQ(out.frame[0].len, 20);
+  EXPECT_EQ(out.frame[0].can_id, 0x220U);
+  imu::hal::encode(imu::hal::StatsRecord{}, Layout::kClassic, 3, out);
+  EXPECT_EQ(out.count, 7U);  // 44 bytes
+  EXPECT_EQ(out.frame[6].can_id, 0x231U);
+  EXPECT_EQ(out.frame[6].data[0], 0x36U);
+}
+
+TEST(Codec, EveryRecordEndsWithItsCrc) {
+  std::uint8_t buf[80];
+  std::memset(buf, 0xA5, sizeof buf);
+  imu::hal::ConfigRecord c{};
+  c.rate_hz = 100.0;
+  imu::hal::serialize(c, buf);
+  EXPECT_TRUE(imu::hal::crc_ok(buf, imu::hal::kConfigLen));
+  EXPECT_EQ(buf[imu::hal::kConfigLen], 0xA5) << "serialize wrote past the record";
+  buf[10] ^= 0x01;
+  EXPECT_FALSE(imu::hal::crc_ok(buf, imu::hal::kConfigLen));
+  std::memset(buf, 0xA5, sizeof buf);
+  imu::hal::serialize(imu::hal::MonitorRecord{}, buf);
+  EXPECT_TRUE(imu::hal::crc_ok(buf, imu::hal::kMonitorLen));
+  EXPECT_EQ(buf[imu::hal::kMonitorLen], 0xA5);
+  std::memset(buf, 0xA5, sizeof buf);
+  imu::hal::serialize(imu::hal::BiasRecord{}, buf);
+  EXPECT_TRUE(imu::hal::crc_ok(buf, imu::hal::kBiasLen));
+  EXPECT_EQ(buf[imu::hal::kBiasLen], 0xA5);
+}
+
+TEST(Codec, TelemetryRoundTripsExactly) {
+  // float32 and float64 fields are copied bit for bit, so equality of bit patterns is expected.
+  imu::hal::ConfigRecord c{};
+  c.cfg_id = 3;
+  c.rate_hz = 100.0;
+  c.lsb[0] = 0.00333 * 9.80665;
+  c.lsb[3] = 0.05 * 3.14159265358979323846 / 180.0;
+  std::uint8_t buf[64];
+  imu::hal::serialize(c, buf);
+  imu::hal::ConfigRecord c2{};
+  imu::hal::parse(buf, c2);
+  EXPECT_EQ(c2.cfg_id, 3);
+  EXPECT_EQ(std::memcmp(&c2.lsb[0], &c.lsb[0], sizeof(double)), 0);
+  EXPECT_EQ(std::memcmp(&c2.lsb[3], &c.lsb[3], sizeof(double)), 0);
+  EXPECT_EQ(std::memcmp(&c2.rate_hz, &c.rate_hz, sizeof(double)), 0);
+
+  imu::hal::AdevRecord a{};
+  a.channel = 5;
+  a.index = 9;
+  a.n_points = 40;
+  a.tau_s = 0.32F;
+  a.adev = 1.25e-3F;
+  a.ci_lo = 1.2e-3F;
+  a.ci_hi = 1.3e-3F;
+  a.n_terms = 123456;
+  imu::hal::serialize(a, buf);
+  imu::hal::AdevRecord a2{};
+  imu::hal::parse(buf, a2);
+  EXPECT_EQ(a2.channel, 5);
+  EXPECT_EQ(a2.index, 9);
+  EXPECT_EQ(a2.n_points, 40);
+  EXPECT_EQ(std::memcmp(&a2.adev, &a.adev, sizeof(float)), 0);
+  EXPECT_EQ(std::memcmp(&a2.ci_hi, &a.ci_hi, sizeof(float)), 0);
+  EXPECT_EQ(a2.n_terms, 123456U);
+
+  imu::hal::StatsRecord st{};
+  st.frames = 1;
+  st.kernel_drops = 0xDEADBEEF;
+  imu::hal::serialize(st, buf);
+  imu::hal::StatsRecord st2{};
+  imu::hal::parse(buf, st2);
+  EXPECT_EQ(st2.frames, 1U);
+  EXPECT_EQ(st2.kernel_drops, 0xDEADBEEFU);
+}
+
+TEST(Codec, IdentifierClassification) {
+  imu::hal::RecordKind k{};
+  Layout l{};
+  ASSERT_TRUE(imu::hal::kind_of_id(0x101, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kSample);
+  EXPECT_EQ(l, Layout::kClassic);
+  ASSERT_TRUE(imu::hal::kind_of_id(0x080, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kConfig);
+  EXPECT_EQ(l, Layout::kFd);
+  EXPECT_FALSE(imu::hal::kind_of_id(0x102, k, l));
+  EXPECT_FALSE(imu::hal::kind_of_id(0x100U | imu::hal::kCanEffFlag, k, l));
+  EXPECT_FALSE(imu::hal::kind_of_id(0x100U | imu::hal::kCanRtrFlag, k, l));
+}
+
+// The sensor's own counts travel exactly: with the LSB announced in the config frame, a value
+// stored as k * lsb (how the .mat data was produced) quantises back to k for every k in the
+// +-16 g range, and int32 holds it with room to spare.
+TEST(Codec, AdisCountsAreCarriedExactlyOverTheFullRange) {
+  const double acc_lsb = 0.00333 * 9.80665;                    // 3.33 mg in m/s^2
+  const double gyro_lsb = 0.05 * 3.14159265358979323846 / 180;  // 0.05 deg/s in rad/s
+  const auto acc_max = static_cast<std::int32_t>(16.0 * 9.80665 / acc_lsb) + 1;
+  const auto gyro_max = static_cast<std::int32_t>(2000.0 / 0.05) + 1;
+  for (std::int32_t k = -acc_max; k <= acc_max; ++k) {
+    const auto q = imu::quantize(static_cast<double>(k) * acc_lsb, acc_lsb);
+    ASSERT_EQ(q.counts, k);
+    ASSERT_FALSE(q.saturated);
+  }
+  for (std::int32_t k = -gyro_max; k <= gyro_max; ++k) {
+    const auto q = imu::quantize(static_cast<double>(k) * gyro_lsb, gyro_lsb);
+    ASSERT_EQ(q.counts, k);
+  }
+}
+
+}  // namespace
