@@ -134,8 +134,8 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values("imu1/acc_x", "imu1/acc_y", "imu1/acc_z", "imu1/gyro_x", "imu1/gyro_y",
                       "imu1/gyro_z", "imu2/acc_x", "imu2/acc_y", "imu2/acc_z", "imu2/gyro_x",
                       "imu2/gyro_y", "imu2/gyro_z"),
-    [](const ::testing::TestParamInfo<std::string>& info) {
-      std::string n = info.param;
+    [](const ::testing::TestParamInfo<std::string>& param_info) {
+      std::string n = param_info.param;
       std::replace(n.begin(), n.end(), '/', '_');
       return n;
     });
