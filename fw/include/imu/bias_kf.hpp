@@ -1,0 +1,266 @@
+// Bias Kalman filters on target: scalar (first-order GM, the seed's model) and n-state (any
+// DiscreteModel), templated on the arithmetic type (float on the Cortex-M4F, double on the host).
+//
+// Per sample (step()):
+//   1. predict: x = Phi x, P = Phi P Phi^T + Qd (always, every sample);
+//   2. if the caller says the sensor is static: innovation e = (z - known_signal) - H x,
+//      S = H P H^T + R, K = P H^T / S, x += K e, Joseph form P = (I - K H) P (I - K H)^T + K R K^T
+//      (positive semi-definite by construction, also in float), then P is symmetrised.
+// The known signal (e.g. local gravity projected on a vertical accelerometer, in the channel's
+// units) is a parameter: set_known_signal(). R is DiscreteModel::r_filter(): white noise plus the
+// quantization MA(1) variance treated as white (error_model.hpp explains the approximation).
+// Non-finite z is not used (counted in stats.rejected_nonfinite, prediction still done).
+// Diagonal entries of P are floored at 0 and capped at p_max (stats counters), so P stays
+// positive and bounded even if the model were inconsistent.
+//
+// Float accuracy: the model is discretised in double and rounded to T once. Per-sample rounding
+// in float is ~6e-8 relative; the filter is stable (|Phi (1 - K H)| < 1) so errors do not
+// accumulate: test_bias_kf measures float vs double over 1e6 samples.
+//
+// Cost per sample: scalar 1 predict = 4 flops, update +~12 flops, 1 division; n-state predict
+// 2 n^3 + n^2, update ~4 n^2 + n^3 (Joseph with a rank-one K H) flops. No heap, not re-entrant
+// on one instance. sizeof(ScalarBiasKf<float>) is the whole state (see the benchmark).
+#ifndef IMU_BIAS_KF_HPP
+#define IMU_BIAS_KF_HPP
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "imu/error_model.hpp"
+#include "imu/linalg.hpp"
+
+namespace imu {
+
+enum class KfStatus : std::uint8_t {
+  kOk = 0,
+  kBadModel,  ///< dimension mismatch, non-finite or negative variance, |phi| > 1
+};
+
+/// What one step did.
+template <typename T>
+struct KfStep {
+  bool updated = false;  ///< the measurement was used
+  T innovation = T(0);   ///< e = z - known - H x (prior), 0 when not updated
+  T innovation_var = T(0);  ///< S
+  T nis = T(0);             ///< e^2 / S
+};
+
+struct KfStats {
+  std::uint64_t predictions = 0;
+  std::uint64_t updates = 0;
+  std::uint64_t rejected_nonfinite = 0;  ///< static samples with non-finite z (not used)
+  std::uint64_t covariance_floored = 0;  ///< a diagonal of P was < 0 and was set to 0
+  std::uint64_t covariance_capped = 0;   ///< a diagonal of P exceeded p_max and was capped
+};
+
+/// Scalar filter for z = b + n, b_{k+1} = phi b_k + w_k.
+template <typename T>
+class ScalarBiasKf {
+ public:
+  /// From the seed's model (phi, Qw, Qn). p0: initial bias variance (default: Pss, i.e. the bias
+  /// is unknown within its steady-state spread); b0: initial bias.
+  [[nodiscard]] KfStatus configure(const FirstOrderGm& m, double known_signal = 0.0) {
+    return configure(m.phi, m.qw, m.qn, m.pss_d, 0.0, known_signal);
+  }
+  /// From any 1-state DiscreteModel (r = r_filter()).
+  [[nodiscard]] KfStatus configure(const DiscreteModel<1>& m, double known_signal = 0.0) {
+    if (m.n_states != 1 || std::fabs(m.h(0, 0) - 1.0) > 0.0) {  // every 1-state term has H = 1
+      return KfStatus::kBadModel;
+    }
+    return configure(m.phi(0, 0), m.qd(0, 0), m.r_filter(), m.p0(0, 0), 0.0,
+                     known_signal);
+  }
+  [[nodiscard]] KfStatus configure(double phi, double qw, double r, double p0, double b0,
+                                   double known_signal) {
+    if (!std::isfinite(phi) || !(std::fabs(phi) <= 1.0) || !(qw >= 0.0) || !(r > 0.0) ||
+        !(p0 >= 0.0) || !std::isfinite(qw + r + p0 + b0 + known_signal)) {
+      return KfStatus::kBadModel;
+    }
+    phi_ = static_cast<T>(phi);
+    qw_ = static_cast<T>(qw);
+    r_ = static_cast<T>(r);
+    b_ = static_cast<T>(b0);
+    p_ = static_cast<T>(p0);
+    known_ = static_cast<T>(known_signal);
+    // Bound: the larger of p0 and the open-loop steady state, times 10.
+    const double pss = phi * phi < 1.0 ? qw / (1.0 - phi * phi) : 1e30;
+    p_max_ = static_cast<T>(10.0 * (p0 > pss ? p0 : pss));
+    stats_ = KfStats{};
+    return KfStatus::kOk;
+  }
+
+  void set_known_signal(T known) { known_ = known; }
+
+  /// One sample: predict, then update if is_static. Constant time.
+  KfStep<T> step(T z, bool is_static) {
+    b_ = phi_ * b_;
+    p_ = phi_ * phi_ * p_ + qw_;
+    ++stats_.predictions;
+    KfStep<T> out;
+    if (is_static) {
+      if (!std::isfinite(z)) {
+        ++stats_.rejected_nonfinite;
+      } else {
+        const T e = (z - known_) - b_;
+        const T s = p_ + r_;
+        const T k = p_ / s;
+        b_ += k * e;
+        const T one_k = T(1) - k;
+        p_ = one_k * one_k * p_ + k * k * r_;  // Joseph form
+        ++stats_.updates;
+        out.updated = true;
+        out.innovation = e;
+        out.innovation_var = s;
+        out.nis = e * e / s;
+      }
+    }
+    if (p_ < T(0)) {
+      p_ = T(0);
+      ++stats_.covariance_floored;
+    } else if (p_ > p_max_) {
+      p_ = p_max_;
+      ++stats_.covariance_capped;
+    }
+    return out;
+  }
+
+  [[nodiscard]] T bias() const { return b_; }
+  [[nodiscard]] T variance() const { return p_; }
+  [[nodiscard]] const KfStats& stats() const { return stats_; }
+
+ private:
+  T phi_ = T(1);
+  T qw_ = T(0);
+  T r_ = T(1);
+  T b_ = T(0);
+  T p_ = T(0);
+  T known_ = T(0);
+  T p_max_ = T(1);
+  KfStats stats_{};
+};
+
+/// n-state filter for a DiscreteModel with exactly N states (N = model.n_states).
+template <typename T, std::size_t N>
+class KalmanFilter {
+ public:
+  using Vec = Mat<T, N, 1>;
+  using Square = Mat<T, N, N>;
+
+  /// The model's P0 is the initial covariance, x0 = 0. kBadModel if model.n_states != N or the
+  /// model has non-finite entries.
+  template <std::size_t kMaxStates>
+  [[nodiscard]] KfStatus configure(const DiscreteModel<kMaxStates>& m, double known_signal = 0.0) {
+    static_assert(N <= kMaxStates, "filter larger than the model capacity");
+    if (m.n_states != N || !(m.r_filter() > 0.0) || !std::isfinite(known_signal)) {
+      return KfStatus::kBadModel;
+    }
+    double pmax = 0.0;
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        if (!std::isfinite(m.phi(i, j)) || !std::isfinite(m.qd(i, j)) ||
+            !std::isfinite(m.p0(i, j))) {
+          return KfStatus::kBadModel;
+        }
+        phi_(i, j) = static_cast<T>(m.phi(i, j));
+        qd_(i, j) = static_cast<T>(m.qd(i, j));
+        p_(i, j) = static_cast<T>(m.p0(i, j));
+      }
+      h_(0, i) = static_cast<T>(m.h(0, i));
+      x_(i, 0) = T(0);
+      pmax = m.p0(i, i) > pmax ? m.p0(i, i) : pmax;
+      pmax = m.qd(i, i) > pmax ? m.qd(i, i) : pmax;
+    }
+    r_ = static_cast<T>(m.r_filter());
+    known_ = static_cast<T>(known_signal);
+    // Generous bound for states that are not mean-reverting (RRW, ramp): 1e6 x the largest
+    // initial or per-step variance. Hitting it is counted, never silent.
+    p_max_ = static_cast<T>(1e6 * (pmax > 0.0 ? pmax : 1.0));
+    stats_ = KfStats{};
+    return KfStatus::kOk;
+  }
+
+  void set_known_signal(T known) { known_ = known; }
+
+  /// One sample: predict, then update if is_static. O(N^3).
+  KfStep<T> step(T z, bool is_static) {
+    x_ = phi_ * x_;
+    p_ = phi_ * p_ * phi_.transpose() + qd_;
+    ++stats_.predictions;
+    KfStep<T> out;
+    if (is_static) {
+      if (!std::isfinite(z)) {
+        ++stats_.rejected_nonfinite;
+      } else {
+        const Mat<T, N, 1> pht = p_ * h_.transpose();
+        T s = r_;
+        T hx = T(0);
+        for (std::size_t i = 0; i < N; ++i) {
+          s += h_(0, i) * pht(i, 0);
+          hx += h_(0, i) * x_(i, 0);
+        }
+        const T e = (z - known_) - hx;
+        Mat<T, N, 1> k{};
+        for (std::size_t i = 0; i < N; ++i) {
+          k(i, 0) = pht(i, 0) / s;
+          x_(i, 0) += k(i, 0) * e;
+        }
+        Square ikh = Square::identity() - k * h_;
+        p_ = ikh * p_ * ikh.transpose() + (k * k.transpose()) * r_;  // Joseph form
+        ++stats_.updates;
+        out.updated = true;
+        out.innovation = e;
+        out.innovation_var = s;
+        out.nis = e * e / s;
+      }
+    }
+    symmetrize(p_);
+    for (std::size_t i = 0; i < N; ++i) {
+      if (p_(i, i) < T(0)) {
+        p_(i, i) = T(0);
+        ++stats_.covariance_floored;
+      } else if (p_(i, i) > p_max_) {
+        p_(i, i) = p_max_;
+        ++stats_.covariance_capped;
+      }
+    }
+    return out;
+  }
+
+  /// The bias the measurement sees, H x.
+  [[nodiscard]] T bias() const {
+    T s = T(0);
+    for (std::size_t i = 0; i < N; ++i) {
+      s += h_(0, i) * x_(i, 0);
+    }
+    return s;
+  }
+  /// Variance of H x: H P H^T.
+  [[nodiscard]] T bias_variance() const {
+    T s = T(0);
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        s += h_(0, i) * p_(i, j) * h_(0, j);
+      }
+    }
+    return s;
+  }
+  [[nodiscard]] const Vec& state() const { return x_; }
+  [[nodiscard]] const Square& covariance() const { return p_; }
+  [[nodiscard]] const KfStats& stats() const { return stats_; }
+
+ private:
+  Square phi_{};
+  Square qd_{};
+  Square p_{};
+  Mat<T, 1, N> h_{};
+  Vec x_{};
+  T r_ = T(1);
+  T known_ = T(0);
+  T p_max_ = T(1);
+  KfStats stats_{};
+};
+
+}  // namespace imu
+
+#endif  // IMU_BIAS_KF_HPP

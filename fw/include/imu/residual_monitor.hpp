@@ -1,0 +1,290 @@
+// Residual monitors of the bias filter on target: fixed memory, float arithmetic, results are
+// plain numbers and flags the caller reads (telemetry, an alarm GPIO line).
+//
+// Input of every monitor: one normalised innovation nu = e / sqrt(S) per filter UPDATE (not per
+// sample: predictions without a measurement have no innovation). Under a correct model nu is
+// N(0, 1) and white.
+//
+// * NisMonitor: mean of nu^2 over consecutive blocks of `window` updates. For a correct model
+//   window * mean ~ chi-square(window); the block is flagged when the mean is outside
+//   [chi2_{(1-c)/2}(window), chi2_{(1+c)/2}(window)] / window (bounds computed once with
+//   imu::chi2_quantile at configure()). Also a running (current block) mean.
+// * WhitenessMonitor<kLags>: sample autocorrelation r_l = sum nu_k nu_{k-l} / sum nu_k^2 at lags
+//   1..kLags over the same kind of blocks. Per-lag flag when |r_l| > 2 / sqrt(window) (the
+//   usual 95 % band), and a Box-Pierce portmanteau Q = window * sum r_l^2 against
+//   chi2_c(kLags) (one combined flag with the stated false-alarm rate 1 - c).
+// * Cusum: two-sided CUSUM for a step in the mean of nu: g+ = max(0, g+ + nu - k),
+//   g- = max(0, g- - nu - k); alarm when either exceeds h (k = 0.5, h = 5 by default: average
+//   run length ~ 930 updates without a step, detection of a 1-sigma step in ~10 updates). The
+//   estimated step time is the update index at which the alarming sum last left zero. reset()
+//   re-arms it.
+// Cost per update: NIS 3 flops, whiteness kLags + 3 multiply-adds, CUSUM 4 flops; end of block
+// O(kLags). No heap, not re-entrant on one instance.
+#ifndef IMU_RESIDUAL_MONITOR_HPP
+#define IMU_RESIDUAL_MONITOR_HPP
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+
+#include "imu/edf.hpp"
+
+namespace imu {
+
+enum class MonitorStatus : std::uint8_t { kOk = 0, kBadConfig };
+
+class NisMonitor {
+ public:
+  /// window >= 2 updates per block, confidence in (0, 1). Resets the monitor.
+  [[nodiscard]] MonitorStatus configure(std::uint32_t window = 1000, double confidence = 0.99) {
+    if (window < 2 || !(confidence > 0.0 && confidence < 1.0)) {
+      return MonitorStatus::kBadConfig;
+    }
+    window_ = window;
+    const double dof = static_cast<double>(window);
+    lo_ = static_cast<float>(chi2_quantile((1.0 - confidence) / 2.0, dof) / dof);
+    hi_ = static_cast<float>(chi2_quantile((1.0 + confidence) / 2.0, dof) / dof);
+    reset();
+    return MonitorStatus::kOk;
+  }
+  void reset() {
+    sum_ = 0.0F;
+    count_ = 0;
+    last_mean_ = 0.0F;
+    blocks_ = 0;
+    flagged_blocks_ = 0;
+    flag_ = false;
+  }
+  /// Push one normalised innovation.
+  void push(float nu) {
+    sum_ += nu * nu;
+    ++count_;
+    if (count_ >= window_) {
+      last_mean_ = sum_ / static_cast<float>(count_);
+      flag_ = last_mean_ < lo_ || last_mean_ > hi_;
+      ++blocks_;
+      flagged_blocks_ += flag_ ? 1U : 0U;
+      sum_ = 0.0F;
+      count_ = 0;
+    }
+  }
+  [[nodiscard]] float running_mean() const {
+    return count_ > 0 ? sum_ / static_cast<float>(count_) : 0.0F;
+  }
+  [[nodiscard]] float last_block_mean() const { return last_mean_; }
+  [[nodiscard]] float bound_lo() const { return lo_; }
+  [[nodiscard]] float bound_hi() const { return hi_; }
+  /// The last complete block was outside the bounds.
+  [[nodiscard]] bool flag() const { return flag_; }
+  [[nodiscard]] std::uint32_t blocks() const { return blocks_; }
+  [[nodiscard]] std::uint32_t flagged_blocks() const { return flagged_blocks_; }
+
+ private:
+  std::uint32_t window_ = 1000;
+  float lo_ = 0.0F;
+  float hi_ = 0.0F;
+  float sum_ = 0.0F;
+  std::uint32_t count_ = 0;
+  float last_mean_ = 0.0F;
+  std::uint32_t blocks_ = 0;
+  std::uint32_t flagged_blocks_ = 0;
+  bool flag_ = false;
+};
+
+template <std::size_t kLags = 4>
+class WhitenessMonitor {
+  static_assert(kLags >= 1 && kLags <= 16, "kLags must be 1..16");
+
+ public:
+  [[nodiscard]] MonitorStatus configure(std::uint32_t window = 1000, double confidence = 0.95) {
+    if (window < 4 * kLags || !(confidence > 0.0 && confidence < 1.0)) {
+      return MonitorStatus::kBadConfig;
+    }
+    window_ = window;
+    band_ = static_cast<float>(2.0 / std::sqrt(static_cast<double>(window)));
+    q_bound_ = static_cast<float>(chi2_quantile(confidence, static_cast<double>(kLags)));
+    reset();
+    return MonitorStatus::kOk;
+  }
+  void reset() {
+    for (std::size_t l = 0; l < kLags; ++l) {
+      hist_[l] = 0.0F;
+      lag_sum_[l] = 0.0F;
+      r_[l] = 0.0F;
+      lag_flag_[l] = false;
+    }
+    sum_sq_ = 0.0F;
+    count_ = 0;
+    q_ = 0.0F;
+    flag_ = false;
+    blocks_ = 0;
+    flagged_blocks_ = 0;
+  }
+  void push(float nu) {
+    sum_sq_ += nu * nu;
+    // hist_[l] holds nu_{k-1-l}; products only within the block (count_ > l).
+    for (std::size_t l = 0; l < kLags; ++l) {
+      if (count_ > l) {
+        lag_sum_[l] += nu * hist_[l];
+      }
+    }
+    for (std::size_t l = kLags - 1; l > 0; --l) {
+      hist_[l] = hist_[l - 1];
+    }
+    hist_[0] = nu;
+    ++count_;
+    if (count_ >= window_) {
+      close_block();
+    }
+  }
+  /// Autocorrelation at lag l (1..kLags) of the last complete block.
+  [[nodiscard]] float autocorrelation(std::size_t lag) const {
+    return lag >= 1 && lag <= kLags ? r_[lag - 1] : 0.0F;
+  }
+  [[nodiscard]] bool lag_flag(std::size_t lag) const {
+    return lag >= 1 && lag <= kLags ? lag_flag_[lag - 1] : false;
+  }
+  [[nodiscard]] float band() const { return band_; }
+  [[nodiscard]] float box_pierce() const { return q_; }
+  [[nodiscard]] float box_pierce_bound() const { return q_bound_; }
+  /// Box-Pierce statistic of the last complete block above its bound.
+  [[nodiscard]] bool flag() const { return flag_; }
+  [[nodiscard]] std::uint32_t blocks() const { return blocks_; }
+  [[nodiscard]] std::uint32_t flagged_blocks() const { return flagged_blocks_; }
+
+ private:
+  void close_block() {
+    float q = 0.0F;
+    for (std::size_t l = 0; l < kLags; ++l) {
+      r_[l] = sum_sq_ > 0.0F ? lag_sum_[l] / sum_sq_ : 0.0F;
+      lag_flag_[l] = std::fabs(r_[l]) > band_;
+      q += r_[l] * r_[l];
+      lag_sum_[l] = 0.0F;
+    }
+    q_ = static_cast<float>(window_) * q;
+    flag_ = q_ > q_bound_;
+    ++blocks_;
+    flagged_blocks_ += flag_ ? 1U : 0U;
+    sum_sq_ = 0.0F;
+    count_ = 0;
+  }
+
+  std::uint32_t window_ = 1000;
+  float band_ = 0.0F;
+  float q_bound_ = 0.0F;
+  float hist_[kLags] = {};
+  float lag_sum_[kLags] = {};
+  float r_[kLags] = {};
+  bool lag_flag_[kLags] = {};
+  float sum_sq_ = 0.0F;
+  std::uint32_t count_ = 0;
+  float q_ = 0.0F;
+  bool flag_ = false;
+  std::uint32_t blocks_ = 0;
+  std::uint32_t flagged_blocks_ = 0;
+};
+
+class Cusum {
+ public:
+  /// slack k >= 0 and threshold h > 0, in units of the innovation's standard deviation.
+  [[nodiscard]] MonitorStatus configure(float slack = 0.5F, float threshold = 5.0F) {
+    if (!(slack >= 0.0F) || !(threshold > 0.0F) || !std::isfinite(slack + threshold)) {
+      return MonitorStatus::kBadConfig;
+    }
+    k_ = slack;
+    h_ = threshold;
+    reset();
+    n_ = 0;
+    return MonitorStatus::kOk;
+  }
+  /// Re-arm after an alarm (keeps the update counter running).
+  void reset() {
+    gp_ = 0.0F;
+    gm_ = 0.0F;
+    start_p_ = n_;
+    start_m_ = n_;
+    alarm_ = false;
+    direction_ = 0;
+    step_index_ = 0;
+  }
+  /// Push one normalised innovation. Returns true while in alarm.
+  bool push(float nu) {
+    ++n_;
+    if (alarm_) {
+      return true;  // latched until reset()
+    }
+    gp_ += nu - k_;
+    if (gp_ <= 0.0F) {
+      gp_ = 0.0F;
+      start_p_ = n_;
+    }
+    gm_ += -nu - k_;
+    if (gm_ <= 0.0F) {
+      gm_ = 0.0F;
+      start_m_ = n_;
+    }
+    if (gp_ > h_ || gm_ > h_) {
+      alarm_ = true;
+      direction_ = gp_ > h_ ? 1 : -1;
+      step_index_ = gp_ > h_ ? start_p_ : start_m_;
+      ++alarms_;
+    }
+    return alarm_;
+  }
+  [[nodiscard]] bool alarm() const { return alarm_; }
+  /// +1 upward step, -1 downward, 0 no alarm.
+  [[nodiscard]] int direction() const { return direction_; }
+  /// Updates counted from configure(); the step is estimated to start right after update
+  /// number step_index() (valid while alarm()).
+  [[nodiscard]] std::uint64_t step_index() const { return step_index_; }
+  [[nodiscard]] std::uint64_t updates() const { return n_; }
+  [[nodiscard]] std::uint32_t alarms() const { return alarms_; }
+  [[nodiscard]] float g_pos() const { return gp_; }
+  [[nodiscard]] float g_neg() const { return gm_; }
+
+ private:
+  float k_ = 0.5F;
+  float h_ = 5.0F;
+  float gp_ = 0.0F;
+  float gm_ = 0.0F;
+  std::uint64_t n_ = 0;
+  std::uint64_t start_p_ = 0;
+  std::uint64_t start_m_ = 0;
+  std::uint64_t step_index_ = 0;
+  bool alarm_ = false;
+  int direction_ = 0;
+  std::uint32_t alarms_ = 0;
+};
+
+/// The three monitors of one channel, fed from the filter's step result.
+template <std::size_t kLags = 4>
+struct ResidualMonitors {
+  NisMonitor nis;
+  WhitenessMonitor<kLags> whiteness;
+  Cusum cusum;
+
+  [[nodiscard]] MonitorStatus configure(std::uint32_t window = 1000) {
+    if (nis.configure(window) != MonitorStatus::kOk ||
+        whiteness.configure(window) != MonitorStatus::kOk ||
+        cusum.configure() != MonitorStatus::kOk) {
+      return MonitorStatus::kBadConfig;
+    }
+    return MonitorStatus::kOk;
+  }
+  /// innovation and its variance S (> 0) of one update.
+  void push(float innovation, float innovation_var) {
+    if (!(innovation_var > 0.0F)) {
+      return;
+    }
+    const float nu = innovation / std::sqrt(innovation_var);
+    nis.push(nu);
+    whiteness.push(nu);
+    (void)cusum.push(nu);
+  }
+  /// Any monitor fires (the "alarm" output line).
+  [[nodiscard]] bool any_alarm() const { return nis.flag() || whiteness.flag() || cusum.alarm(); }
+};
+
+}  // namespace imu
+
+#endif  // IMU_RESIDUAL_MONITOR_HPP

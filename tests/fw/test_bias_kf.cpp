@@ -1,0 +1,204 @@
+// Tests of imu/bias_kf.hpp: float on target vs double on host over 1e6 samples, covariance
+// positivity and bound, steady state against the closed-form Riccati solution, static gating,
+// the known signal, and the n-state filter against the scalar one.
+#include "imu/bias_kf.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "imu/error_model.hpp"
+#include "imu/noise_sim.hpp"
+
+namespace {
+
+constexpr double kGravity = 9.80665;  // the known signal of a vertical accelerometer [m/s^2]
+
+imu::FirstOrderGm seed_model() {
+  imu::FirstOrderGm m{};
+  EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, m), imu::ModelStatus::kOk);
+  return m;
+}
+
+imu::DiscreteModel<1> seed_discrete(const imu::FirstOrderGm& m) {
+  imu::ContinuousModel<1> c;
+  EXPECT_EQ(c.add_white(m.n), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.add_gauss_markov(m.sb, m.tb_s), imu::ModelStatus::kOk);
+  imu::DiscreteModel<1> d;
+  EXPECT_EQ(imu::discretize(c, m.ts_s, d), imu::ModelStatus::kOk);
+  return d;
+}
+
+// Posterior steady state of the scalar filter, written here from the Riccati equation:
+// prior M = phi^2 P + Q, posterior P = M R / (M + R)  =>  phi^2 P^2 + (Q + R - phi^2 R) P - Q R = 0.
+double riccati_posterior(double phi, double q, double r) {
+  const double a = phi * phi;
+  const double b = q + r - a * r;
+  const double c = -q * r;
+  return (-b + std::sqrt(b * b - 4.0 * a * c)) / (2.0 * a);
+}
+
+TEST(BiasKf, FloatAgreesWithDoubleOverAMillionSamples) {
+  const imu::FirstOrderGm m = seed_model();
+  const imu::DiscreteModel<1> d = seed_discrete(m);
+  imu::ModelSimulator<1> sim;
+  ASSERT_EQ(sim.configure(d, 7), imu::ModelStatus::kOk);
+  imu::ScalarBiasKf<float> kf_f;
+  imu::ScalarBiasKf<double> kf_d;
+  ASSERT_EQ(kf_f.configure(m, kGravity), imu::KfStatus::kOk);
+  ASSERT_EQ(kf_d.configure(m, kGravity), imu::KfStatus::kOk);
+  double max_db_sigma = 0.0;  // |b_float - b_double| / sqrt(P_double)
+  double max_dp_rel = 0.0;    // |P_float / P_double - 1|
+  double min_p = 1e30;
+  double max_p = 0.0;
+  for (int i = 0; i < 1000000; ++i) {
+    const double z = kGravity + sim.next();
+    // Static 9 s out of every 10 s: the filter also has to coast.
+    const bool is_static = (i % 1000) < 900;
+    (void)kf_d.step(z, is_static);
+    (void)kf_f.step(static_cast<float>(z), is_static);
+    const double p = kf_d.variance();
+    const double db = std::fabs(static_cast<double>(kf_f.bias()) - kf_d.bias()) / std::sqrt(p);
+    const double dp = std::fabs(static_cast<double>(kf_f.variance()) / p - 1.0);
+    max_db_sigma = db > max_db_sigma ? db : max_db_sigma;
+    max_dp_rel = dp > max_dp_rel ? dp : max_dp_rel;
+    const double pf = static_cast<double>(kf_f.variance());
+    min_p = pf < min_p ? pf : min_p;
+    max_p = pf > max_p ? pf : max_p;
+  }
+  std::printf("float vs double over 1e6 samples: max |db| = %.3e sigma, max |dP/P| = %.3e, "
+              "P_float in [%.3e, %.3e]\n", max_db_sigma, max_dp_rel, min_p, max_p);
+  // Stated tolerance: the float bias stays within 1 % of the filter's own standard deviation
+  // (measured: 4e-4). Why: z ~ 9.8 m/s^2 is rounded to float (half ulp 4.8e-7 m/s^2, 7e-4 of the
+  // steady-state bias sigma 7e-4 m/s^2, and the filter averages those roundings over ~1/K =
+  // 2000 samples); per-step rounding of b is 6e-8 relative and decays with the filter's time
+  // constant, so the error stays a bounded sum of a few hundred ulp.
+  EXPECT_LT(max_db_sigma, 0.01);
+  // P in float: phi^2 = 1 - 1.26e-4 is rounded with 6e-8 absolute error, 5e-4 relative error in
+  // the decay rate; the steady state moves by about that much. 1e-3 relative.
+  EXPECT_LT(max_dp_rel, 1e-3);
+  EXPECT_GT(min_p, 0.0);           // positive
+  EXPECT_LE(max_p, m.pss_d * 1.001);  // bounded by the prior (Pss) up to float rounding
+  EXPECT_EQ(kf_f.stats().covariance_floored, 0U);
+  EXPECT_EQ(kf_f.stats().covariance_capped, 0U);
+  EXPECT_EQ(kf_f.stats().updates, 900000U);
+  EXPECT_EQ(kf_f.stats().predictions, 1000000U);
+}
+
+TEST(BiasKf, SteadyStateMatchesTheRiccatiSolution) {
+  const imu::FirstOrderGm m = seed_model();
+  imu::ScalarBiasKf<double> kf;
+  ASSERT_EQ(kf.configure(m), imu::KfStatus::kOk);
+  for (int i = 0; i < 200000; ++i) {  // time constant ~ 1/sqrt(Q/R) = 2000 samples
+    (void)kf.step(0.0, true);
+  }
+  const double want = riccati_posterior(m.phi, m.qw, m.qn);
+  // Converged to machine precision after 100 time constants; 1e-9 relative.
+  EXPECT_NEAR(kf.variance(), want, 1e-9 * want);
+}
+
+TEST(BiasKf, PredictsOnlyWhileNotStaticAndTracksAKnownSignal) {
+  const imu::FirstOrderGm m = seed_model();
+  imu::ScalarBiasKf<double> kf;
+  ASSERT_EQ(kf.configure(m, kGravity), imu::KfStatus::kOk);
+  // Constant true bias 2e-3 on top of gravity, no noise: the estimate converges to it.
+  for (int i = 0; i < 50000; ++i) {
+    const imu::KfStep<double> s = kf.step(kGravity + 2e-3, true);
+    ASSERT_TRUE(s.updated);
+  }
+  // The GM prior pulls b towards 0 at rate mu = 6.3e-3/s against gain K ~ 4e-4 per sample: the
+  // fixed point is 2e-3 K / (K + (1 - phi)) ~ 2e-3 (1 - 0.15); 0.5e-3 absolute tolerance.
+  EXPECT_NEAR(kf.bias(), 2e-3, 0.5e-3);
+  const double p_static = kf.variance();
+  const double b_static = kf.bias();
+  for (int i = 0; i < 100; ++i) {
+    const imu::KfStep<double> s = kf.step(1e9, false);  // garbage while moving: must be ignored
+    EXPECT_FALSE(s.updated);
+  }
+  EXPECT_GT(kf.variance(), p_static);  // prediction only: P grows
+  EXPECT_NEAR(kf.bias(), b_static * std::pow(m.phi, 100), 1e-15);  // b decays by phi^100
+  EXPECT_EQ(kf.stats().updates, 50000U);
+  (void)kf.step(NAN, true);
+  EXPECT_EQ(kf.stats().rejected_nonfinite, 1U);
+}
+
+TEST(BiasKf, RejectsBadModels) {
+  imu::ScalarBiasKf<float> kf;
+  EXPECT_EQ(kf.configure(1.5, 1e-10, 1e-3, 1e-6, 0.0, 0.0), imu::KfStatus::kBadModel);
+  EXPECT_EQ(kf.configure(0.99, -1.0, 1e-3, 1e-6, 0.0, 0.0), imu::KfStatus::kBadModel);
+  EXPECT_EQ(kf.configure(0.99, 1e-10, 0.0, 1e-6, 0.0, 0.0), imu::KfStatus::kBadModel);
+  imu::KalmanFilter<float, 2> kf2;
+  imu::DiscreteModel<6> d;
+  d.n_states = 3;
+  d.ts_s = 0.01;
+  d.r_white = 1.0;
+  EXPECT_EQ(kf2.configure(d), imu::KfStatus::kBadModel);  // 3 states into a 2-state filter
+}
+
+TEST(BiasKf, NStateFilterWithOneStateEqualsTheScalarFilter) {
+  const imu::FirstOrderGm m = seed_model();
+  const imu::DiscreteModel<1> d = seed_discrete(m);
+  imu::ScalarBiasKf<double> s;
+  imu::KalmanFilter<double, 1> n;
+  ASSERT_EQ(s.configure(d, kGravity), imu::KfStatus::kOk);
+  ASSERT_EQ(n.configure(d, kGravity), imu::KfStatus::kOk);
+  imu::ModelSimulator<1> sim;
+  ASSERT_EQ(sim.configure(d, 3), imu::ModelStatus::kOk);
+  for (int i = 0; i < 20000; ++i) {
+    const double z = kGravity + sim.next();
+    const bool st = (i / 500) % 2 == 0;
+    const auto a = s.step(z, st);
+    const auto b = n.step(z, st);
+    ASSERT_EQ(a.updated, b.updated);
+    // Same equations in a different order (matrix products): ~10 ulp of the values.
+    ASSERT_NEAR(a.innovation, b.innovation, 1e-14);
+    ASSERT_NEAR(s.bias(), n.bias(), 1e-14);
+    ASSERT_NEAR(s.variance(), n.bias_variance(), 1e-12 * s.variance());
+  }
+}
+
+TEST(BiasKf, ThreeStateFloatFilterIsConsistentOnSimulatedData) {
+  // GM + RRW + white + quantization, simulated exactly; the float 3-state filter (GM, RRW and a
+  // second GM) must give innovations with mean NIS ~ 1 and stay close to the double filter.
+  imu::ContinuousModel<6> c;
+  ASSERT_EQ(c.add_white(3.3e-3), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_quantization(2e-5), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_gauss_markov(2.7e-8, 160.0), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_gauss_markov(1e-6, 2.0), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_rrw(1.3e-4, 1e-6), imu::ModelStatus::kOk);
+  imu::DiscreteModel<6> d;
+  ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
+  imu::ModelSimulator<6> sim;
+  ASSERT_EQ(sim.configure(d, 11), imu::ModelStatus::kOk);
+  imu::KalmanFilter<float, 3> kf;
+  imu::KalmanFilter<double, 3> kd;
+  ASSERT_EQ(kf.configure(d), imu::KfStatus::kOk);
+  ASSERT_EQ(kd.configure(d), imu::KfStatus::kOk);
+  double nis_sum = 0.0;
+  double max_db_sigma = 0.0;
+  constexpr int kN = 200000;
+  for (int i = 0; i < kN; ++i) {
+    const double z = sim.next();
+    const auto sd = kd.step(z, true);
+    (void)kf.step(static_cast<float>(z), true);
+    nis_sum += sd.nis;
+    const double db = std::fabs(static_cast<double>(kf.bias()) - kd.bias()) /
+                      std::sqrt(kd.bias_variance());
+    max_db_sigma = db > max_db_sigma ? db : max_db_sigma;
+  }
+  const double nis_mean = nis_sum / kN;
+  std::printf("3-state: mean NIS %.4f, max |db| float vs double %.3e sigma\n", nis_mean,
+              max_db_sigma);
+  // The quantization MA(1) noise is treated as white: its variance 2 Q^2/Ts^2 = 8e-6 is 0.7 % of
+  // R, so the NIS mean is 1 within that plus the sampling error sqrt(2/2e5) = 0.3 % (x 4 sigma).
+  EXPECT_NEAR(nis_mean, 1.0, 0.007 + 4.0 * std::sqrt(2.0 / kN));
+  // Float 3-state: rounding of the 3x3 products and of P entries spanning 1e-14..1e-6; 5 % sigma.
+  EXPECT_LT(max_db_sigma, 0.05);
+  EXPECT_EQ(kf.stats().covariance_floored, 0U);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_GT(kf.covariance()(i, i), 0.0F);
+  }
+}
+
+}  // namespace
