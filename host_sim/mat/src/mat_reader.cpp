@@ -273,6 +273,25 @@ std::string dims_text(const std::vector<std::uint64_t>& dims) {
   return t;
 }
 
+// A level 4 file starts with a 20-byte header: type MOPT (M 0..4, O = 0, P 0..5, T 0..2),
+// rows, cols, imagf (0/1), name length including the NUL, in either byte order.
+bool looks_like_v4(const std::uint8_t* data, std::size_t size) {
+  if (size < 20U) {
+    return false;
+  }
+  for (const bool be : {false, true}) {
+    const std::uint32_t mopt = load_u32(data, be);
+    const std::uint32_t imagf = load_u32(data + 12, be);
+    const std::uint32_t namlen = load_u32(data + 16, be);
+    if (mopt < 5000U && (mopt / 100U) % 10U == 0U && (mopt / 10U) % 10U <= 5U && mopt % 10U <= 2U &&
+        imagf <= 1U && namlen >= 2U && namlen <= 64U && size >= 20U + namlen &&
+        data[20U + namlen - 1U] == 0U) {
+      return true;
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 // A top-level data element.
@@ -436,6 +455,11 @@ Result<MatFile> MatFile::from_memory(std::string display_name, const std::uint8_
       starts_with(512, kHdf5Signature.data(), kHdf5Signature.size()) ||
       starts_with(0, reinterpret_cast<const std::uint8_t*>(kV73), sizeof(kV73) - 1U)) {  // NOLINT
     return fail("MATLAB v7.3 (HDF5) MAT-file is not supported: re-save with -v7");
+  }
+  const bool level5 = size >= kHeaderBytes && ((data[126] == 'I' && data[127] == 'M') ||
+                                               (data[126] == 'M' && data[127] == 'I'));
+  if (!level5 && looks_like_v4(data, size)) {
+    return fail("MATLAB v4 MAT-file is not supported: re-save with -v7");
   }
   if (size < kHeaderBytes) {
     return fail("not a MAT-file: " + std::to_string(size) +
