@@ -568,7 +568,18 @@ Status peek_header(const std::string& file, const std::uint8_t* data, bool big_e
   const std::size_t cap = std::min(kPeekBytes, max_inflated_size(bytes));
   InflateResult ir = inflate_zlib(data + payload, bytes, cap, InflateMode::prefix, scratch);
   if (ir.status != InflateStatus::ok) {
-    return MatError{where + "corrupt zlib stream (" + describe(ir.status) + ")"};
+    // Name the variable if what inflated before the fault shows it.
+    std::string subject = where;
+    if (scratch.size() >= 8U && load_u32(scratch.data(), big_endian) == kMiMatrix) {
+      Matrix partial_m;
+      std::string ignored;
+      if (parse_matrix(scratch.data() + 8, scratch.size() - 8U, big_endian, true, partial_m,
+                       ignored) == Parse::ok &&
+          !partial_m.name.empty()) {
+        subject = file + ": variable '" + partial_m.name + "': ";
+      }
+    }
+    return MatError{subject + "corrupt zlib stream (" + describe(ir.status) + ")"};
   }
   for (int attempt = 0; attempt < 2; ++attempt) {
     if (scratch.size() < 8U) {

@@ -1,0 +1,446 @@
+// Tests of imu/mat/mat_reader.hpp: files written by scipy.io.savemat (compressed and not),
+// hand-made files (big-endian, class double stored as integers, small data elements), and one
+// test per kind of bad file. Expected values are the inputs of gen_mat_vectors.py or bytes built
+// here by hand; doubles are compared bit for bit (the reader must convert exactly).
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+#include "imu/mat/mat_reader.hpp"
+#include "imu/mat/zlib.hpp"
+
+namespace {
+
+using imu::mat::MatFile;
+using Bytes = std::vector<std::uint8_t>;
+
+const std::string kDir = IMU_MAT_VECTOR_DIR;
+
+Bytes read_file(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  return Bytes(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+std::uint64_t bits_of(double v) {
+  std::uint64_t b = 0;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+
+// Exact comparison through the bit patterns (no float ==; -0.0 and 0.0 differ, as they should).
+void expect_same(const std::vector<double>& got, const std::vector<double>& want) {
+  ASSERT_EQ(got.size(), want.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    EXPECT_EQ(bits_of(got[i]), bits_of(want[i])) << "index " << i << ": " << got[i] << " vs "
+                                                 << want[i];
+  }
+}
+
+bool contains(const std::string& s, const std::string& part) {
+  return s.find(part) != std::string::npos;
+}
+
+// --- hand-built little-endian images (spec layout, independent of the writer) -------------------
+void u32(Bytes& b, std::uint32_t v) {
+  for (unsigned i = 0; i < 4U; ++i) {
+    b.push_back(static_cast<std::uint8_t>(v >> (8U * i)));
+  }
+}
+void pad8(Bytes& b) {
+  while (b.size() % 8U != 0U) {
+    b.push_back(0);
+  }
+}
+Bytes header() {
+  std::string text = "MATLAB 5.0 MAT-file, test image";
+  text.resize(116, ' ');
+  Bytes b(text.begin(), text.end());
+  b.resize(124, 0);
+  b.push_back(0x00);
+  b.push_back(0x01);
+  b.push_back('I');
+  b.push_back('M');
+  return b;
+}
+// A miMATRIX element of class double named `name` with the given dims and raw real-part bytes
+// stored as miDOUBLE (whatever their count: tests use this to claim dims that do not fit).
+Bytes double_matrix(const std::string& name, std::uint32_t rows, std::uint32_t cols,
+                    const std::vector<double>& values, std::uint32_t n_override = 0) {
+  Bytes body;
+  u32(body, 6);  // miUINT32 array flags
+  u32(body, 8);
+  u32(body, 6);  // mxDOUBLE_CLASS
+  u32(body, 0);
+  u32(body, 5);  // miINT32 dims
+  u32(body, 8);
+  u32(body, rows);
+  u32(body, cols);
+  u32(body, 1);  // miINT8 name
+  u32(body, static_cast<std::uint32_t>(name.size()));
+  body.insert(body.end(), name.begin(), name.end());
+  pad8(body);
+  u32(body, 9);  // miDOUBLE real part
+  u32(body, static_cast<std::uint32_t>(8U * values.size()));
+  for (const double v : values) {
+    const std::uint64_t b = bits_of(v);
+    u32(body, static_cast<std::uint32_t>(b));
+    u32(body, static_cast<std::uint32_t>(b >> 32U));
+  }
+  Bytes e;
+  u32(e, 14);
+  u32(e, n_override != 0U ? n_override : static_cast<std::uint32_t>(body.size()));
+  e.insert(e.end(), body.begin(), body.end());
+  return e;
+}
+Bytes compressed(const Bytes& element) {
+  const Bytes z = imu::mat::zlib_store(element.data(), element.size());
+  Bytes e;
+  u32(e, 15);
+  u32(e, static_cast<std::uint32_t>(z.size()));
+  e.insert(e.end(), z.begin(), z.end());
+  return e;
+}
+Bytes image(std::initializer_list<Bytes> elements) {
+  Bytes b = header();
+  for (const Bytes& e : elements) {
+    b.insert(b.end(), e.begin(), e.end());
+  }
+  return b;
+}
+MatFile open_memory(const Bytes& b, const std::string& name = "t.mat") {
+  auto r = MatFile::from_memory(name, b.data(), b.size());
+  EXPECT_TRUE(r.ok()) << r.error().message;
+  return std::move(r).value();
+}
+std::string column_error(const Bytes& b, const std::string& var, std::size_t column = 0) {
+  auto f = MatFile::from_memory("t.mat", b.data(), b.size());
+  if (!f.ok()) {
+    return f.error().message;
+  }
+  const auto r = f.value().read_column(var, column);
+  return r.ok() ? std::string("(no error)") : r.error().message;
+}
+
+// --- scipy-written files -------------------------------------------------------------------------
+class ScipyFile : public ::testing::TestWithParam<const char*> {
+ protected:
+  void SetUp() override {
+    auto r = MatFile::open(kDir + "/" + GetParam());
+    ASSERT_TRUE(r.ok()) << r.error().message;
+    file_ = std::make_unique<MatFile>(std::move(r).value());
+  }
+  std::vector<double> col(const std::string& name, std::size_t c = 0) {
+    const auto r = file_->read_column(name, c);
+    EXPECT_TRUE(r.ok()) << r.error().message;
+    return r.ok() ? r.value() : std::vector<double>{};
+  }
+  std::string err(const std::string& name, std::size_t c = 0) {
+    const auto r = file_->read_column(name, c);
+    return r.ok() ? std::string("(no error)") : r.error().message;
+  }
+  std::unique_ptr<MatFile> file_;
+};
+
+TEST_P(ScipyFile, ListsEveryVariableInOrder) {
+  const auto r = file_->list_variables();
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const std::vector<std::string> names = {"cellvar", "structvar", "d_col", "d_row", "d_mat",
+                                          "s_col",   "i8",        "u8",    "i16",   "u16",
+                                          "i32",     "u32",       "i64",   "u64",   "flag",
+                                          "scalar",  "text",      "charmat", "cplx", "empty",
+                                          "cube"};
+  ASSERT_EQ(r.value().size(), names.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    EXPECT_EQ(r.value()[i].name, names[i]);
+  }
+  const auto& v = r.value();
+  EXPECT_EQ(v[0].class_name, "cell");
+  EXPECT_EQ(v[1].class_name, "struct");
+  EXPECT_EQ(v[4].class_name, "double");
+  EXPECT_EQ(v[4].rows, 3U);
+  EXPECT_EQ(v[4].cols, 2U);
+  EXPECT_EQ(v[5].class_name, "single");
+  EXPECT_EQ(v[12].class_name, "int64");
+  EXPECT_EQ(v[14].class_name, "logical");
+  EXPECT_EQ(v[16].class_name, "char");
+  EXPECT_TRUE(v[18].complex);
+  EXPECT_EQ(v[20].n_dims, 3U);
+  EXPECT_EQ(v[20].cols, 12U);
+}
+
+TEST_P(ScipyFile, DoubleColumnRowAndMatrix) {
+  expect_same(col("d_col"), {1.5, -2.25, 3e10, -0.0, 1e-300});
+  expect_same(col("d_row"), {1.0, 2.0, 3.0, 4.5});  // a row vector is read whole
+  expect_same(col("d_mat", 0), {1.0, 3.0, 5.0});
+  expect_same(col("d_mat", 1), {2.0, 4.0, 6.0});
+  expect_same(col("cube", 5), {10.0, 11.0});  // 2x3x4 seen as 2x12, column-major 0..23
+}
+
+TEST_P(ScipyFile, EveryNumericClassConverts) {
+  expect_same(col("s_col"), {0.5, -1.25, 3.0});
+  expect_same(col("i8"), {-128.0, 0.0, 127.0});
+  expect_same(col("u8"), {0.0, 255.0});
+  expect_same(col("i16"), {-32768.0, 32767.0});
+  expect_same(col("u16"), {65535.0});
+  expect_same(col("i32"), {-2147483648.0, 2147483647.0});
+  expect_same(col("u32"), {4294967295.0});
+  expect_same(col("i64"), {-9007199254740992.0, 123456789.0});
+  expect_same(col("u64"), {9007199254740992.0});
+  expect_same(col("flag"), {1.0, 0.0, 1.0});
+}
+
+TEST_P(ScipyFile, ScalarAndStrings) {
+  const auto s = file_->read_scalar("scalar");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(bits_of(s.value()), bits_of(42.0));
+  const auto u = file_->read_scalar("u16");
+  ASSERT_TRUE(u.ok());
+  EXPECT_EQ(bits_of(u.value()), bits_of(65535.0));
+  const auto t = file_->read_string("text");
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  EXPECT_EQ(t.value(), "hello MAT");
+  const auto m = file_->read_string("charmat");
+  ASSERT_TRUE(m.ok()) << m.error().message;
+  EXPECT_EQ(m.value(), "ab\ncd");
+}
+
+TEST_P(ScipyFile, WrongKindOrShapeIsAClearError) {
+  const std::string f = kDir + "/" + GetParam();
+  EXPECT_EQ(err("d_row", 1),
+            f + ": variable 'd_row': is a vector (1x4): column 1 does not exist");
+  EXPECT_EQ(err("d_mat", 2), f + ": variable 'd_mat': has 2 columns (3x2): column 2 does not exist");
+  EXPECT_TRUE(contains(err("cellvar"), "variable 'cellvar': is a cell array, not numeric"));
+  EXPECT_TRUE(contains(err("structvar"), "is a struct array"));
+  EXPECT_TRUE(contains(err("text"), "variable 'text': is a char array, not numeric"));
+  EXPECT_TRUE(contains(err("cplx"), "variable 'cplx': complex not supported"));
+  EXPECT_TRUE(contains(err("empty"), "variable 'empty': is empty (0x0)"));
+  const auto s = file_->read_scalar("d_col");
+  ASSERT_FALSE(s.ok());
+  EXPECT_EQ(s.error().message, f + ": variable 'd_col': is 5x1, not a scalar");
+  const auto t = file_->read_string("d_col");
+  ASSERT_FALSE(t.ok());
+  EXPECT_TRUE(contains(t.error().message, "variable 'd_col': is a double array, not char"));
+}
+
+TEST_P(ScipyFile, MissingVariableListsTheOthers) {
+  const std::string f = kDir + "/" + GetParam();
+  EXPECT_EQ(err("acc_q"),
+            f + ": variable 'acc_q' not found; variables: cellvar, structvar, d_col, d_row, d_mat, "
+                "s_col, i8, u8, i16, u16, i32, u32, i64, u64, flag, scalar, text, charmat, cplx, "
+                "empty, cube");
+}
+
+TEST_P(ScipyFile, PathApiMatchesMemoryApi) {
+  const std::string f = kDir + "/" + GetParam();
+  const Bytes b = read_file(f);
+  const MatFile m = open_memory(b, f);
+  const auto a = imu::mat::read_column(f, "d_mat", 1);
+  const auto c = m.read_column("d_mat", 1);
+  ASSERT_TRUE(a.ok() && c.ok());
+  expect_same(a.value(), c.value());
+  const auto s = imu::mat::read_scalar(f, "scalar");
+  ASSERT_TRUE(s.ok());
+  EXPECT_EQ(bits_of(s.value()), bits_of(42.0));
+  const auto t = imu::mat::read_string(f, "text");
+  ASSERT_TRUE(t.ok());
+  EXPECT_EQ(t.value(), "hello MAT");
+  const auto l = imu::mat::list_variables(f);
+  ASSERT_TRUE(l.ok());
+  EXPECT_EQ(l.value().size(), 21U);
+  std::vector<double> reused(1000, 7.0);
+  ASSERT_TRUE(m.read_column_into("d_col", 0, reused).ok());
+  expect_same(reused, {1.5, -2.25, 3e10, -0.0, 1e-300});
+}
+
+INSTANTIATE_TEST_SUITE_P(Mat, ScipyFile,
+                         ::testing::Values("scipy_v5_compressed.mat", "scipy_v5_uncompressed.mat"));
+
+// --- hand-made files -----------------------------------------------------------------------------
+TEST(MatReader, BigEndianFile) {
+  auto r = MatFile::open(kDir + "/handmade_be.mat");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const MatFile& f = r.value();
+  EXPECT_TRUE(f.big_endian());
+  const auto c = f.read_column("be_col");
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  expect_same(c.value(), {1.0, -2.5});
+  const auto t = f.read_string("be_text");
+  ASSERT_TRUE(t.ok()) << t.error().message;
+  EXPECT_EQ(t.value(), "hi");
+  const auto i = f.read_column("be_i32");
+  ASSERT_TRUE(i.ok()) << i.error().message;
+  expect_same(i.value(), {-7.0, 0.0, 2000000000.0});
+}
+
+TEST(MatReader, DoubleClassStoredAsIntegersInSmallElements) {
+  auto r = MatFile::open(kDir + "/handmade_mixed.mat");
+  ASSERT_TRUE(r.ok()) << r.error().message;
+  const auto a = r.value().read_column("d_as_u8");
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  expect_same(a.value(), {1.0, 2.0, 250.0});
+  const auto b = r.value().read_column("d_as_i16");
+  ASSERT_TRUE(b.ok()) << b.error().message;
+  expect_same(b.value(), {-300.0, 301.0});
+  const auto s = r.value().read_scalar("d_as_u8_1");
+  ASSERT_TRUE(s.ok()) << s.error().message;
+  EXPECT_EQ(bits_of(s.value()), bits_of(9.0));
+}
+
+TEST(MatReader, HandBuiltCompressedAndPlainAgree) {
+  const Bytes plain = image({double_matrix("x", 3, 1, {1.0, 2.0, 3.0})});
+  const Bytes packed = image({compressed(double_matrix("x", 3, 1, {1.0, 2.0, 3.0}))});
+  for (const Bytes* b : {&plain, &packed}) {
+    const MatFile f = open_memory(*b);
+    const auto c = f.read_column("x");
+    ASSERT_TRUE(c.ok()) << c.error().message;
+    expect_same(c.value(), {1.0, 2.0, 3.0});
+  }
+}
+
+// --- bad files: one test per kind ------------------------------------------------------------------
+TEST(MatReaderErrors, NotAMatFile) {
+  const std::string text(300, 'x');
+  const Bytes b(text.begin(), text.end());
+  auto r = MatFile::from_memory("notes.txt", b.data(), b.size());
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(contains(r.error().message, "notes.txt: not a MAT-file")) << r.error().message;
+  const Bytes tiny = {'M', 'A', 'T'};
+  r = MatFile::from_memory("tiny.mat", tiny.data(), tiny.size());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message,
+            "tiny.mat: not a MAT-file: 3 bytes, shorter than the 128-byte level 5 header");
+  Bytes bad_version = header();
+  bad_version[124] = 0x00;
+  bad_version[125] = 0x02;
+  r = MatFile::from_memory("v.mat", bad_version.data(), bad_version.size());
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(contains(r.error().message, "unsupported MAT-file version 0x0200"));
+}
+
+TEST(MatReaderErrors, MissingFile) {
+  const auto r = imu::mat::read_column("/nonexistent/dir/x.mat", "acc_z");
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(contains(r.error().message, "/nonexistent/dir/x.mat: cannot open"));
+}
+
+TEST(MatReaderErrors, Version4File) {
+  const auto r = MatFile::open(kDir + "/scipy_v4.mat");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message,
+            kDir + "/scipy_v4.mat: MATLAB v4 MAT-file is not supported: re-save with -v7");
+}
+
+TEST(MatReaderErrors, Version73Hdf5) {
+  // What MATLAB -v7.3 writes: a 512-byte user block starting with the MATLAB text, then HDF5.
+  std::string text = "MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan  1 00:00:00 2024 HDF5 schema 1.00 .";
+  text.resize(116, ' ');
+  Bytes b(text.begin(), text.end());
+  b.resize(128, 0);
+  b[124] = 0x00;
+  b[125] = 0x02;
+  b[126] = 'I';
+  b[127] = 'M';
+  b.resize(512, 0);
+  const Bytes sig = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1A, '\n'};
+  b.insert(b.end(), sig.begin(), sig.end());
+  b.resize(2048, 0);
+  auto r = MatFile::from_memory("v73.mat", b.data(), b.size());
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, "v73.mat: MATLAB v7.3 (HDF5) MAT-file is not supported: re-save with -v7");
+  // The HDF5 signature alone is enough (text overwritten).
+  std::fill(b.begin(), b.begin() + 116, static_cast<std::uint8_t>(' '));
+  r = MatFile::from_memory("v73.mat", b.data(), b.size());
+  ASSERT_FALSE(r.ok());
+  EXPECT_TRUE(contains(r.error().message, "re-save with -v7"));
+}
+
+TEST(MatReaderErrors, Truncated) {
+  const Bytes full = read_file(kDir + "/scipy_v5_compressed.mat");
+  const Bytes cut(full.begin(), full.end() - 20);
+  const std::string e = column_error(cut, "cube");
+  EXPECT_TRUE(contains(e, "t.mat: truncated: element at offset ")) << e;
+  EXPECT_TRUE(contains(e, "remain")) << e;
+  // Variables before the cut stay readable.
+  const MatFile f = open_memory(cut);
+  EXPECT_TRUE(f.read_column("d_col").ok());
+  // Uncompressed: cut inside the last variable, and a stray partial tag.
+  const Bytes plain = image({double_matrix("a", 2, 1, {1.0, 2.0}), double_matrix("b", 1, 1, {3.0})});
+  EXPECT_TRUE(contains(column_error(Bytes(plain.begin(), plain.end() - 3), "b"), "truncated"));
+  Bytes stray = plain;
+  stray.push_back(14);
+  stray.push_back(0);
+  EXPECT_TRUE(contains(column_error(stray, "zz"), "truncated: 2 stray bytes at offset"));
+}
+
+TEST(MatReaderErrors, CorruptZlibStream) {
+  const Bytes good = image({compressed(double_matrix("x", 3, 1, {1.0, 2.0, 3.0}))});
+  Bytes adler = good;
+  adler.back() ^= 0x55U;  // last byte of the Adler-32 trailer
+  EXPECT_EQ(column_error(adler, "x"),
+            "t.mat: variable 'x': corrupt zlib stream (Adler-32 check failed)");
+  Bytes head = good;
+  head[128 + 8 + 1] ^= 0x01U;  // zlib FLG byte: header check fails
+  EXPECT_EQ(column_error(head, "x"),
+            "t.mat: element at offset 128: corrupt zlib stream (bad zlib header)");
+  Bytes block = good;
+  block[128 + 8 + 2] = 0x07;  // first block header: BTYPE 11
+  EXPECT_TRUE(contains(column_error(block, "x"), "corrupt zlib stream (invalid block type)"));
+}
+
+TEST(MatReaderErrors, DimensionsDoNotFitTheData) {
+  const Bytes b = image({double_matrix("acc", 1000, 1, {1.0, 2.0})});
+  EXPECT_EQ(column_error(b, "acc"),
+            "t.mat: variable 'acc': dimensions 1000x1 do not fit the data (2 elements of miDOUBLE)");
+  const Bytes z = image({compressed(double_matrix("acc", 1000, 1, {1.0, 2.0}))});
+  EXPECT_EQ(column_error(z, "acc"),
+            "t.mat: variable 'acc': dimensions 1000x1 do not fit the data (2 elements of miDOUBLE)");
+}
+
+TEST(MatReaderErrors, HugeDimensionsAllocateNothing) {
+  // 2^31-1 squared elements (2^65 bytes) claimed over 16 bytes of data: must fail on the sizes,
+  // not by trying to allocate (an allocation of that size aborts under ASan, throws otherwise).
+  const Bytes b = image({double_matrix("big", 0x7FFFFFFFU, 0x7FFFFFFFU, {1.0, 2.0})});
+  EXPECT_TRUE(contains(column_error(b, "big"), "dimensions 2147483647x2147483647 do not fit"));
+  const Bytes z = image({compressed(double_matrix("big", 0x7FFFFFFFU, 0x7FFFFFFFU, {1.0, 2.0}))});
+  EXPECT_TRUE(contains(column_error(z, "big"), "dimensions 2147483647x2147483647 do not fit"));
+  // A compressed matrix that claims 4 GiB inside a few bytes of zlib stream.
+  const Bytes claim = image({compressed(double_matrix("big", 1, 1, {1.0}, 0xFFFFFFF0U))});
+  EXPECT_TRUE(contains(column_error(claim, "big"), "compressed bytes can hold")) << column_error(claim, "big");
+}
+
+TEST(MatReaderErrors, StreamInflatesBeyondDeclaredSize) {
+  Bytes e = double_matrix("x", 2, 1, {1.0, 2.0});
+  e.resize(e.size() + 16U, 0xAB);  // the stream holds 16 bytes more than the miMATRIX declares
+  EXPECT_EQ(column_error(image({compressed(e)}), "x"),
+            "t.mat: variable 'x': corrupt zlib stream (inflates beyond the declared size)");
+  // Declaring 8 bytes less than the sub-elements take is a corrupt matrix.
+  Bytes shorter = double_matrix("x", 2, 1, {1.0, 2.0});
+  const auto n = static_cast<std::uint32_t>(shorter.size() - 8U - 8U);
+  for (unsigned i = 0; i < 4U; ++i) {
+    shorter[4U + i] = static_cast<std::uint8_t>(n >> (8U * i));
+  }
+  EXPECT_TRUE(contains(column_error(image({compressed(shorter)}), "x"),
+                       "miDOUBLE sub-element claims 16 bytes, only 8 remain in the matrix"));
+}
+
+TEST(MatReaderErrors, VariableNotFound) {
+  const Bytes b = image({double_matrix("acc_x", 1, 1, {1.0}), double_matrix("acc_y", 1, 1, {2.0})});
+  EXPECT_EQ(column_error(b, "acc_q"), "t.mat: variable 'acc_q' not found; variables: acc_x, acc_y");
+  EXPECT_EQ(column_error(image({}), "acc_q"), "t.mat: variable 'acc_q' not found; variables: (none)");
+}
+
+TEST(MatReaderErrors, CorruptMatrixHeader) {
+  Bytes b = image({double_matrix("x", 1, 1, {1.0})});
+  b[128 + 8] = 7;  // array flags tag type: not miUINT32
+  EXPECT_TRUE(contains(column_error(b, "x"), "array flags are not an 8-byte miUINT32 element"));
+  Bytes neg = image({double_matrix("x", 1, 1, {1.0})});
+  neg[128 + 8 + 16 + 8 + 3] = 0x80;  // rows = negative
+  EXPECT_TRUE(contains(column_error(neg, "x"), "negative dimension"));
+}
+
+}  // namespace
