@@ -24,7 +24,7 @@ template <std::size_t M, std::size_t L>
 void BM_PushPerSample(benchmark::State& state) {
   const auto input = make_input(1U << 20U);
   imu::OnlineAdev<M, L> adev(0.01, 1.0);
-  for (auto _ : state) {
+  for (auto _ : state) {  // NOLINT(clang-analyzer-deadcode.DeadStores): benchmark idiom
     adev.push_block(input.data(), input.size());
     benchmark::DoNotOptimize(adev);
   }
@@ -40,7 +40,7 @@ BENCHMARK(BM_PushPerSample<8, 22>)->Unit(benchmark::kMillisecond);
 void BM_SixChannels(benchmark::State& state) {
   const auto input = make_input(6U << 18U);
   imu::MultiAdev<6, 8, 24> adev;
-  for (auto _ : state) {
+  for (auto _ : state) {  // NOLINT(clang-analyzer-deadcode.DeadStores): benchmark idiom
     for (std::size_t i = 0; i + 6 <= input.size(); i += 6) {
       const std::int32_t(&s)[6] = *reinterpret_cast<const std::int32_t(*)[6]>(&input[i]);
       adev.push(s);
@@ -58,7 +58,7 @@ void BM_Snapshot(benchmark::State& state) {
   imu::OnlineAdev<8, 24> adev(0.01, 1.0);
   adev.push_block(input.data(), input.size());
   imu::AdevPoint pts[imu::OnlineAdev<8, 24>::kMaxPoints];
-  for (auto _ : state) {
+  for (auto _ : state) {  // NOLINT(clang-analyzer-deadcode.DeadStores): benchmark idiom
     benchmark::DoNotOptimize(adev.snapshot(pts, std::size(pts)));
   }
 }

@@ -15,7 +15,8 @@ std::atomic<std::uint64_t> g_allocs{0};
 bool g_counting = false;
 }  // namespace
 
-extern "C" void* __libc_malloc(std::size_t size);  // glibc's implementation behind malloc
+// NOLINTNEXTLINE(bugprone-reserved-identifier): glibc's allocator behind malloc, to forward to
+extern "C" void* __libc_malloc(std::size_t size);
 extern "C" void* malloc(std::size_t size) {        // NOLINT: interposes the C allocator
   if (g_counting) {
     ++g_allocs;
