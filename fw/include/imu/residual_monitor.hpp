@@ -14,10 +14,11 @@
 //   usual 95 % band), and a Box-Pierce portmanteau Q = window * sum r_l^2 against
 //   chi2_c(kLags) (one combined flag with the stated false-alarm rate 1 - c).
 // * Cusum: two-sided CUSUM for a step in the mean of nu: g+ = max(0, g+ + nu - k),
-//   g- = max(0, g- - nu - k); alarm when either exceeds h (k = 0.5, h = 5 by default: average
-//   run length ~ 930 updates without a step, detection of a 1-sigma step in ~10 updates). The
-//   estimated step time is the update index at which the alarming sum last left zero. reset()
-//   re-arms it.
+//   g- = max(0, g- - nu - k); alarm when either exceeds h. Defaults k = 0.5, h = 10: two-sided
+//   in-control average run length ~7e4 updates (Siegmund's approximation; ~12 min at 100 Hz),
+//   detection of a 1-sigma step in ~22 updates (h = 5: ARL ~470, ~11 updates). The estimated
+//   step time is the update index at which the alarming sum last left zero. The alarm latches
+//   until reset().
 // Cost per update: NIS 3 flops, whiteness kLags + 3 multiply-adds, CUSUM 4 flops; end of block
 // O(kLags). No heap, not re-entrant on one instance.
 #ifndef IMU_RESIDUAL_MONITOR_HPP
@@ -187,7 +188,7 @@ class WhitenessMonitor {
 class Cusum {
  public:
   /// slack k >= 0 and threshold h > 0, in units of the innovation's standard deviation.
-  [[nodiscard]] MonitorStatus configure(float slack = 0.5F, float threshold = 5.0F) {
+  [[nodiscard]] MonitorStatus configure(float slack = 0.5F, float threshold = 10.0F) {
     if (!(slack >= 0.0F) || !(threshold > 0.0F) || !std::isfinite(slack + threshold)) {
       return MonitorStatus::kBadConfig;
     }
@@ -244,7 +245,7 @@ class Cusum {
 
  private:
   float k_ = 0.5F;
-  float h_ = 5.0F;
+  float h_ = 10.0F;
   float gp_ = 0.0F;
   float gm_ = 0.0F;
   std::uint64_t n_ = 0;
