@@ -1,6 +1,7 @@
 // See demo.hpp. Compiled under fw/'s rules (prelude force-included: no heap, stdio, exceptions).
 #include "demo.hpp"
 
+#include "imu/bias_kf.hpp"
 #include "imu/online_adev.hpp"
 #include "line.hpp"
 #include "samples.hpp"
@@ -13,6 +14,7 @@ using Adev = MultiAdev<kChannels, kAdevM, kAdevL>;
 // Static, not on the stack: the estimator is the bulk of the image's RAM and must show in .bss.
 Adev g_adev;
 AdevPoint g_points[Adev::Channel::kMaxPoints];
+ScalarBiasKf<float> g_kf[kChannels];
 
 }  // namespace
 
@@ -40,11 +42,20 @@ DemoStatus run_demo(WriteFn write, void* ctx) {
   SampleSource sources[kChannels] = {};
   for (std::size_t c = 0; c < kChannels; ++c) {
     sources[c] = SampleSource(static_cast<std::uint32_t>(c));
+    if (g_kf[c].configure(kKfPhi, kKfQw, kKfR, kKfP0, 0.0, 0.0) != KfStatus::kOk) {
+      line.str("IMU-M4 END status=bad_filter_model");
+      emit();
+      return DemoStatus::kBadFilterModel;
+    }
   }
+  constexpr auto kLsbF = static_cast<float>(kLsb);  // 2^-10: exact in float
   std::int32_t row[kChannels] = {};
   for (std::uint32_t i = 0; i < kSamples; ++i) {
+    const bool is_static = is_static_sample(i);
     for (std::size_t c = 0; c < kChannels; ++c) {
       row[c] = sources[c].next();
+      // |counts| < 2^24 here, so the conversion to float is exact.
+      static_cast<void>(g_kf[c].step(static_cast<float>(row[c]) * kLsbF, is_static));
     }
     g_adev.push(row);
   }
@@ -62,8 +73,14 @@ DemoStatus run_demo(WriteFn write, void* ctx) {
     line.str("C c=").u64(c).str(" samples=").u64(ch.samples()).str(" points=").u64(k);
     emit();
   }
-  // TODO(issue 3): run the bias Kalman filter over the same samples and print its state here
-  // ("K c=<ch> ..." lines) once fw/ has it.
+  for (std::size_t c = 0; c < kChannels; ++c) {
+    const auto& kf = g_kf[c];
+    const double truth = static_cast<double>(sources[c].bias_counts()) * kLsb;
+    line.str("K c=").u64(c).str(" bias=").f32(kf.bias()).str(" var=").f32(kf.variance());
+    line.str(" truth=").f64(truth).str(" predictions=").u64(kf.stats().predictions);
+    line.str(" updates=").u64(kf.stats().updates);
+    emit();
+  }
 
   line.str("IMU-M4 END status=").str(truncated ? "truncated" : "ok").str(" lines=").u64(lines + 1);
   emit();

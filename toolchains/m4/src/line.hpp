@@ -49,6 +49,20 @@ class Line {
     }
     return *this;
   }
+  Line& hex32(std::uint32_t v) {
+    static constexpr char kHex[] = "0123456789abcdef";
+    for (int shift = 28; shift >= 0; shift -= 4) {
+      put(kHex[(v >> static_cast<unsigned>(shift)) & 0xFu]);
+    }
+    return *this;
+  }
+  /// The IEEE-754 bits of a float in hex (8 digits, exact).
+  Line& f32(float v) {
+    std::uint32_t bits = 0;
+    static_assert(sizeof bits == sizeof v, "IEEE-754 binary32");
+    std::memcpy(&bits, &v, sizeof v);
+    return hex32(bits);
+  }
   /// The IEEE-754 bits of `v` in hex (exact; the reader converts back with memcpy).
   Line& f64(double v) {
     std::uint64_t bits = 0;

@@ -1,7 +1,7 @@
 // Deterministic IMU-like samples for the bare-metal program and its host twin: integer-only
 // (an LCG), so the Cortex-M4 and the host generate bit-identical input without any table in
 // flash. Per channel: constant bias + approximately Gaussian white noise (sum of four uniforms,
-// sigma about 9459 counts) + a random walk (steps uniform in +-32 counts, sigma about 18.5).
+// sigma about 18900 counts) + a random walk (steps uniform in +-32 counts, sigma about 18.5).
 // Cost: O(1) per sample, a few integer operations. No heap, re-entrant per instance.
 #ifndef IMU_M4_SAMPLES_HPP
 #define IMU_M4_SAMPLES_HPP
@@ -35,6 +35,9 @@ class SampleSource {
 
   /// Next sample in counts. Stays far inside int32 for any practical length: the walk grows
   /// like 18.5 sqrt(n) counts.
+  /// Constant part of the bias and the random walk so far, in counts (the truth a filter tracks).
+  constexpr std::int32_t bias_counts() const { return bias_counts_ + walk_counts_; }
+
   constexpr std::int32_t next() {
     const std::int32_t white = (rng_.uniform16() + rng_.uniform16() + rng_.uniform16() +
                                 rng_.uniform16()) / 2;
