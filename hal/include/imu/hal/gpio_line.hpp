@@ -1,0 +1,132 @@
+// GPIO lines for the IMU node: the "static" input (bias filter updates while active), the
+// "alarm" output (set while a residual monitor fires) and an optional data-ready / sync input
+// with kernel edge timestamps. Chip and line names are configuration (LineConfig), never
+// constants; a missing chip or line is reported at open() with a message naming both.
+//
+// Narrow interfaces: DigitalInput, DigitalOutput (what the application needs), implemented by
+// GpioLine (libgpiod 1.6 C API, RAII) and MemoryLine (in-memory, for simulation and tests).
+// The GpioLine backend is chosen by CMake: with libgpiod found it uses it; without (e.g. a
+// cross build lacking the arm64 libgpiod) every open() returns kUnavailable with a message.
+// No exceptions cross this boundary; every call returns a GpioStatus.
+#ifndef IMU_HAL_GPIO_LINE_HPP
+#define IMU_HAL_GPIO_LINE_HPP
+
+#include <cstdint>
+
+struct gpiod_chip;
+struct gpiod_line;
+
+namespace imu::hal {
+
+enum class GpioStatus : std::uint8_t {
+  kOk,
+  kUnavailable,     ///< built without libgpiod
+  kNoSuchChip,
+  kNoSuchLine,
+  kLineBusy,        ///< requested by another consumer
+  kNotOpen,
+  kWrongDirection,  ///< write() on an input, read of edges on a non-edge line, ...
+  kTimeout,
+  kBadArgument,
+  kSysError,
+};
+
+[[nodiscard]] const char* to_string(GpioStatus s);
+
+enum class LineMode : std::uint8_t {
+  kInput,   ///< level input (e.g. "static")
+  kOutput,  ///< level output (e.g. "alarm")
+  kEdges,   ///< input with both-edge events and kernel timestamps (e.g. "drdy")
+};
+
+struct LineConfig {
+  const char* chip = nullptr;      ///< "gpiochip0", "0", "/dev/gpiochip0" or a chip label
+  const char* line = nullptr;      ///< line name as in the device tree / gpio-sim configfs
+  const char* consumer = "imu-hal";
+  LineMode mode = LineMode::kInput;
+  bool active_low = false;         ///< "active" means electrically low
+  bool initial_active = false;     ///< output value at request time
+};
+
+/// One edge. time_ns is the kernel's event timestamp (CLOCK_MONOTONIC on Debian 12's kernel).
+struct EdgeEvent {
+  bool rising;  ///< towards active (after active_low inversion)
+  std::uint64_t time_ns;
+};
+
+class DigitalInput {
+ public:
+  virtual ~DigitalInput() = default;
+  [[nodiscard]] virtual GpioStatus read(bool& active) = 0;
+};
+
+class DigitalOutput {
+ public:
+  virtual ~DigitalOutput() = default;
+  [[nodiscard]] virtual GpioStatus write(bool active) = 0;
+};
+
+/// A line requested through libgpiod. Move-only; releases the line and closes the chip when
+/// destroyed. Each call is one ioctl (read/write) or one read() (edges).
+class GpioLine final : public DigitalInput, public DigitalOutput {
+ public:
+  GpioLine() = default;
+  ~GpioLine() override;
+  GpioLine(const GpioLine&) = delete;
+  GpioLine& operator=(const GpioLine&) = delete;
+  GpioLine(GpioLine&& other) noexcept;
+  GpioLine& operator=(GpioLine&& other) noexcept;
+
+  /// False when this build has no libgpiod (every open() then returns kUnavailable).
+  [[nodiscard]] static bool available();
+
+  /// Find the chip and the line by name and request it in cfg.mode. On failure error() says
+  /// which chip or line, e.g. "gpio: chip 'gpiochip7' not found: No such file or directory".
+  [[nodiscard]] GpioStatus open(const LineConfig& cfg);
+  void close();
+
+  [[nodiscard]] GpioStatus read(bool& active) override;   ///< kInput, kOutput or kEdges
+  [[nodiscard]] GpioStatus write(bool active) override;   ///< kOutput only
+  /// kEdges only: wait up to timeout_ms (-1 forever) for one edge. kTimeout if none.
+  [[nodiscard]] GpioStatus wait_edge(int timeout_ms, EdgeEvent& out);
+  /// kEdges only: descriptor to poll together with the CAN socket; -1 otherwise.
+  [[nodiscard]] int event_fd() const;
+
+  [[nodiscard]] const char* error() const { return error_; }
+  [[nodiscard]] bool is_open() const { return line_ != nullptr; }
+
+ private:
+  GpioStatus fail(GpioStatus s, int err, const char* what);
+
+  gpiod_chip* chip_ = nullptr;
+  gpiod_line* line_ = nullptr;
+  LineMode mode_ = LineMode::kInput;
+  char chip_name_[64] = {};
+  char line_name_[64] = {};
+  char error_[192] = {};
+};
+
+/// In-memory line: reads what was last written or set by set(). For simulation and tests of
+/// code that takes a DigitalInput / DigitalOutput.
+class MemoryLine final : public DigitalInput, public DigitalOutput {
+ public:
+  [[nodiscard]] GpioStatus read(bool& active) override {
+    active = value_;
+    return GpioStatus::kOk;
+  }
+  [[nodiscard]] GpioStatus write(bool active) override {
+    value_ = active;
+    ++writes_;
+    return GpioStatus::kOk;
+  }
+  void set(bool active) { value_ = active; }
+  [[nodiscard]] std::uint64_t writes() const { return writes_; }
+
+ private:
+  bool value_ = false;
+  std::uint64_t writes_ = 0;
+};
+
+}  // namespace imu::hal
+
+#endif  // IMU_HAL_GPIO_LINE_HPP
