@@ -324,7 +324,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
                               kFitRamp;
   if (!range_ok || (o.terms & known) == 0 || (o.terms & ~known) != 0 ||
       ((o.terms & kFitGm2) != 0 && (o.terms & kFitGm1) == 0) || o.weight_iterations < 0 ||
-      o.weight_iterations > 10 || (points == nullptr && n > 0)) {
+      o.weight_iterations > 10 || (points == nullptr && n > 0) || !(o.edf_cap >= 0.0)) {
     res.status = FitStatus::kBadOptions;
     return res;
   }
@@ -359,8 +359,9 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
     }
     pb.tau[pb.n] = p.tau_s;
     pb.avar[pb.n] = p.avar;
-    pb.edf[pb.n] = p.edf;
-    pb.w[pb.n] = p.edf / (2.0 * p.avar * p.avar);
+    const double edf = o.edf_cap > 0.0 && p.edf > o.edf_cap ? o.edf_cap : p.edf;
+    pb.edf[pb.n] = edf;
+    pb.w[pb.n] = edf / (2.0 * p.avar * p.avar);
     ++pb.n;
   }
   res.n_points = pb.n;

@@ -51,6 +51,11 @@ struct FitOptions {
   double tb_min_s = 0.0;  ///< correlation time search range; 0: tau_min_s
   double tb_max_s = 0.0;  ///< 0: 10 * tau_max_s
   int weight_iterations = 2;  ///< reweighting passes after the first (0..10)
+  /// Upper limit on the EDF used in the weights (0: none, the pure CSM weighting). The
+  /// estimates at neighbouring taus are strongly correlated, which 1/var weights ignore: with a
+  /// model that cannot follow the data everywhere, the short taus (EDF ~1e6) then decide the
+  /// fit alone. A cap (e.g. 1000) makes the fit closer to a relative least-squares fit.
+  double edf_cap = 0.0;
 };
 
 enum class FitStatus : std::uint8_t {
