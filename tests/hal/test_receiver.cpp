@@ -31,12 +31,14 @@ struct Sink {
   std::vector<std::int64_t> seq;
   std::vector<RxEvent> other;
   std::uint32_t missing_end = 0;
+  std::uint32_t resync_marks = 0;
   void drain(Rx& rx) {
     RxEvent e{};
     while (rx.pop(e)) {
       if (e.type == RxEvent::Type::kSample) {
         seq.push_back(e.rec.sample.seq);
       } else if (e.type == RxEvent::Type::kMissing) {
+        resync_marks += e.resync ? 1U : 0U;
         // A run may arrive in pieces; the consumer adds them up (mark_missing(a + b)).
         if (!seq.empty() && seq.back() < 0 && e.missing_first_seq == missing_end) {
           seq.back() -= e.missing_count;
@@ -321,6 +323,7 @@ TEST(Receiver, SenderRestartResynchronisesWithOneBreakMark) {
   }
   EXPECT_EQ(sink.seq, want);
   EXPECT_EQ(rx.stats().resyncs, 1U);
+  EXPECT_EQ(sink.resync_marks, 1U);
 }
 
 TEST(Receiver, SequenceWrapsAroundTwoToThe32) {

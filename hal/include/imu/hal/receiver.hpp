@@ -70,6 +70,8 @@ struct RxEvent {
   std::uint64_t rx_time_ns;           ///< receive time of the frame that completed the record
   std::uint32_t missing_first_seq;    ///< kMissing: first missing sequence number
   std::uint32_t missing_count;        ///< kMissing: number of consecutive missing samples
+  bool resync;                        ///< kMissing: break mark of a sender restart (count 1);
+                                      ///< the next sample starts a new sequence
   union Rec {
     SampleRecord sample;
     ConfigRecord config;
@@ -309,6 +311,7 @@ RxEvent& Receiver<W>::enqueue(RxEvent::Type t, std::uint64_t rx_time_ns) {
   e.rx_time_ns = rx_time_ns;
   e.missing_first_seq = 0;
   e.missing_count = 0;
+  e.resync = false;
   return e;
 }
 
@@ -439,7 +442,13 @@ void Receiver<W>::on_sample(const SampleRecord& s, std::uint64_t rx_time_ns) {
     // mark one missing sample so the consumer breaks its phase, then start over at s.seq.
     ++stats_.resyncs;
     release_held();
-    emit_missing(next_, 1);
+    ++stats_.missing;
+    ++stats_.gaps;
+    RxEvent& e = enqueue(RxEvent::Type::kMissing, rx_time_ns);
+    e.missing_first_seq = next_;
+    e.missing_count = 1;
+    e.resync = true;
+    have_missing_ = false;
     next_ = s.seq;
     max_seen_ = s.seq;
     history_ = 0;
