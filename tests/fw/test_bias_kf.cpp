@@ -119,7 +119,7 @@ TEST(BiasKf, PredictsOnlyWhileNotStaticAndTracksAKnownSignal) {
   EXPECT_GT(kf.variance(), p_static);  // prediction only: P grows
   EXPECT_NEAR(kf.bias(), b_static * std::pow(m.phi, 100), 1e-15);  // b decays by phi^100
   EXPECT_EQ(kf.stats().updates, 50000U);
-  (void)kf.step(NAN, true);
+  (void)kf.step(std::nan(""), true);
   EXPECT_EQ(kf.stats().rejected_nonfinite, 1U);
 }
 

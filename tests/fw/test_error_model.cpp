@@ -59,7 +59,7 @@ TEST(ErrorModel, RejectsBadInputs) {
             imu::ModelStatus::kBadParameter);
   EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 0.0, 100.0, m),
             imu::ModelStatus::kBadParameter);
-  EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, NAN, 300.0, 100.0, m),
+  EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, std::nan(""), 300.0, 100.0, m),
             imu::ModelStatus::kBadParameter);
   imu::ContinuousModel<2> c;
   EXPECT_EQ(c.add_gauss_markov(1e-8, 100.0), imu::ModelStatus::kOk);
