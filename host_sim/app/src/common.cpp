@@ -1,0 +1,163 @@
+// Internal helpers of imu-sim / imu-fw (see common.hpp).
+#include "common.hpp"
+
+#include <sys/stat.h>
+#include <time.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdarg>
+#include <cstdlib>
+#include <cstring>
+
+namespace imu::sim {
+
+const char* const kChannelNames[kNumChannels] = {"acc_x",  "acc_y",  "acc_z",
+                                                 "gyro_x", "gyro_y", "gyro_z"};
+
+bool channel_index(const std::string& name, std::size_t& out) {
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    if (name == kChannelNames[c]) {
+      out = c;
+      return true;
+    }
+  }
+  return false;
+}
+
+const char* channel_unit(std::size_t c) { return c < 3 ? "m/s^2" : "rad/s"; }
+
+double default_lsb(std::size_t c) { return c < 3 ? 1e-6 : 1e-7; }
+
+bool Args::parse(int argc, char** argv, int first, const std::vector<OptSpec>& specs,
+                 std::size_t max_positional, std::string& err) {
+  for (int i = first; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.size() > 2 && a[0] == '-' && a[1] == '-') {
+      std::string name = a;
+      std::string value;
+      bool inline_value = false;
+      const std::size_t eq = a.find('=');
+      if (eq != std::string::npos) {
+        name = a.substr(0, eq);
+        value = a.substr(eq + 1);
+        inline_value = true;
+      }
+      const OptSpec* spec = nullptr;
+      for (const OptSpec& s : specs) {
+        if (name == s.name) {
+          spec = &s;
+        }
+      }
+      if (spec == nullptr) {
+        err = "unknown option '" + name + "'";
+        return false;
+      }
+      if (spec->has_value && !inline_value) {
+        if (i + 1 >= argc) {
+          err = "option '" + name + "' needs a value";
+          return false;
+        }
+        value = argv[++i];
+      } else if (!spec->has_value && inline_value) {
+        err = "option '" + name + "' takes no value";
+        return false;
+      }
+      opts_[name] = value;
+    } else {
+      if (pos_.size() >= max_positional) {
+        err = "unexpected argument '" + a + "'";
+        return false;
+      }
+      pos_.push_back(a);
+    }
+  }
+  return true;
+}
+
+std::string Args::get(const std::string& name, const std::string& def) const {
+  const auto it = opts_.find(name);
+  return it == opts_.end() ? def : it->second;
+}
+
+bool Args::number(const std::string& name, double def, double& out, std::string& err) const {
+  const auto it = opts_.find(name);
+  if (it == opts_.end()) {
+    out = def;
+    return true;
+  }
+  const char* s = it->second.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s, &end);
+  if (end == s || *end != '\0' || errno != 0 || !std::isfinite(v)) {
+    err = "option '" + name + "': '" + it->second + "' is not a number";
+    return false;
+  }
+  out = v;
+  return true;
+}
+
+double now_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+void appendf(std::string& out, const char* fmt, ...) {
+  char buf[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  const int n = std::vsnprintf(buf, sizeof buf, fmt, ap);
+  va_end(ap);
+  if (n > 0) {
+    out.append(buf, static_cast<std::size_t>(n) < sizeof buf ? static_cast<std::size_t>(n)
+                                                             : sizeof buf - 1);
+  }
+}
+
+bool make_dirs(const std::string& path, std::string& err) {
+  if (path.empty()) {
+    return true;
+  }
+  std::string cur;
+  std::size_t pos = 0;
+  while (pos != std::string::npos) {
+    pos = path.find('/', pos + 1);
+    cur = path.substr(0, pos);
+    if (cur.empty()) {
+      continue;
+    }
+    if (mkdir(cur.c_str(), 0755) != 0 && errno != EEXIST) {
+      err = "cannot create directory '" + cur + "': " + std::strerror(errno);
+      return false;
+    }
+  }
+  struct stat st {};
+  if (stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
+    err = "'" + path + "' is not a directory";
+    return false;
+  }
+  return true;
+}
+
+bool write_file(const std::string& path, const std::string& text, std::string& err) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  if (f == nullptr) {
+    err = "cannot write '" + path + "': " + std::strerror(errno);
+    return false;
+  }
+  const std::size_t w = std::fwrite(text.data(), 1, text.size(), f);
+  const bool ok = w == text.size() && std::fclose(f) == 0;
+  if (!ok) {
+    err = "write error on '" + path + "'";
+  }
+  return ok;
+}
+
+int fail(const char* cmd, const std::string& msg, int status) {
+  std::fprintf(stderr, "%s: %s\n", cmd, msg.c_str());
+  return status;
+}
+
+}  // namespace imu::sim

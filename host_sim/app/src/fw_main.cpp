@@ -1,0 +1,197 @@
+// imu-fw: the firmware node on Linux (node core + CanSocket + optional libgpiod lines).
+#include <signal.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "common.hpp"
+#include "imu/hal/can_socket.hpp"
+#include "imu/hal/gpio_line.hpp"
+#include "imu/node/node.hpp"
+#include "imu/node/node_loop.hpp"
+#include "imu/sim/cli.hpp"
+#include "report.hpp"
+
+namespace imu::sim {
+namespace {
+
+constexpr const char* kCmd = "imu-fw";
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_signal(int /*sig*/) { g_stop.store(true); }
+
+constexpr const char* kFwUsage =
+    "usage: imu-fw --bus loopback[:NAME]|vcan0|can0 [--gpio-chip CHIP --static-line NAME\n"
+    "              --alarm-line NAME] [--N 3.3e-3 --B 9e-4 --Tp 300] [--gyro-N 5.8e-4\n"
+    "              --gyro-B 1.2e-4 --gyro-Tp 300] [--listen-only] [--layout fd|classic]\n"
+    "              [--idle-ms 200] [--exit-idle-s S] [--status-period 100]\n"
+    "              [--adev-period 6000] [--init-samples 1000] [--quiet]\n"
+    "Runs until the stream ends: the loopback peer closes, or (CAN) no frame for --exit-idle-s\n"
+    "seconds after samples (default 3; 0 = run until SIGINT). Prints the final ADEV table.\n";
+
+}  // namespace
+
+int fw_main(int argc, char** argv) {
+  Args a;
+  std::string err;
+  const std::vector<OptSpec> specs = {
+      {"--bus", true},       {"--gpio-chip", true},    {"--static-line", true},
+      {"--alarm-line", true}, {"--N", true},           {"--B", true},
+      {"--Tp", true},        {"--gyro-N", true},       {"--gyro-B", true},
+      {"--gyro-Tp", true},   {"--listen-only", false}, {"--layout", true},
+      {"--idle-ms", true},   {"--exit-idle-s", true},  {"--status-period", true},
+      {"--adev-period", true}, {"--init-samples", true}, {"--quiet", false},
+      {"--help", false}};
+  if (!a.parse(argc, argv, 1, specs, 0, err)) {
+    std::fputs(kFwUsage, stderr);
+    return fail(kCmd, err, 2);
+  }
+  if (a.has("--help")) {
+    std::fputs(kFwUsage, stdout);
+    return 0;
+  }
+  if (!a.has("--bus")) {
+    std::fputs(kFwUsage, stderr);
+    return fail(kCmd, "--bus is required", 2);
+  }
+  const std::string bus = a.get("--bus");
+  const bool is_loopback = bus == "loopback" || bus.rfind("loopback:", 0) == 0;
+  node::NodeConfig nc;
+  double v[6] = {};
+  double idle_ms = 0, exit_idle_s = 0, status_p = 0, adev_p = 0, init_n = 0;
+  if (!a.number("--N", 3.3e-3, v[0], err) || !a.number("--B", 9e-4, v[1], err) ||
+      !a.number("--Tp", 300.0, v[2], err) || !a.number("--gyro-N", 5.8e-4, v[3], err) ||
+      !a.number("--gyro-B", 1.2e-4, v[4], err) || !a.number("--gyro-Tp", 300.0, v[5], err) ||
+      !a.number("--idle-ms", 200.0, idle_ms, err) ||
+      !a.number("--exit-idle-s", is_loopback ? 0.0 : 3.0, exit_idle_s, err) ||
+      !a.number("--status-period", 100.0, status_p, err) ||
+      !a.number("--adev-period", 6000.0, adev_p, err) ||
+      !a.number("--init-samples", 1000.0, init_n, err)) {
+    return fail(kCmd, err, 2);
+  }
+  if (idle_ms < 1.0 || exit_idle_s < 0.0 || status_p < 1.0 || adev_p < 0.0 || init_n < 1.0 ||
+      status_p > 4e9 || adev_p > 4e9 || init_n > 4e9 || idle_ms > 1e6 || exit_idle_s > 1e6) {
+    return fail(kCmd, "a numeric option is out of range", 2);
+  }
+  for (std::size_t c = 0; c < node::kChannels; ++c) {
+    const double* p = c < 3 ? v : v + 3;
+    nc.model[c] = node::ChannelModel{p[0], p[1], p[2]};
+  }
+  const std::string layout = a.get("--layout", "fd");
+  if (layout != "fd" && layout != "classic") {
+    return fail(kCmd, "--layout must be fd or classic", 2);
+  }
+  nc.layout = layout == "fd" ? hal::Layout::kFd : hal::Layout::kClassic;
+  nc.telemetry = !a.has("--listen-only");
+  nc.status_period_samples = static_cast<std::uint32_t>(status_p);
+  nc.adev_period_samples = static_cast<std::uint32_t>(adev_p);
+  nc.init_samples = static_cast<std::uint32_t>(init_n);
+  const bool gpio = a.has("--gpio-chip") || a.has("--static-line") || a.has("--alarm-line");
+  if (gpio && !a.has("--gpio-chip")) {
+    return fail(kCmd, "--static-line / --alarm-line need --gpio-chip", 2);
+  }
+
+  hal::GpioLine static_line;
+  hal::GpioLine alarm_line;
+  hal::DigitalInput* static_in = nullptr;
+  hal::DigitalOutput* alarm_out = nullptr;
+  const std::string chip = a.get("--gpio-chip");
+  const std::string sname = a.get("--static-line");
+  const std::string aname = a.get("--alarm-line");
+  if (!sname.empty()) {
+    hal::LineConfig lc;
+    lc.chip = chip.c_str();
+    lc.line = sname.c_str();
+    lc.consumer = "imu-fw";
+    lc.mode = hal::LineMode::kInput;
+    if (static_line.open(lc) != hal::GpioStatus::kOk) {
+      return fail(kCmd, static_line.error());
+    }
+    static_in = &static_line;
+  }
+  if (!aname.empty()) {
+    hal::LineConfig lc;
+    lc.chip = chip.c_str();
+    lc.line = aname.c_str();
+    lc.consumer = "imu-fw";
+    lc.mode = hal::LineMode::kOutput;
+    if (alarm_line.open(lc) != hal::GpioStatus::kOk) {
+      return fail(kCmd, alarm_line.error());
+    }
+    alarm_out = &alarm_line;
+  }
+
+  hal::CanSocket sock;
+  if (sock.open(bus.c_str()) != hal::IoStatus::kOk) {
+    return fail(kCmd, std::string("cannot open bus: ") + sock.error());
+  }
+  auto nd = std::make_unique<node::Node>();
+  if (nd->configure(nc, sock, static_in, alarm_out) != node::NodeStatus::kOk) {
+    return fail(kCmd, "node configuration rejected (model parameters)", 2);
+  }
+  g_stop.store(false);
+  struct sigaction sa {};
+  sa.sa_handler = on_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = 0;  // no SA_RESTART: poll() returns EINTR and the loop sees the flag
+  struct sigaction old_int {};
+  struct sigaction old_term {};
+  sigaction(SIGINT, &sa, &old_int);
+  sigaction(SIGTERM, &sa, &old_term);
+  const bool quiet = a.has("--quiet");
+  if (!quiet) {
+    std::fprintf(stderr, "imu-fw: listening on %s%s\n", bus.c_str(),
+                 nc.telemetry ? "" : " (listen only: no telemetry)");
+  }
+  node::LoopOptions lo;
+  lo.idle_ms = static_cast<int>(idle_ms);
+  lo.exit_idle_ms = static_cast<int>(exit_idle_s * 1000.0);
+  lo.exit_on_link_down = true;
+  lo.stop = &g_stop;
+  const node::LoopEnd end = node::run_node_loop(*nd, sock, lo);
+  sigaction(SIGINT, &old_int, nullptr);
+  sigaction(SIGTERM, &old_term, nullptr);
+
+  const node::Node& n = *nd;
+  const node::NodeStats& st = n.stats();
+  const hal::RxStats& rs = n.rx_stats();
+  std::printf("imu-fw: stream ended (%s): %llu samples, %llu missing, %llu frames, "
+              "%llu crc errors, %llu before config, %llu telemetry frames (%llu failed), "
+              "kernel drops %llu\n",
+              node::to_string(end), static_cast<unsigned long long>(st.samples),
+              static_cast<unsigned long long>(st.missing),
+              static_cast<unsigned long long>(rs.frames),
+              static_cast<unsigned long long>(rs.crc_errors),
+              static_cast<unsigned long long>(st.samples_before_config),
+              static_cast<unsigned long long>(st.telemetry_frames),
+              static_cast<unsigned long long>(st.telemetry_failures),
+              static_cast<unsigned long long>(sock.stats().kernel_drops));
+  if (n.have_config()) {
+    AdevPoint pts[node::kMaxAdevPoints];
+    for (std::size_t c = 0; c < node::kChannels; ++c) {
+      const std::size_t np = n.adev().channel(c).snapshot(pts, node::kMaxAdevPoints);
+      bool nonzero = false;
+      for (std::size_t i = 0; i < np; ++i) {
+        nonzero = nonzero || pts[i].adev > 0.0;
+      }
+      if (!nonzero) {
+        continue;  // channel not carried by this stream (all zero counts)
+      }
+      std::printf("\nfinal ADEV of %s [%s] (bias %.4e, std %.2e, alarm %s):\n", kChannelNames[c],
+                  channel_unit(c), static_cast<double>(n.bias(c)),
+                  std::sqrt(static_cast<double>(n.bias_var(c))), n.alarm() ? "on" : "off");
+      std::fputs(format_adev_table(rows_from_points(pts, np)).c_str(), stdout);
+    }
+  }
+  if (end == node::LoopEnd::kError) {
+    return fail(kCmd, std::string("bus error: ") + sock.error());
+  }
+  return 0;
+}
+
+}  // namespace imu::sim

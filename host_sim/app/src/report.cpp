@@ -1,0 +1,628 @@
+// Report of imu-sim run (see report.hpp).
+#include "report.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "common.hpp"
+#include "imu/covariance_check.hpp"
+#include "imu/error_model.hpp"
+#include "imu/model_fit.hpp"
+#include "imu/model_text.hpp"
+#include "imu/noise_sim.hpp"
+
+namespace imu::sim {
+namespace {
+
+constexpr std::size_t kStates = 4;  // white + quantization + GM + RRW need 2 states
+
+struct Curve {
+  std::vector<double> tau_s;
+  std::vector<double> white, quant, gm, rrw, total;  // ADEV of each term and of the sum
+};
+
+Curve model_curve(const ModelParams& p, double ts_s, double tau_max_s) {
+  Curve c;
+  const double lo = std::log10(ts_s);
+  const double hi = std::log10(tau_max_s);
+  const int n = 120;
+  for (int i = 0; i <= n; ++i) {
+    const double tau = std::pow(10.0, lo + (hi - lo) * i / n);
+    c.tau_s.push_back(tau);
+    c.white.push_back(std::sqrt(avar_white(p.n, tau)));
+    c.quant.push_back(std::sqrt(avar_quantization(p.q, tau)));
+    double g = 0.0;
+    for (std::size_t k = 0; k < p.n_gm; ++k) {
+      g += avar_gauss_markov(p.gm[k].sb, p.gm[k].tb_s, tau);
+    }
+    c.gm.push_back(std::sqrt(g));
+    c.rrw.push_back(std::sqrt(avar_rrw(p.k, tau)));
+    c.total.push_back(std::sqrt(model_avar(p, tau)));
+  }
+  return c;
+}
+
+// The fit input: AdevPoint from a reported row (af and stride recovered from tau and Ts).
+std::vector<AdevPoint> points_from_rows(const std::vector<AdevRow>& rows, double ts_s) {
+  std::vector<AdevPoint> pts;
+  for (const AdevRow& r : rows) {
+    AdevPoint p{};
+    p.tau_s = r.tau_s;
+    p.af = static_cast<std::uint32_t>(std::lround(r.tau_s / ts_s));
+    p.stride = 1;
+    p.n_terms = r.n_terms;
+    p.avar = r.adev * r.adev;
+    p.adev = r.adev;
+    p.edf = r.edf;
+    p.ci_lo = r.ci_lo;
+    p.ci_hi = r.ci_hi;
+    pts.push_back(p);
+  }
+  return pts;
+}
+
+struct CovResult {
+  std::size_t n_avg = 0, n_int = 0;
+  std::size_t data_windows = 0, sim_windows = 0;
+  std::vector<double> pred_exact, pred_seed, emp_sim, emp_data;
+  std::vector<double> traj_sim, traj_data;  // windows x n_int, row-major
+};
+
+std::vector<double> column_robust_std(std::vector<double>& traj, std::size_t windows,
+                                      std::size_t n_int) {
+  std::vector<double> out(n_int, 0.0);
+  std::vector<double> col(windows);
+  for (std::size_t j = 0; j < n_int && windows > 0; ++j) {
+    for (std::size_t w = 0; w < windows; ++w) {
+      col[w] = traj[w * n_int + j];
+    }
+    out[j] = robust_std(col.data(), windows);
+  }
+  return out;
+}
+
+std::string fmt_stats_value(double v) {
+  std::string s;
+  if (std::fabs(v - std::round(v)) < 1e-9 && std::fabs(v) < 1e15) {
+    appendf(s, "%.0f", v);
+  } else {
+    appendf(s, "%.4g", v);
+  }
+  return s;
+}
+
+bool have_gnuplot() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
+
+bool gnuplot_has_pngcairo() {
+  return std::system("gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1") == 0;
+}
+
+std::string quote_sh(const std::string& s) {
+  std::string q = "'";
+  for (char ch : s) {
+    if (ch == '\'') {
+      q += "'\\''";
+    } else {
+      q += ch;
+    }
+  }
+  return q + "'";
+}
+
+}  // namespace
+
+std::vector<AdevRow> rows_from_points(const AdevPoint* p, std::size_t n) {
+  std::vector<AdevRow> rows;
+  for (std::size_t i = 0; i < n; ++i) {
+    rows.push_back(AdevRow{p[i].tau_s, p[i].adev, p[i].edf, p[i].ci_lo, p[i].ci_hi,
+                           p[i].n_terms});
+  }
+  return rows;
+}
+
+std::string format_adev_table(const std::vector<AdevRow>& rows) {
+  std::string s;
+  appendf(s, "%12s %12s %12s %12s %10s %10s\n", "tau_s", "adev", "ci_lo", "ci_hi", "edf",
+          "n_terms");
+  for (const AdevRow& r : rows) {
+    appendf(s, "%12.4g %12.4e %12.4e %12.4e %10.4g %10llu\n", r.tau_s, r.adev, r.ci_lo, r.ci_hi,
+            r.edf, static_cast<unsigned long long>(r.n_terms));
+  }
+  return s;
+}
+
+std::string json_num(double v) {
+  if (!std::isfinite(v)) {
+    return "null";
+  }
+  std::string s;
+  appendf(s, "%.10g", v);
+  return s;
+}
+
+std::string json_str(const std::string& s) {
+  std::string o = "\"";
+  for (char ch : s) {
+    switch (ch) {
+      case '"': o += "\\\""; break;
+      case '\\': o += "\\\\"; break;
+      case '\n': o += "\\n"; break;
+      case '\t': o += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(ch) < 0x20) {
+          appendf(o, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(ch)));
+        } else {
+          o += ch;
+        }
+    }
+  }
+  return o + "\"";
+}
+
+std::string adev_json_list(const std::vector<AdevRow>& rows) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const AdevRow& r = rows[i];
+    s += i == 0 ? "\n" : ",\n";
+    s += "    {\"tau_s\": " + json_num(r.tau_s) + ", \"adev\": " + json_num(r.adev) +
+         ", \"edf\": " + json_num(r.edf) + ", \"ci_lo\": " + json_num(r.ci_lo) +
+         ", \"ci_hi\": " + json_num(r.ci_hi) +
+         ", \"n_terms\": " + std::to_string(r.n_terms) + "}";
+  }
+  s += rows.empty() ? "]" : "\n  ]";
+  return s;
+}
+
+bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& text,
+                  std::string& err) {
+  const double ts_s = 1.0 / in.fs_hz;
+  const char* unit = channel_unit(in.channel_index);
+  const std::vector<double>& data = *in.data;
+  if (!make_dirs(opt.out_dir, err)) {
+    return false;
+  }
+  double tau_max_s = 1.0;
+  for (const AdevRow& r : in.adev) {
+    tau_max_s = std::max(tau_max_s, r.tau_s);
+  }
+
+  // ---- Fit (always) and the model under test -------------------------------------------
+  const std::vector<AdevPoint> pts = points_from_rows(in.adev, ts_s);
+  FitOptions fo;
+  fo.terms = kFitWhite | kFitQuantization | kFitGm1 | kFitRrw;
+  fo.tau_min_s = ts_s;
+  fo.tau_max_s = tau_max_s;
+  fo.edf_cap = 1000.0;  // neighbouring taus are correlated: keep the short taus from deciding alone
+  const FitResult fr = fit(pts.data(), pts.size(), fo);
+
+  ModelParams mp{};
+  FirstOrderGm gm{};
+  bool have_gm = false;
+  std::string model_origin;
+  if (opt.given_model) {
+    if (first_order_gm_from_asd(opt.n, opt.b, opt.tp_s, in.fs_hz, gm) != ModelStatus::kOk ||
+        opt.k < 0.0) {
+      err = "model parameters rejected (N, B, Tp must be > 0, K >= 0)";
+      return false;
+    }
+    have_gm = true;
+    mp.n = opt.n;
+    mp.n_gm = 1;
+    mp.gm[0] = GmParam{gm.sb, gm.tb_s};
+    mp.k = opt.k;
+    appendf(model_origin, "given: N = %.4g, B = %.4g, Tp = %.4g s, K = %.4g", opt.n, opt.b,
+            opt.tp_s, opt.k);
+  } else if (fr.status == FitStatus::kOk) {
+    mp = fr.params;
+    model_origin = "fitted: white + quantization + first-order GM + rate random walk";
+    if (mp.n > 0.0 && mp.n_gm >= 1 && mp.gm[0].sb > 0.0) {
+      const double b = kGmPeakAdevFactor * std::sqrt(mp.gm[0].sb * mp.gm[0].tb_s);
+      have_gm = first_order_gm_from_asd(mp.n, b, kGmPeakTauFactor * mp.gm[0].tb_s, in.fs_hz,
+                                        gm) == ModelStatus::kOk;
+    }
+  } else {
+    err = "no model: the fit failed (status " +
+          std::to_string(static_cast<int>(fr.status)) + ") and no --N/--B/--Tp were given";
+    return false;
+  }
+  ContinuousModel<kStates> cm;
+  DiscreteModel<kStates> dm;
+  if (build_model(mp, cm) != ModelStatus::kOk || discretize(cm, ts_s, dm) != ModelStatus::kOk) {
+    err = "the model could not be built or discretised";
+    return false;
+  }
+
+  // ---- Simulated model: ADEV over as many samples as the data -------------------------------
+  const double t_sim0 = now_s();
+  ModelSimulator<kStates> sim;
+  if (sim.configure(dm, opt.seed) != ModelStatus::kOk) {
+    err = "the model could not be simulated (covariance not positive semi-definite)";
+    return false;
+  }
+  const double sim_lsb = std::max(std::sqrt(dm.r_filter()) * 1e-4, 1e-12);
+  OnlineAdev<8, 22> sim_adev(ts_s, sim_lsb);
+  {
+    std::vector<std::int32_t> buf(4096);
+    std::size_t left = data.size();
+    while (left > 0) {
+      const std::size_t b = std::min(left, buf.size());
+      for (std::size_t i = 0; i < b; ++i) {
+        buf[i] = quantize(sim.next(), sim_lsb).counts;
+      }
+      sim_adev.push_block(buf.data(), b);
+      left -= b;
+    }
+  }
+  AdevPoint sim_pts[OnlineAdev<8, 22>::kMaxPoints];
+  const std::vector<AdevRow> sim_rows =
+      rows_from_points(sim_pts, sim_adev.snapshot(sim_pts, OnlineAdev<8, 22>::kMaxPoints));
+
+  // ---- Covariance check -------------------------------------------------------------------
+  CovResult cov;
+  cov.n_avg = static_cast<std::size_t>(std::lround(opt.t_avg_s * in.fs_hz));
+  cov.n_int = static_cast<std::size_t>(std::lround(opt.t_int_s * in.fs_hz));
+  if (cov.n_avg == 0 || cov.n_int == 0) {
+    err = "covariance check: T_avg and T_int must be at least one sample";
+    return false;
+  }
+  const std::size_t win = cov.n_avg + cov.n_int;
+  cov.pred_exact.assign(cov.n_int, 0.0);
+  cov.pred_seed.assign(cov.n_int, 0.0);
+  if (predict_integral_std(dm, cov.n_avg, cov.n_int, cov.pred_exact.data(),
+                           CovPrediction::kExact) != ModelStatus::kOk ||
+      predict_integral_std(dm, cov.n_avg, cov.n_int, cov.pred_seed.data(),
+                           CovPrediction::kCorrelationIgnored) != ModelStatus::kOk) {
+    err = "covariance prediction failed";
+    return false;
+  }
+  cov.data_windows = data.size() / win;
+  cov.traj_data.assign(cov.data_windows * cov.n_int, 0.0);
+  for (std::size_t w = 0; w < cov.data_windows; ++w) {
+    integrate_window(&data[w * win], cov.n_avg, cov.n_int, ts_s, &cov.traj_data[w * cov.n_int]);
+  }
+  cov.sim_windows = opt.sim_windows;
+  cov.traj_sim.assign(cov.sim_windows * cov.n_int, 0.0);
+  {
+    std::vector<double> z(win);
+    for (std::size_t w = 0; w < cov.sim_windows; ++w) {
+      sim.restart();
+      for (double& v : z) {
+        v = sim.next();
+      }
+      integrate_window(z.data(), cov.n_avg, cov.n_int, ts_s, &cov.traj_sim[w * cov.n_int]);
+    }
+  }
+  {
+    std::vector<double> tmp = cov.traj_data;
+    cov.emp_data = column_robust_std(tmp, cov.data_windows, cov.n_int);
+    tmp = cov.traj_sim;
+    cov.emp_sim = column_robust_std(tmp, cov.sim_windows, cov.n_int);
+  }
+  const double t_sim = now_s() - t_sim0;
+
+  // ---- Text ------------------------------------------------------------------------------
+  std::string t;
+  appendf(t, "imu-sim report\n==============\n");
+  appendf(t, "data: %s, channel %s [%s], %zu samples at %.6g Hz (%.6g s), LSB %.6g %s\n",
+          in.source.c_str(), in.channel.c_str(), unit, data.size(), in.fs_hz,
+          static_cast<double>(data.size()) * ts_s, in.lsb, unit);
+  appendf(t, "\n== Error model in the seed's layout (%s)\n\n", model_origin.c_str());
+  if (have_gm) {
+    t += format_seed_model(gm);
+  } else {
+    t += "(no first-order Gauss-Markov term: the seed's layout does not apply)\n";
+  }
+  if (mp.q > 0.0) {
+    appendf(t, "\nBeyond the first-order model: quantization Q = %.4e %s s (AVAR 3 Q^2 / tau^2).\n",
+            mp.q, unit);
+  }
+  if (mp.k > 0.0) {
+    appendf(t, "%sBeyond the first-order model: rate random walk K = %.4e %s/sqrt(s) "
+               "(AVAR K^2 tau / 3; state r' = w, PSD K^2).\n", mp.q > 0.0 ? "" : "\n", mp.k, unit);
+  }
+  appendf(t, "\n== Weighted least-squares fit of the ADEV (white + quantization + GM + RRW, tau in [%.4g, %.4g] s,\n   weights 1/var with the EDF capped at %.0f)\n\n",
+          fo.tau_min_s, fo.tau_max_s, fo.edf_cap);
+  if (fr.status == FitStatus::kOk) {
+    t += format_model_params(fr.params);
+    appendf(t, "points %zu, RMS relative ADEV misfit %.3f%s\n", fr.n_points, fr.rms_rel,
+            fr.tb_at_bound ? ", Tb at the end of its search range (not determined by the data)"
+                           : "");
+  } else {
+    appendf(t, "fit failed (status %d)\n", static_cast<int>(fr.status));
+  }
+  appendf(t, "\n== ADEV of %s (%s; 68.3 %% intervals) with the model's ADEV\n\n",
+          in.channel.c_str(), in.adev_origin.c_str());
+  appendf(t, "%12s %12s %12s %12s %10s %10s %12s\n", "tau_s", "adev", "ci_lo", "ci_hi", "edf",
+          "n_terms", "model");
+  for (const AdevRow& r : in.adev) {
+    appendf(t, "%12.4g %12.4e %12.4e %12.4e %10.4g %10llu %12.4e\n", r.tau_s, r.adev, r.ci_lo,
+            r.ci_hi, r.edf, static_cast<unsigned long long>(r.n_terms),
+            std::sqrt(model_avar(mp, r.tau_s)));
+  }
+  const std::size_t j_end = cov.n_int - 1;
+  appendf(t, "\n== Covariance check (T_avg = %.4g s, T_int = %.4g s): std of the integrated error\n\n",
+          opt.t_avg_s, opt.t_int_s);
+  appendf(t, "%-28s %8s %14s %14s %14s %8s\n", "at t = T_int", "windows", "empirical",
+          "predicted", "pred. (seed)", "ratio");
+  appendf(t, "%-28s %8zu %14.4e %14.4e %14.4e %8.3f\n", "simulated model", cov.sim_windows,
+          cov.emp_sim[j_end], cov.pred_exact[j_end], cov.pred_seed[j_end],
+          cov.emp_sim[j_end] / cov.pred_exact[j_end]);
+  if (cov.data_windows > 0) {
+    appendf(t, "%-28s %8zu %14.4e %14.4e %14.4e %8.3f\n", "data", cov.data_windows,
+            cov.emp_data[j_end], cov.pred_exact[j_end], cov.pred_seed[j_end],
+            cov.emp_data[j_end] / cov.pred_exact[j_end]);
+  } else {
+    appendf(t, "data: fewer samples than one window (%zu)\n", win);
+  }
+  appendf(t, "empirical = robust std (1.4826 MAD) over the windows; predicted = exact propagation\n"
+             "of the model (averaging error and its correlation with the bias); pred. (seed) =\n"
+             "the seed's prediction, which ignores that correlation. Integrated error unit: %s s.\n",
+          unit);
+  appendf(t, "\n== Frame statistics\n\n");
+  for (const StatGroup& g : in.stats) {
+    appendf(t, "%s:\n", g.name.c_str());
+    std::string line = " ";
+    for (const auto& kv : g.values) {
+      std::string item = " " + kv.first + " " + fmt_stats_value(kv.second);
+      if (line.size() + item.size() > 96) {
+        t += line + "\n";
+        line = " ";
+      }
+      line += item;
+    }
+    t += line + "\n";
+  }
+  appendf(t, "\n== Timing\n\n");
+  for (const auto& kv : in.timing_s) {
+    appendf(t, "  %-34s %8.3f s\n", kv.first.c_str(), kv.second);
+  }
+  appendf(t, "  %-34s %8.3f s\n", "model simulation + covariance check", t_sim);
+  for (const std::string& n : in.notes) {
+    appendf(t, "\nnote: %s", n.c_str());
+  }
+  if (!in.notes.empty()) {
+    t += "\n";
+  }
+
+  // ---- CSV -------------------------------------------------------------------------------
+  const std::string& d = opt.out_dir;
+  {
+    std::string c = "tau_s,adev,ci_lo,ci_hi,edf,n_terms\n";
+    for (const AdevRow& r : in.adev) {
+      appendf(c, "%.10g,%.10g,%.10g,%.10g,%.6g,%llu\n", r.tau_s, r.adev, r.ci_lo, r.ci_hi, r.edf,
+              static_cast<unsigned long long>(r.n_terms));
+    }
+    if (!write_file(d + "/fig1_adev_data.csv", c, err)) {
+      return false;
+    }
+    c = "tau_s,adev,ci_lo,ci_hi,edf,n_terms\n";
+    for (const AdevRow& r : sim_rows) {
+      appendf(c, "%.10g,%.10g,%.10g,%.10g,%.6g,%llu\n", r.tau_s, r.adev, r.ci_lo, r.ci_hi, r.edf,
+              static_cast<unsigned long long>(r.n_terms));
+    }
+    if (!write_file(d + "/fig1_adev_sim.csv", c, err)) {
+      return false;
+    }
+    const Curve mc = model_curve(mp, ts_s, tau_max_s * 2.0);
+    c = "tau_s,white,quantization,gauss_markov,rate_random_walk,total\n";
+    for (std::size_t i = 0; i < mc.tau_s.size(); ++i) {
+      appendf(c, "%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", mc.tau_s[i], mc.white[i], mc.quant[i],
+              mc.gm[i], mc.rrw[i], mc.total[i]);
+    }
+    if (!write_file(d + "/fig1_adev_model.csv", c, err)) {
+      return false;
+    }
+    c = "t_s,empirical_sim,empirical_data,predicted_exact,predicted_seed\n";
+    for (std::size_t j = 0; j < cov.n_int; ++j) {
+      appendf(c, "%.6g,%.10g,%.10g,%.10g,%.10g\n", static_cast<double>(j + 1) * ts_s,
+              cov.emp_sim[j], cov.data_windows > 0 ? cov.emp_data[j] : 0.0, cov.pred_exact[j],
+              cov.pred_seed[j]);
+    }
+    if (!write_file(d + "/fig2_std.csv", c, err)) {
+      return false;
+    }
+    // Trajectories: at most 100 per source, about 200 points each (the figure, not the
+    // statistics, which use every window and every sample).
+    const std::size_t step = std::max<std::size_t>(1, cov.n_int / 200);
+    for (int src = 0; src < 2; ++src) {
+      const std::vector<double>& tr = src == 0 ? cov.traj_sim : cov.traj_data;
+      const std::size_t nw = std::min<std::size_t>(
+          100, src == 0 ? cov.sim_windows : cov.data_windows);
+      c = "t_s";
+      for (std::size_t w = 0; w < nw; ++w) {
+        appendf(c, ",w%zu", w);
+      }
+      c += "\n";
+      for (std::size_t j = step - 1; j < cov.n_int; j += step) {
+        appendf(c, "%.6g", static_cast<double>(j + 1) * ts_s);
+        for (std::size_t w = 0; w < nw; ++w) {
+          appendf(c, ",%.6g", tr[w * cov.n_int + j]);
+        }
+        c += "\n";
+      }
+      if (!write_file(d + (src == 0 ? "/fig2_traj_sim.csv" : "/fig2_traj_data.csv"), c, err)) {
+        return false;
+      }
+    }
+  }
+
+  // ---- Plots (gnuplot) --------------------------------------------------------------------
+  std::string plot_note;
+  std::vector<std::string> plot_files;
+  std::string title_chan;  // gnuplot enhanced text: '_' would start a subscript
+  for (char ch : in.channel) {
+    title_chan += ch == '_' ? std::string("\\_") : std::string(1, ch);
+  }
+  {
+    const std::size_t nw_sim = std::min<std::size_t>(100, cov.sim_windows);
+    const std::size_t nw_data = std::min<std::size_t>(100, cov.data_windows);
+    std::string g1;
+    appendf(g1,
+            "set datafile separator ','\n"
+            "set logscale xy\nset format y '10^{%%L}'\nset format x '10^{%%L}'\n"
+            "set grid xtics ytics mxtics mytics lc rgb '#dddddd'\n"
+            "set key bottom left box opaque\n"
+            "set xlabel 'tau [s]'\nset ylabel 'Allan deviation [%s]'\n"
+            "set title 'ADEV of %s: data (node telemetry, 68.3%% intervals), model, simulated "
+            "model'\n"
+            "plot 'fig1_adev_data.csv' skip 1 using 1:2:3:4 with yerrorbars pt 7 ps 0.6 "
+            "lc rgb '#1f77b4' title 'data', \\\n"
+            "  'fig1_adev_model.csv' skip 1 using 1:($2>0?$2:1/0) with lines dt 2 lw 2 lc rgb "
+            "'#2ca02c' title 'model: white noise', \\\n"
+            "  '' skip 1 using 1:($3>0?$3:1/0) with lines dt 2 lw 2 lc rgb '#8c564b' "
+            "title 'model: quantization', \\\n"
+            "  '' skip 1 using 1:($4>0?$4:1/0) with lines dt 2 lw 2 lc rgb '#ff7f0e' "
+            "title 'model: Gauss-Markov', \\\n"
+            "  '' skip 1 using 1:($5>0?$5:1/0) with lines dt 2 lw 2 lc rgb '#9467bd' "
+            "title 'model: rate random walk', \\\n"
+            "  '' skip 1 using 1:6 with lines lw 2 lc rgb 'black' title 'model: total', \\\n"
+            "  'fig1_adev_sim.csv' skip 1 using 1:2 with points pt 6 ps 0.8 lc rgb '#d62728' "
+            "title 'simulated model'\n",
+            unit, title_chan.c_str());
+    std::string g2;
+    appendf(g2,
+            "set datafile separator ','\n"
+            "set multiplot layout 2,1\n"
+            "set grid lc rgb '#dddddd'\nset key top left box opaque\n"
+            "set xlabel 't [s] after the %.4g s bias average'\nset ylabel 'integrated error [%s s]'\n"
+            "set title 'Simulated model: %zu of %zu windows, robust std and predicted std'\n"
+            "plot for [i=2:%zu] 'fig2_traj_sim.csv' skip 1 using 1:i with lines lw 0.5 lc rgb "
+            "'#c8c8c8' notitle, \\\n"
+            "  'fig2_std.csv' skip 1 using 1:2 with lines lw 2 lc rgb '#1f77b4' title 'robust std "
+            "(1.4826 MAD)', '' skip 1 using 1:(-$2) with lines lw 2 lc rgb '#1f77b4' notitle, \\\n"
+            "  '' skip 1 using 1:4 with lines lw 2 lc rgb 'black' title 'predicted std', '' skip 1 "
+            "using 1:(-$4) with lines lw 2 lc rgb 'black' notitle, \\\n"
+            "  '' skip 1 using 1:5 with lines dt 2 lw 1.5 lc rgb '#d62728' title 'predicted "
+            "(seed)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
+            opt.t_avg_s, unit, nw_sim, cov.sim_windows, nw_sim + 1);
+    if (nw_data > 0) {
+      appendf(g2,
+              "set title 'Data (%s): %zu of %zu windows, robust std and predicted std'\n"
+              "plot for [i=2:%zu] 'fig2_traj_data.csv' skip 1 using 1:i with lines lw 0.5 lc rgb "
+              "'#c8c8c8' notitle, \\\n"
+              "  'fig2_std.csv' skip 1 using 1:3 with lines lw 2 lc rgb '#1f77b4' title 'robust "
+              "std (1.4826 MAD)', '' skip 1 using 1:(-$3) with lines lw 2 lc rgb '#1f77b4' "
+              "notitle, \\\n"
+              "  '' skip 1 using 1:4 with lines lw 2 lc rgb 'black' title 'predicted std', '' "
+              "skip 1 using 1:(-$4) with lines lw 2 lc rgb 'black' notitle, \\\n"
+              "  '' skip 1 using 1:5 with lines dt 2 lw 1.5 lc rgb '#d62728' title 'predicted "
+              "(seed)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
+              title_chan.c_str(), nw_data, cov.data_windows, nw_data + 1);
+    }
+    g2 += "unset multiplot\n";
+    if (!write_file(d + "/fig1_adev.gp", g1, err) ||
+        !write_file(d + "/fig2_covariance.gp", g2, err)) {
+      return false;
+    }
+    if (!opt.plots) {
+      plot_note = "plots: skipped (--no-plots); gnuplot scripts fig1_adev.gp, fig2_covariance.gp";
+    } else if (!have_gnuplot()) {
+      plot_note =
+          "plots: gnuplot NOT FOUND, no SVG/PNG written (install gnuplot-nox: "
+          "toolchains/install-deps.sh core); the CSV files and the gnuplot scripts are there";
+    } else {
+      const bool cairo = gnuplot_has_pngcairo();
+      const char* png_term = cairo ? "pngcairo size 1100,800" : "png size 1100,800";
+      bool ok = true;
+      for (const char* base : {"fig1_adev", "fig2_covariance"}) {
+        const std::string b = base;
+        const std::string h = b == "fig1_adev" ? "700" : "900";
+        const std::string cmd =
+            "cd " + quote_sh(d) + " && gnuplot -e " +
+            quote_sh("set terminal svg size 1000," + h + " dynamic; set output '" + b + ".svg'") +
+            " " + b + ".gp >/dev/null 2>" + b + ".gnuplot.log && gnuplot -e " +
+            quote_sh(std::string("set terminal ") + png_term + "; set output '" + b + ".png'") +
+            " " + b + ".gp >/dev/null 2>>" + b + ".gnuplot.log";
+        if (std::system(cmd.c_str()) != 0) {
+          ok = false;
+          plot_note += "plots: gnuplot failed on " + b + ".gp (see " + b + ".gnuplot.log)\n";
+        } else {
+          plot_files.push_back(d + "/" + b + ".svg");
+          plot_files.push_back(d + "/" + b + ".png");
+          std::string ignore;
+          (void)std::remove((d + "/" + b + ".gnuplot.log").c_str());
+        }
+      }
+      if (ok) {
+        plot_note = "plots: fig1_adev.svg/.png (seed Fig. 1), fig2_covariance.svg/.png (seed Fig. 2)";
+      }
+    }
+  }
+  appendf(t, "\n%s\nfiles in %s: report.txt, %s, fig1_adev_{data,model,sim}.csv, fig2_std.csv, "
+             "fig2_traj_{sim,data}.csv\n",
+          plot_note.c_str(), d.c_str(), opt.json_path.c_str());
+
+  // ---- JSON ------------------------------------------------------------------------------
+  std::string j = "{\n";
+  j += "  \"source\": " + json_str(in.source) + ",\n";
+  j += "  \"channel\": " + json_str(in.channel) + ",\n";
+  j += "  \"unit\": " + json_str(unit) + ",\n";
+  j += "  \"fs_hz\": " + json_num(in.fs_hz) + ",\n";
+  j += "  \"lsb\": " + json_num(in.lsb) + ",\n";
+  j += "  \"n_samples\": " + std::to_string(data.size()) + ",\n";
+  j += "  \"adev_origin\": " + json_str(in.adev_origin) + ",\n";
+  j += "  \"adev\": " + adev_json_list(in.adev) + ",\n";
+  j += "  \"adev_simulated_model\": " + adev_json_list(sim_rows) + ",\n";
+  j += "  \"model\": {\"origin\": " + json_str(model_origin) + ", \"N\": " + json_num(mp.n) +
+       ", \"Q\": " + json_num(mp.q) + ", \"K\": " + json_num(mp.k) + ", \"gm\": [";
+  for (std::size_t i = 0; i < mp.n_gm; ++i) {
+    j += (i == 0 ? "" : ", ") + std::string("{\"Sb\": ") + json_num(mp.gm[i].sb) +
+         ", \"Tb_s\": " + json_num(mp.gm[i].tb_s) + "}";
+  }
+  j += "]";
+  if (have_gm) {
+    j += ",\n    \"seed_layout\": {\"mu_per_s\": " + json_num(gm.mu_per_s) +
+         ", \"Sn\": " + json_num(gm.sn) + ", \"Sw\": " + json_num(gm.sb) +
+         ", \"Pss_c\": " + json_num(gm.pss) + ", \"phi\": " + json_num(gm.phi) +
+         ", \"Qn\": " + json_num(gm.qn) + ", \"Qw\": " + json_num(gm.qw) +
+         ", \"Pss_d\": " + json_num(gm.pss_d) + "}";
+  }
+  j += "},\n";
+  j += "  \"fit\": {\"status\": " + std::to_string(static_cast<int>(fr.status)) +
+       ", \"N\": " + json_num(fr.params.n) + ", \"K\": " + json_num(fr.params.k) +
+       ", \"gm\": [";
+  for (std::size_t i = 0; i < fr.params.n_gm; ++i) {
+    j += (i == 0 ? "" : ", ") + std::string("{\"Sb\": ") + json_num(fr.params.gm[i].sb) +
+         ", \"Tb_s\": " + json_num(fr.params.gm[i].tb_s) + "}";
+  }
+  j += "], \"rms_rel\": " + json_num(fr.rms_rel) + ", \"n_points\": " +
+       std::to_string(fr.n_points) + ", \"tb_at_bound\": " +
+       (fr.tb_at_bound ? "true" : "false") + "},\n";
+  j += "  \"covariance_check\": {\"t_avg_s\": " + json_num(opt.t_avg_s) +
+       ", \"t_int_s\": " + json_num(opt.t_int_s) +
+       ", \"sim_windows\": " + std::to_string(cov.sim_windows) +
+       ", \"data_windows\": " + std::to_string(cov.data_windows) +
+       ",\n    \"at_t_int\": {\"empirical_sim\": " + json_num(cov.emp_sim[j_end]) +
+       ", \"empirical_data\": " +
+       (cov.data_windows > 0 ? json_num(cov.emp_data[j_end]) : std::string("null")) +
+       ", \"predicted\": " + json_num(cov.pred_exact[j_end]) +
+       ", \"predicted_seed\": " + json_num(cov.pred_seed[j_end]) + "}},\n";
+  j += "  \"frame_stats\": {";
+  for (std::size_t gi = 0; gi < in.stats.size(); ++gi) {
+    j += (gi == 0 ? "\n" : ",\n") + std::string("    ") + json_str(in.stats[gi].name) + ": {";
+    for (std::size_t k = 0; k < in.stats[gi].values.size(); ++k) {
+      j += (k == 0 ? "" : ", ") + json_str(in.stats[gi].values[k].first) + ": " +
+           json_num(in.stats[gi].values[k].second);
+    }
+    j += "}";
+  }
+  j += "\n  },\n  \"timing_s\": {";
+  for (std::size_t k = 0; k < in.timing_s.size(); ++k) {
+    j += (k == 0 ? "" : ", ") + json_str(in.timing_s[k].first) + ": " +
+         json_num(in.timing_s[k].second);
+  }
+  j += "},\n  \"plots\": [";
+  for (std::size_t k = 0; k < plot_files.size(); ++k) {
+    j += (k == 0 ? "" : ", ") + json_str(plot_files[k]);
+  }
+  j += "]\n}\n";
+  if (!write_file(opt.json_path, j, err) || !write_file(d + "/report.txt", t, err)) {
+    return false;
+  }
+  text = t;
+  return true;
+}
+
+}  // namespace imu::sim

@@ -1,0 +1,78 @@
+// The report of imu-sim run (what the seed's notebook printed and drew, from our pipeline):
+// text, JSON, CSV data and gnuplot-rendered SVG/PNG plots. Host code.
+#ifndef IMU_SIM_REPORT_HPP
+#define IMU_SIM_REPORT_HPP
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "imu/online_adev.hpp"
+
+namespace imu::sim {
+
+/// One ADEV point as reported (JSON keys tau_s, adev, edf, ci_lo, ci_hi; plus n_terms).
+struct AdevRow {
+  double tau_s = 0.0;
+  double adev = 0.0;
+  double edf = 0.0;
+  double ci_lo = 0.0;
+  double ci_hi = 0.0;
+  std::uint64_t n_terms = 0;
+};
+
+[[nodiscard]] std::vector<AdevRow> rows_from_points(const AdevPoint* p, std::size_t n);
+/// Fixed-width table, one line per tau.
+[[nodiscard]] std::string format_adev_table(const std::vector<AdevRow>& rows);
+/// JSON array of {"tau_s","adev","edf","ci_lo","ci_hi","n_terms"} objects.
+[[nodiscard]] std::string adev_json_list(const std::vector<AdevRow>& rows);
+/// A JSON number (%.10g; non-finite -> null) and a JSON string literal.
+[[nodiscard]] std::string json_num(double v);
+[[nodiscard]] std::string json_str(const std::string& s);
+
+/// Counters of one part of the chain (sender, node, receiver), printed and written as JSON.
+struct StatGroup {
+  std::string name;
+  std::vector<std::pair<std::string, double>> values;
+};
+
+struct ReportOptions {
+  bool given_model = false;  ///< use n/b/tp_s/k below; otherwise the fitted model
+  double n = 0.0;
+  double b = 0.0;
+  double tp_s = 0.0;
+  double k = 0.0;
+  double t_avg_s = 10.0;           ///< covariance check: bias averaging time
+  double t_int_s = 20.0;           ///< covariance check: integration time
+  std::size_t sim_windows = 1000;  ///< simulated trajectories
+  std::uint64_t seed = 1;          ///< simulation seed
+  bool plots = true;               ///< run gnuplot (CSV files are always written)
+  std::string out_dir;             ///< report.txt, CSV, plots
+  std::string json_path;           ///< report JSON
+};
+
+struct ReportInput {
+  std::string source;              ///< data file
+  std::string channel;             ///< e.g. acc_z
+  std::size_t channel_index = 2;
+  double fs_hz = 0.0;
+  double lsb = 0.0;
+  const std::vector<double>* data = nullptr;  ///< the channel's samples (covariance check)
+  std::vector<AdevRow> adev;       ///< the node's ADEV of the channel
+  std::string adev_origin;         ///< where adev came from (text)
+  std::vector<StatGroup> stats;    ///< frame statistics
+  std::vector<std::pair<std::string, double>> timing_s;
+  std::vector<std::string> notes;  ///< printed at the end
+};
+
+/// Compute model, fit, simulation and covariance check; write out_dir/report.txt, the JSON,
+/// the CSV files and (if plots) the SVG/PNG figures. text receives the text report. Returns
+/// false with a one-line err if a file cannot be written or the model is invalid.
+[[nodiscard]] bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& text,
+                                std::string& err);
+
+}  // namespace imu::sim
+
+#endif  // IMU_SIM_REPORT_HPP

@@ -1,0 +1,181 @@
+// The firmware node core: what the IMU co-processor runs, as a plain C++17 class.
+//
+// Frames are pushed in (on_frame); the node reassembles them through hal::Receiver, feeds every
+// sample to the online ADEV of the six channels (imu::MultiAdev) and to one scalar bias Kalman
+// filter per channel (imu::ScalarBiasKf<float>, the seed's first-order model) with its residual
+// monitors (imu::ResidualMonitors), drives the alarm output while any monitor fires, and sends
+// telemetry frames (hal codec records) to a FrameSink:
+//   every status_period_samples:  StatsRecord, BiasRecord, MonitorRecord (in that order);
+//   every adev_period_samples:    the same, then the full ADEV curve of every channel;
+//   at on_idle() / finish():      the same full set if samples arrived since the last one.
+// A consumer that knows how many samples it sent recognises the final curves as the first
+// complete ADEV set after a StatsRecord with samples + missing >= that number.
+//
+// Samples are interpreted with the last ConfigRecord (rate, LSB per channel); samples before
+// the first ConfigRecord are counted (stats.samples_before_config) and ignored. A ConfigRecord
+// with a new cfg_id restarts the estimators (a new stream). Missing samples reported by the
+// receiver go to MultiAdev::mark_missing and advance the filters by prediction only.
+// Filter: the known signal of each channel (gravity + initial bias) is the mean of its first
+// init_samples samples; the filter then estimates the bias relative to it, updating only while
+// the static input is active (no input: always static). A channel whose counts have all been 0
+// since the stream started is inactive (no filter, no monitor, no alarm): a real sensor channel
+// is never exactly zero, a channel absent from a recording is. The static input is read once per
+// status period, not per sample (one GPIO ioctl per period).
+//
+// Memory: sizeof(Node) is the whole state (about 45 kB, dominated by six OnlineAdev<8,22>); no
+// heap, no exceptions, no OS calls: the library is compiled with fw/src/fw_prelude.hpp. Not
+// re-entrant on one instance. Cost per sample: 6 ADEV pushes (amortised ~12 multiply-adds each)
+// + 6 scalar filter steps + monitors; a full ADEV telemetry set is 6 snapshots (O(96 * 8)) and
+// up to 6 * 96 frames.
+#ifndef IMU_NODE_NODE_HPP
+#define IMU_NODE_NODE_HPP
+
+#include <cstddef>
+#include <cstdint>
+
+#include "imu/bias_kf.hpp"
+#include "imu/error_model.hpp"
+#include "imu/hal/codec.hpp"
+#include "imu/hal/frame_io.hpp"
+#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/receiver.hpp"
+#include "imu/online_adev.hpp"
+#include "imu/residual_monitor.hpp"
+
+namespace imu::node {
+
+inline constexpr std::size_t kChannels = hal::kChannels;
+using NodeAdev = MultiAdev<kChannels, 8, 22>;
+inline constexpr std::size_t kMaxAdevPoints = NodeAdev::Channel::kMaxPoints;
+static_assert(kMaxAdevPoints <= 255, "AdevRecord::index is 8 bits");
+
+/// The seed's parameters of one channel's first-order model (imu::first_order_gm_from_asd).
+struct ChannelModel {
+  double n;     ///< white noise N [unit/sqrt(Hz)]
+  double b;     ///< bias instability B [unit]
+  double tp_s;  ///< delay of the model's ADEV peak [s]
+};
+
+/// Defaults: accelerometers the seed's model (N = 3.3e-3 m/s/sqrt(s), B = 9e-4 m/s^2,
+/// Tp = 300 s); gyros the ADIS16405 datasheet's typical angle random walk 2 deg/sqrt(h)
+/// (5.8e-4 rad/s/sqrt(Hz)) and in-run bias stability 0.007 deg/s (1.2e-4 rad/s), Tp = 300 s.
+/// Replace them with a fitted model for real use.
+struct NodeConfig {
+  std::uint32_t status_period_samples = 100;   ///< stats, bias, monitor (1 s at 100 Hz); >= 1
+  std::uint32_t adev_period_samples = 6000;    ///< full ADEV curves (60 s at 100 Hz); 0: never
+  std::uint32_t init_samples = 1000;           ///< known-signal average per channel; >= 1
+  std::uint32_t monitor_window = 1000;         ///< residual monitor block, updates; >= 16
+  ChannelModel model[kChannels] = {{3.3e-3, 9e-4, 300.0}, {3.3e-3, 9e-4, 300.0},
+                                   {3.3e-3, 9e-4, 300.0}, {5.8e-4, 1.2e-4, 300.0},
+                                   {5.8e-4, 1.2e-4, 300.0}, {5.8e-4, 1.2e-4, 300.0}};
+  hal::Layout layout = hal::Layout::kFd;       ///< telemetry frame layout
+  int send_timeout_ms = 2000;                  ///< per telemetry frame (back-pressure wait)
+  bool telemetry = true;                       ///< false: listen only (e.g. a canplayer replay)
+};
+
+enum class NodeStatus : std::uint8_t {
+  kOk = 0,
+  kBadConfig,  ///< a period or window out of range, or a channel model rejected
+};
+
+/// Counters of the node itself (the receiver's are in rx_stats()).
+struct NodeStats {
+  std::uint64_t samples = 0;                ///< samples processed (after the first config)
+  std::uint64_t missing = 0;                ///< samples marked missing
+  std::uint64_t samples_before_config = 0;  ///< ignored: no ConfigRecord yet
+  std::uint64_t configs = 0;                ///< ConfigRecords received
+  std::uint64_t restarts = 0;               ///< ConfigRecords with a new cfg_id after the first
+  std::uint64_t bad_config = 0;             ///< ConfigRecords rejected (rate or LSB not > 0)
+  std::uint64_t saturated = 0;              ///< samples with a sat_mask bit set
+  std::uint64_t telemetry_frames = 0;       ///< frames sent
+  std::uint64_t telemetry_failures = 0;     ///< frames the sink refused (send status not ok)
+  std::uint64_t status_sets = 0;            ///< stats/bias/monitor triples sent
+  std::uint64_t adev_sets = 0;              ///< full ADEV telemetry sets sent
+  std::uint64_t gpio_errors = 0;            ///< static input read / alarm write failures
+  std::uint64_t alarm_changes = 0;          ///< alarm output transitions
+  hal::IoStatus last_send_status = hal::IoStatus::kOk;
+};
+
+class Node {
+ public:
+  Node() = default;
+
+  /// Set up (and reset) the node. tx receives telemetry; static_in / alarm_out may be null
+  /// (always static / no alarm line). The referenced objects must outlive the node. O(1).
+  [[nodiscard]] NodeStatus configure(const NodeConfig& cfg, hal::FrameSink& tx,
+                                     hal::DigitalInput* static_in, hal::DigitalOutput* alarm_out);
+
+  /// One received frame (nbytes as delivered by the transport). O(frame + events).
+  void on_frame(const hal::CanFrame& f, std::size_t nbytes, std::uint64_t rx_time_ns);
+
+  /// The bus was idle: release samples held in the reorder window and, if samples arrived since
+  /// the last full telemetry set, send one. O(full set).
+  void on_idle();
+
+  /// End of stream: same as on_idle(). Telemetry is not sent if the sink is gone (counted).
+  void finish() { on_idle(); }
+
+  /// Send stats, bias and monitor records now. O(1) frames.
+  void send_status();
+  /// Send status and every channel's ADEV curve now.
+  void send_full();
+
+  [[nodiscard]] const NodeAdev& adev() const { return adev_; }
+  [[nodiscard]] const NodeStats& stats() const { return stats_; }
+  [[nodiscard]] const hal::RxStats& rx_stats() const { return rx_.stats(); }
+  [[nodiscard]] bool have_config() const { return have_cfg_; }
+  [[nodiscard]] const hal::ConfigRecord& sensor_config() const { return cfg_; }
+  /// Bias estimate (channel units, relative to the known signal) and its variance.
+  [[nodiscard]] float bias(std::size_t c) const { return kf_[c].bias(); }
+  [[nodiscard]] float bias_var(std::size_t c) const { return kf_[c].variance(); }
+  [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
+  [[nodiscard]] const ResidualMonitors<4>& monitors(std::size_t c) const { return mon_[c]; }
+  /// The channel has carried a non-zero count since the stream (re)started. Inactive channels
+  /// (e.g. absent from a one-channel recording) run no filter and raise no alarm.
+  [[nodiscard]] bool active(std::size_t c) const { return active_[c]; }
+  [[nodiscard]] bool alarm() const { return alarm_; }
+  [[nodiscard]] bool is_static() const { return static_; }
+
+ private:
+  void on_event(const hal::RxEvent& e);
+  void on_config(const hal::ConfigRecord& c);
+  void on_sample(const hal::SampleRecord& s);
+  void on_missing(std::uint32_t n);
+  void after_sample();
+  void restart_estimators();
+  void send_adev();
+  void send_frames(const hal::EncodedFrames& fr);
+  void update_alarm();
+  void read_static();
+
+  NodeConfig cfg_node_{};
+  hal::FrameSink* tx_ = nullptr;
+  hal::DigitalInput* static_in_ = nullptr;
+  hal::DigitalOutput* alarm_out_ = nullptr;
+  hal::Receiver<8> rx_;
+  NodeAdev adev_;
+  ScalarBiasKf<float> kf_[kChannels];
+  ResidualMonitors<4> mon_[kChannels];
+  FirstOrderGm gm_[kChannels] = {};
+  float known_[kChannels] = {};
+  bool active_[kChannels] = {};  // a non-zero count was seen since the stream started
+  double init_sum_[kChannels] = {};
+  std::uint32_t init_count_ = 0;
+  double lsb_[kChannels] = {};
+  hal::ConfigRecord cfg_{};
+  bool have_cfg_ = false;
+  bool configured_ = false;
+  bool static_ = true;
+  bool alarm_ = false;
+  bool dirty_ = false;  // samples since the last full set
+  std::uint32_t last_seq_ = 0;
+  std::uint32_t since_status_ = 0;
+  std::uint32_t since_adev_ = 0;
+  std::uint8_t transfer_id_ = 0;
+  AdevPoint points_[kMaxAdevPoints] = {};
+  NodeStats stats_{};
+};
+
+}  // namespace imu::node
+
+#endif  // IMU_NODE_NODE_HPP
