@@ -136,8 +136,123 @@ t_gpio_missing_line() {
 }
 
 # ---------------------------------------------------------------------------------------------
-# The project's binaries (issue 7). TODO: wire these when imu-sim / imu-fw / the HAL GPIO tool
-# land: each runs the real check when its binaries are in /opt/imu/bin, else SKIPs.
+# The project's HAL on the real kernel: imu-can-probe (SocketCAN transport + receiver) and
+# imu-gpio-probe (libgpiod wrapper). key=value output, parsed with kv.
+kv() { sed -n "s/.*[ ^]$2=\([0-9]*\).*/\1/p" "$1" | head -n1; }
+
+# The protocol over vcan0 at a realistic rate (1 kHz), candump recording alongside:
+# every sample received, none missing, no CRC error, no kernel drop; candump saw every frame.
+IMU_N=2000
+t_hal_can_stream() {
+  have imu-can-probe || { result hal_can_stream SKIP "imu-can-probe not built"; return; }
+  local frames=$((IMU_N + 1))  # FD layout: one frame per sample + the config record
+  timeout 20 candump -n $frames -L vcan0 >/tmp/imu.log &
+  local dump=$!
+  imu-can-probe --bus vcan0 --recv --count $IMU_N --timeout-ms 3000 >/tmp/rx_stream.txt 2>&1 &
+  local rx=$!
+  sleep 0.5
+  imu-can-probe --bus vcan0 --send $IMU_N --rate-hz 1000 >/tmp/tx_stream.txt 2>&1
+  wait $rx
+  wait $dump
+  local samples missing crc drops logged
+  samples=$(kv /tmp/rx_stream.txt samples)
+  missing=$(kv /tmp/rx_stream.txt missing)
+  crc=$(kv /tmp/rx_stream.txt crc_errors)
+  drops=$(kv /tmp/rx_stream.txt kernel_drops)
+  logged=$(wc -l </tmp/imu.log)
+  if [ "$samples" = $IMU_N ] && [ "$missing" = 0 ] && [ "$crc" = 0 ] && [ "$drops" = 0 ] &&
+     [ "$logged" = $frames ]; then
+    result hal_can_stream PASS "$IMU_N samples at 1 kHz: received $samples, missing 0, crc 0, kernel drops 0; candump logged $logged frames"
+  else
+    result hal_can_stream FAIL "samples=$samples missing=$missing crc=$crc kernel_drops=$drops candump=$logged/$frames: $(tr '\n' ' ' </tmp/rx_stream.txt)"
+  fi
+}
+
+# canplayer (independent sender) replays candump's log of the stream into the receiver.
+t_hal_can_replay() {
+  have imu-can-probe || { result hal_can_replay SKIP "imu-can-probe not built"; return; }
+  [ -s /tmp/imu.log ] || { result hal_can_replay SKIP "no candump log from hal_can_stream"; return; }
+  imu-can-probe --bus vcan0 --recv --count $IMU_N --timeout-ms 3000 >/tmp/rx_replay.txt 2>&1 &
+  local rx=$!
+  sleep 0.5
+  canplayer -I /tmp/imu.log
+  wait $rx
+  local samples missing crc
+  samples=$(kv /tmp/rx_replay.txt samples)
+  missing=$(kv /tmp/rx_replay.txt missing)
+  crc=$(kv /tmp/rx_replay.txt crc_errors)
+  [ "$samples" = $IMU_N ] && [ "$missing" = 0 ] && [ "$crc" = 0 ] &&
+    result hal_can_replay PASS "canplayer replay: received $samples samples, missing 0, crc 0" ||
+    result hal_can_replay FAIL "$(tr '\n' ' ' </tmp/rx_replay.txt)"
+}
+
+# cangen floods random frames (every kind: -m) alongside the stream: they are counted as
+# rejected, the stream is intact, nothing crashes.
+t_hal_can_flood() {
+  have imu-can-probe || { result hal_can_flood SKIP "imu-can-probe not built"; return; }
+  imu-can-probe --bus vcan0 --recv --count $IMU_N --timeout-ms 3000 >/tmp/rx_flood.txt 2>&1 &
+  local rx=$!
+  sleep 0.5
+  cangen vcan0 -m -g 1 -n 1500 -p 10 &
+  local gen=$!
+  imu-can-probe --bus vcan0 --send $IMU_N --rate-hz 1000 >/tmp/tx_flood.txt 2>&1
+  wait $gen
+  wait $rx
+  local rc=$?
+  local samples missing rejected=0 f
+  samples=$(kv /tmp/rx_flood.txt samples)
+  missing=$(kv /tmp/rx_flood.txt missing)
+  for f in crc_errors bad_mtu bad_dlc unknown_id remote error_frames orphan_fragments; do
+    rejected=$((rejected + $(kv /tmp/rx_flood.txt $f)))
+  done
+  [ $rc = 0 ] && [ "$samples" = $IMU_N ] && [ "$missing" = 0 ] && [ $rejected -gt 0 ] &&
+    result hal_can_flood PASS "1500 cangen -m frames alongside: $rejected rejected, $samples samples intact, missing 0" ||
+    result hal_can_flood FAIL "exit $rc rejected=$rejected: $(tr '\n' ' ' </tmp/rx_flood.txt)"
+}
+
+# A gap in the stream (sample 500 not sent) is reported as exactly one missing sample.
+t_hal_can_gap() {
+  have imu-can-probe || { result hal_can_gap SKIP "imu-can-probe not built"; return; }
+  imu-can-probe --bus vcan0 --recv --count 1000 --timeout-ms 3000 >/tmp/rx_gap.txt 2>&1 &
+  local rx=$!
+  sleep 0.5
+  imu-can-probe --bus vcan0 --send 1000 --skip 500 >/tmp/tx_gap.txt 2>&1
+  wait $rx
+  local samples missing gaps
+  samples=$(kv /tmp/rx_gap.txt samples)
+  missing=$(kv /tmp/rx_gap.txt missing)
+  gaps=$(kv /tmp/rx_gap.txt gaps)
+  [ "$samples" = 999 ] && [ "$missing" = 1 ] && [ "$gaps" = 1 ] &&
+    result hal_can_gap PASS "sample 500 skipped: received 999, missing 1, gaps 1" ||
+    result hal_can_gap FAIL "$(tr '\n' ' ' </tmp/rx_gap.txt)"
+}
+
+# The HAL's GPIO wrapper on gpio-sim: reads "static", drives "alarm", and a missing line is a
+# clear error (exit 3 and a message naming it).
+t_hal_gpio() {
+  have imu-gpio-probe || { result hal_gpio SKIP "imu-gpio-probe not built"; return; }
+  [ -n "$GPIO_CHIP" ] || { result hal_gpio SKIP "no gpio-sim chip"; return; }
+  local hi lo alarm rc_missing msg
+  echo pull-up >$GPIO_SIM/sim_gpio0/pull
+  hi=$(imu-gpio-probe --chip "$GPIO_CHIP" --line static 2>&1)
+  echo pull-down >$GPIO_SIM/sim_gpio0/pull
+  lo=$(imu-gpio-probe --chip "$GPIO_CHIP" --line static 2>&1)
+  imu-gpio-probe --chip "$GPIO_CHIP" --line alarm --set 1 --hold-ms 1500 >/tmp/alarm.txt 2>&1 &
+  local setter=$!
+  sleep 0.7
+  alarm=$(cat $GPIO_SIM/sim_gpio1/value)
+  wait $setter
+  msg=$(imu-gpio-probe --chip "$GPIO_CHIP" --line no_such_line 2>&1) && rc_missing=0 || rc_missing=$?
+  if [ "$hi" = value=1 ] && [ "$lo" = value=0 ] && [ "$alarm" = 1 ] && [ "$rc_missing" = 3 ]; then
+    result hal_gpio PASS "static read 1/0 with pull-up/down, alarm driven high seen by the simulator, missing line: exit 3 '$msg'"
+  else
+    result hal_gpio FAIL "static '$hi'/'$lo' alarm '$alarm' missing-line exit $rc_missing '$msg'"
+  fi
+}
+
+# ---------------------------------------------------------------------------------------------
+# The firmware node end to end (issue 7). TODO: wire these when imu-sim / imu-fw land: each
+# runs the real check when its binaries are in /opt/imu/bin, else SKIPs.
 
 t_imu_stream() {
   have imu-sim && have imu-fw || { result imu_stream SKIP "TODO: imu-sim/imu-fw not built yet"; return; }
@@ -157,7 +272,8 @@ t_imu_gpio() {
 }
 
 TESTS="can_vcan_fd can_roundtrip can_replay gpio_sim gpio_static_input gpio_alarm_output
-       gpio_missing_line imu_stream imu_replay imu_flood imu_gpio"
+       gpio_missing_line hal_can_stream hal_can_replay hal_can_flood hal_can_gap hal_gpio
+       imu_stream imu_replay imu_flood imu_gpio"
 for t in $TESTS; do
   t_$t
 done
