@@ -468,19 +468,35 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
             "set title 'ADEV of %s: data (node telemetry, 68.3%% intervals), model, simulated "
             "model'\n"
             "plot 'fig1_adev_data.csv' skip 1 using 1:2:3:4 with yerrorbars pt 7 ps 0.6 "
-            "lc rgb '#1f77b4' title 'data', \\\n"
-            "  'fig1_adev_model.csv' skip 1 using 1:($2>0?$2:1/0) with lines dt 2 lw 2 lc rgb "
-            "'#2ca02c' title 'model: white noise', \\\n"
-            "  '' skip 1 using 1:($3>0?$3:1/0) with lines dt 2 lw 2 lc rgb '#8c564b' "
-            "title 'model: quantization', \\\n"
-            "  '' skip 1 using 1:($4>0?$4:1/0) with lines dt 2 lw 2 lc rgb '#ff7f0e' "
-            "title 'model: Gauss-Markov', \\\n"
-            "  '' skip 1 using 1:($5>0?$5:1/0) with lines dt 2 lw 2 lc rgb '#9467bd' "
-            "title 'model: rate random walk', \\\n"
-            "  '' skip 1 using 1:6 with lines lw 2 lc rgb 'black' title 'model: total', \\\n"
-            "  'fig1_adev_sim.csv' skip 1 using 1:2 with points pt 6 ps 0.8 lc rgb '#d62728' "
-            "title 'simulated model'\n",
+            "lc rgb '#1f77b4' title 'data'",
             unit, title_chan.c_str());
+    // One dashed line per term present in the model (a term absent from the model would be a
+    // curve without a single defined point, which gnuplot rejects).
+    struct Term {
+      bool present;
+      int column;
+      const char* color;
+      const char* title;
+    };
+    const Term terms[] = {{mp.n > 0.0, 2, "#2ca02c", "white noise"},
+                          {mp.q > 0.0, 3, "#8c564b", "quantization"},
+                          {mp.n_gm > 0, 4, "#ff7f0e", "Gauss-Markov"},
+                          {mp.k > 0.0, 5, "#9467bd", "rate random walk"}};
+    for (const Term& term : terms) {
+      if (term.present) {
+        appendf(g1,
+                ", \\\n  'fig1_adev_model.csv' skip 1 using 1:($%d>0?$%d:1/0) with lines dt 2 "
+                "lw 2 lc rgb '%s' title 'model: %s'",
+                term.column, term.column, term.color, term.title);
+      }
+    }
+    g1 += ", \\\n  'fig1_adev_model.csv' skip 1 using 1:6 with lines lw 2 lc rgb 'black' "
+          "title 'model: total'";
+    if (!sim_rows.empty()) {
+      g1 += ", \\\n  'fig1_adev_sim.csv' skip 1 using 1:2 with points pt 6 ps 0.8 lc rgb "
+            "'#d62728' title 'simulated model'";
+    }
+    g1 += "\n";
     std::string g2;
     appendf(g2,
             "set datafile separator ','\n"

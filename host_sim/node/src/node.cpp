@@ -57,6 +57,7 @@ void Node::restart_estimators() {
     (void)mon_[c].configure(cfg_node_.monitor_window);  // window checked in configure()
   }
   init_count_ = 0;
+  pending_missing_ = 0;
 }
 
 void Node::on_frame(const hal::CanFrame& f, std::size_t nbytes, std::uint64_t rx_time_ns) {
@@ -85,6 +86,7 @@ void Node::on_idle() {
       on_event(e);
     }
   }
+  apply_missing();
   if (dirty_) {
     send_full();
   }
@@ -149,6 +151,7 @@ void Node::on_sample(const hal::SampleRecord& s) {
     ++stats_.samples_before_config;
     return;
   }
+  apply_missing();
   if (s.sat_mask != 0) {
     ++stats_.saturated;
   }
@@ -188,16 +191,27 @@ void Node::on_missing(std::uint32_t n) {
   if (!have_cfg_) {
     return;
   }
+  // The receiver may report one run of lost samples as several consecutive events: collect
+  // them and apply the run once, before the next sample (one gap for the estimators).
+  pending_missing_ += n;
+  dirty_ = true;
+}
+
+void Node::apply_missing() {
+  const std::uint64_t n = pending_missing_;
+  if (n == 0) {
+    return;
+  }
+  pending_missing_ = 0;
   stats_.missing += n;
   adev_.mark_missing(n);
   if (init_count_ >= cfg_node_.init_samples) {
-    for (std::uint32_t i = 0; i < n; ++i) {
+    for (std::uint64_t i = 0; i < n; ++i) {
       for (auto& kf : kf_) {
         (void)kf.step(0.0F, false);  // prediction only: no measurement
       }
     }
   }
-  dirty_ = true;
 }
 
 void Node::after_sample() {

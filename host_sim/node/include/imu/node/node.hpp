@@ -141,6 +141,7 @@ class Node {
   void on_config(const hal::ConfigRecord& c);
   void on_sample(const hal::SampleRecord& s);
   void on_missing(std::uint32_t n);
+  void apply_missing();
   void after_sample();
   void restart_estimators();
   void send_adev();
@@ -161,6 +162,7 @@ class Node {
   bool active_[kChannels] = {};  // a non-zero count was seen since the stream started
   double init_sum_[kChannels] = {};
   std::uint32_t init_count_ = 0;
+  std::uint64_t pending_missing_ = 0;  // reported missing, not yet applied
   double lsb_[kChannels] = {};
   hal::ConfigRecord cfg_{};
   bool have_cfg_ = false;

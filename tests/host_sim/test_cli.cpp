@@ -1,0 +1,213 @@
+// Tests of the imu-sim / imu-fw command lines (host_sim/app), run in-process: parse errors,
+// bad files, the model subcommand against the seed's printed numbers, and synth -> run over
+// the loopback bus through the firmware node, compared with imu-sim adev on the same file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "sim_test_util.hpp"
+
+namespace {
+
+using simtest::count_lines;
+using simtest::run;
+
+TEST(SimCli, NoArgumentsPrintsUsageAndExits2) {
+  const auto r = run({});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("usage: imu-sim"), std::string::npos);
+}
+
+TEST(SimCli, HelpExits0) {
+  const auto r = run({"--help"});
+  EXPECT_EQ(r.status, 0);
+  EXPECT_NE(r.out.find("run --mat FILE"), std::string::npos);
+}
+
+TEST(SimCli, UnknownCommand) {
+  const auto r = run({"frobnicate"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err.rfind("imu-sim: unknown command 'frobnicate'", 0), 0U) << r.err;
+}
+
+TEST(SimCli, ParseErrorsAreOneLineAndExit2) {
+  const std::vector<std::vector<std::string>> cases = {
+      {"run", "--mat", "x.mat", "--bogus"},        // unknown option
+      {"run", "--mat"},                             // missing value
+      {"run"},                                      // --mat required
+      {"run", "--mat", "x.mat", "--rate", "fast"},  // bad enum
+      {"run", "--mat", "x.mat", "--node", "x"},
+      {"run", "--mat", "x.mat", "--N", "1e-3"},     // model needs N, B and Tp together
+      {"run", "--mat", "x.mat", "--channel", "acc_w"},
+      {"run", "--mat", "x.mat", "--timeout", "abc"},
+      {"run", "--mat", "x.mat", "--no-plots=1"},    // flag with a value
+      {"adev"},                                     // FILE required
+      {"adev", "a.mat", "b.mat"},                   // one FILE only
+      {"model", "--N", "abc"},
+      {"model", "--N", "-1"},
+      {"synth", "--duration", "0"},
+      {"synth", "--channel", "mag_x"},
+  };
+  for (const auto& c : cases) {
+    const auto r = run(c);
+    std::string joined;
+    for (const auto& s : c) {
+      joined += s + " ";
+    }
+    EXPECT_EQ(r.status, 2) << joined << ": " << r.err;
+    EXPECT_EQ(count_lines(r.err), 1U) << joined << ": " << r.err;
+    EXPECT_EQ(r.err.rfind("imu-sim ", 0), 0U) << joined << ": " << r.err;
+  }
+}
+
+TEST(SimCli, FwParseErrors) {
+  const std::vector<std::vector<std::string>> cases = {
+      {},                                          // --bus required
+      {"--bus", "loopback", "--bogus"},
+      {"--bus", "loopback", "--layout", "x"},
+      {"--bus", "loopback", "--static-line", "s"},  // needs --gpio-chip
+      {"--bus", "loopback", "--N", "0"},            // model rejected
+  };
+  for (const auto& c : cases) {
+    const auto r = run(c, true);
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("imu-fw: "), std::string::npos) << r.err;
+  }
+}
+
+TEST(SimCli, ModelPrintsTheSeedsNumbers) {
+  const auto r = run({"model", "--N", "3.3e-3", "--B", "9e-4", "--Tp", "300", "--fs", "100"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  // Typed from the seed document, section 4 (the notebook's output), not produced by the code.
+  const char* expected[] = {
+      "db(t)/dt = -6.3000e-03 * b(t) + w(t)",
+      "PSD S_n = 1.0890e-05",
+      "PSD S_w = 2.6783e-08",
+      "P_b_ss_c = 2.1256e-06",
+      "b[k+1] = 0.9999 * b[k] + w[k]",
+      "Q_n = 1.0890e-03 (std 3.3000e-02)",
+      "Q_w = 2.6781e-10 (std 1.6365e-05)",
+      "P_b_ss_d = 2.1256e-06",
+  };
+  for (const char* e : expected) {
+    EXPECT_NE(r.out.find(e), std::string::npos) << "missing '" << e << "' in\n" << r.out;
+  }
+}
+
+TEST(SimCli, BadFilesExit1WithOneLine) {
+  simtest::TempDir dir;
+  const std::string junk = dir.file("junk.mat");
+  {
+    std::FILE* f = std::fopen(junk.c_str(), "wb");
+    ASSERT_NE(f, nullptr);
+    std::fputs("this is not a MAT-file, just text long enough to be read as a header......", f);
+    std::fclose(f);
+  }
+  const std::string synth = dir.file("s.mat");
+  ASSERT_EQ(run({"synth", "--out", synth, "--duration", "10"}).status, 0);
+  const std::string missing = dir.file("does-not-exist.mat");
+  const std::vector<std::vector<std::string>> cases = {
+      {"adev", missing},
+      {"adev", junk},
+      {"adev", synth, "--channel", "gyro_x"},  // variable absent
+      {"run", "--mat", missing, "--out", dir.file("o1")},
+      {"run", "--mat", junk, "--out", dir.file("o2")},
+      {"run", "--mat", synth, "--channel", "gyro_y", "--out", dir.file("o3")},
+  };
+  for (const auto& c : cases) {
+    const auto r = run(c);
+    EXPECT_EQ(r.status, 1) << c[1] << ": " << r.err;
+    EXPECT_EQ(count_lines(r.err), 1U) << r.err;
+  }
+  EXPECT_NE(run({"adev", missing}).err.find("does-not-exist.mat"), std::string::npos);
+  EXPECT_NE(run({"adev", synth, "--channel", "gyro_x"}).err.find("gyro_x"), std::string::npos);
+}
+
+/// synth (30,000 samples) -> run in-process over the loopback bus -> compare with adev.
+TEST(SimCli, RunOverLoopbackLosesNothingAndMatchesAdev) {
+  simtest::TempDir dir;
+  const std::string mat = dir.file("synth.mat");
+  auto r = run({"synth", "--out", mat, "--duration", "300", "--seed", "5"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("SYNTHETIC"), std::string::npos);
+  const std::string out = dir.file("run");
+  r = run({"run", "--mat", mat, "--bus", "loopback", "--rate", "max", "--out", out, "--no-plots",
+           "--quiet", "--sim-windows", "50", "--T-avg", "1", "--T-int", "2", "--N", "3.3e-3",
+           "--B", "9e-4", "--Tp", "300", "--K", "1.4e-4"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("Continuous-time model is"), std::string::npos);
+  EXPECT_NE(r.out.find("== Covariance check"), std::string::npos);
+  EXPECT_NE(r.out.find("== Frame statistics"), std::string::npos);
+  const std::string json = simtest::read_text(out + "/report.json");
+  ASSERT_FALSE(json.empty());
+  const char* node = "firmware node (its StatsRecord)";
+  EXPECT_EQ(simtest::json_number_in(json, node, "samples"), 30000.0);
+  EXPECT_EQ(simtest::json_number_in(json, node, "missing"), 0.0);
+  EXPECT_EQ(simtest::json_number_in(json, node, "lost"), 0.0);
+  EXPECT_EQ(simtest::json_number_in(json, node, "crc_errors"), 0.0);
+  for (const char* f : {"report.txt", "fig1_adev_data.csv", "fig1_adev_model.csv",
+                        "fig1_adev_sim.csv", "fig2_std.csv", "fig2_traj_sim.csv",
+                        "fig2_traj_data.csv", "fig1_adev.gp", "fig2_covariance.gp"}) {
+    EXPECT_FALSE(simtest::read_text(out + "/" + f).empty()) << f;
+  }
+
+  const std::string adev_json = dir.file("adev.json");
+  r = run({"adev", mat, "--channel", "acc_z", "--json", adev_json});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("online ADEV"), std::string::npos);
+  const auto a = simtest::json_adev(simtest::read_text(adev_json));
+  const auto b = simtest::json_adev(json);
+  ASSERT_GT(a.size(), 40U);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    // tau is rebuilt exactly from the averaging factor; ADEV and its interval travel as float32
+    // (relative rounding 6e-8) and the node adds one sample at a time where adev uses blocks
+    // (sums in another order, ~1e-13): 3e-7 relative covers both with margin. EDF is
+    // recomputed by imu-sim from n_terms with the same formula: 1e-12.
+    EXPECT_NEAR(b[i].tau_s, a[i].tau_s, 1e-12 * a[i].tau_s) << i;
+    EXPECT_NEAR(b[i].adev, a[i].adev, 3e-7 * a[i].adev) << "tau " << a[i].tau_s;
+    EXPECT_NEAR(b[i].ci_lo, a[i].ci_lo, 3e-7 * a[i].ci_lo) << "tau " << a[i].tau_s;
+    EXPECT_NEAR(b[i].ci_hi, a[i].ci_hi, 3e-7 * a[i].ci_hi) << "tau " << a[i].tau_s;
+    EXPECT_NEAR(b[i].edf, a[i].edf, 1e-9 * a[i].edf) << "tau " << a[i].tau_s;
+  }
+}
+
+/// imu-fw as its own process (spawned by imu-sim) over a named loopback bus.
+TEST(SimCli, RunWithSpawnedFirmwareProcess) {
+  simtest::TempDir dir;
+  const std::string mat = dir.file("synth.mat");
+  ASSERT_EQ(run({"synth", "--out", mat, "--duration", "100"}).status, 0);
+  const std::string out = dir.file("run");
+  const auto r = run({"run", "--mat", mat, "--node", "spawn", "--fw", IMU_FW_PATH, "--out", out,
+                      "--no-plots", "--quiet", "--sim-windows", "20", "--T-avg", "1", "--T-int",
+                      "2"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string log = simtest::read_text(out + "/imu-fw.log");
+  EXPECT_NE(log.find("stream ended (link-down): 10000 samples, 0 missing"), std::string::npos)
+      << log;
+  EXPECT_NE(log.find("final ADEV of acc_z"), std::string::npos) << log;
+  const std::string json = simtest::read_text(out + "/report.json");
+  EXPECT_EQ(simtest::json_number_in(json, "firmware node (its StatsRecord)", "missing"), 0.0);
+}
+
+/// The plots: gnuplot renders SVG (and PNG) from the CSV files, or the report says it is missing.
+TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
+  simtest::TempDir dir;
+  const std::string mat = dir.file("synth.mat");
+  ASSERT_EQ(run({"synth", "--out", mat, "--duration", "100"}).status, 0);
+  const std::string out = dir.file("run");
+  const auto r = run({"run", "--mat", mat, "--out", out, "--quiet", "--sim-windows", "20",
+                      "--T-avg", "1", "--T-int", "2"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  if (std::system("command -v gnuplot >/dev/null 2>&1") == 0) {
+    EXPECT_NE(simtest::read_text(out + "/fig1_adev.svg").find("<svg"), std::string::npos);
+    EXPECT_NE(simtest::read_text(out + "/fig2_covariance.svg").find("<svg"), std::string::npos);
+    EXPECT_NE(r.out.find("plots: fig1_adev.svg"), std::string::npos) << r.out;
+  } else {
+    EXPECT_NE(r.out.find("gnuplot NOT FOUND"), std::string::npos) << r.out;
+  }
+}
+
+}  // namespace
