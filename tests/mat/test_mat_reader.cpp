@@ -302,6 +302,19 @@ TEST(MatReader, HandBuiltCompressedAndPlainAgree) {
   }
 }
 
+TEST(MatReader, HeaderLongerThanThePeekFallsBackToWholeInflate) {
+  const std::string name(600, 'n');  // longer than MATLAB allows, but a valid element
+  const Bytes b = image({compressed(double_matrix(name, 2, 1, {1.0, 2.0})),
+                         compressed(double_matrix("after", 1, 1, {5.0}))});
+  const MatFile f = open_memory(b);
+  const auto c = f.read_column(name);
+  ASSERT_TRUE(c.ok()) << c.error().message;
+  expect_same(c.value(), {1.0, 2.0});
+  const auto a = f.read_scalar("after");
+  ASSERT_TRUE(a.ok()) << a.error().message;
+  EXPECT_EQ(bits_of(a.value()), bits_of(5.0));
+}
+
 // --- bad files: one test per kind ------------------------------------------------------------------
 TEST(MatReaderErrors, NotAMatFile) {
   const std::string text(300, 'x');

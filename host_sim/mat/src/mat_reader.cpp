@@ -37,7 +37,9 @@ constexpr std::uint32_t kMxDouble = 6;
 constexpr std::uint32_t kMxUint64 = 15;
 
 constexpr std::size_t kHeaderBytes = 128;
-constexpr std::size_t kPeekBytes = 4096;  // partial inflate of a compressed variable's header
+// Partial inflate of a compressed variable's header: 8 + 16 + (8 + 4 * 32 dims) + (8 + 64 name)
+// + 8 = 240 bytes at most for valid names; longer headers fall back to a whole inflate.
+constexpr std::size_t kPeekBytes = 512;
 constexpr std::size_t kMaxDims = 32;
 constexpr std::array<std::uint8_t, 8> kHdf5Signature = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1A, '\n'};
 

@@ -197,7 +197,8 @@ class Inflater {
       const int count = h.count[len];
       if (code - count < first) {
         drop(len);
-        return h.symbol[static_cast<std::size_t>(index + (code - first))];
+        const int k = index + (code - first);  // first <= code < first + count
+        return h.symbol[static_cast<std::size_t>(k)];
       }
       index += count;
       first += count;

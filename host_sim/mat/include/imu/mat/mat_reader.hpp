@@ -16,8 +16,9 @@
 // inflated size limit (compressed) before anything is allocated from them.
 //
 // Cost: only the requested variable is decoded. Other uncompressed variables are skipped by
-// their tag; other compressed variables cost one partial inflate of at most 4 KiB (their name is
-// inside the zlib stream). Reading a compressed N-element double column costs one inflate of the
+// their tag; other compressed variables cost one partial inflate of at most 512 bytes (their
+// name is inside the zlib stream; a longer header, e.g. a name over 63 characters, falls back to
+// inflating that variable whole). Reading a compressed N-element double column costs one inflate of the
 // variable (about 8 N bytes of scratch) and one copy of the selected column.
 //
 // Thread safety: a MatFile is immutable after construction; const member functions may run
