@@ -20,8 +20,10 @@ namespace {
 std::vector<imu::AdevPoint> exact_points(const imu::ModelParams& p, double tau_lo, double tau_hi,
                                          int per_decade) {
   std::vector<imu::AdevPoint> pts;
-  const double step = std::pow(10.0, 1.0 / per_decade);
-  for (double tau = tau_lo; tau <= tau_hi * 1.0001; tau *= step) {
+  const double decades = std::log10(tau_hi / tau_lo);
+  const int count = static_cast<int>(std::floor(decades * per_decade + 1e-6)) + 1;
+  for (int i = 0; i < count; ++i) {
+    const double tau = tau_lo * std::pow(10.0, static_cast<double>(i) / per_decade);
     imu::AdevPoint a{};
     a.tau_s = tau;
     a.avar = imu::model_avar(p, tau);
