@@ -58,6 +58,13 @@ class ModelSimulator {
   [[nodiscard]] ModelStatus configure(const DiscreteModel<kMaxStates>& model, std::uint64_t seed);
   /// Draw a new x_0 ~ N(0, P0) and restart the quantization phase noise (a new realisation).
   void restart();
+  /// Set the current state x_k (n_states entries), e.g. a sinusoid of a chosen amplitude and
+  /// phase or a ramp of a chosen slope instead of a draw from P0. Ignored if not configured.
+  void set_state(const double* x, std::size_t n) {
+    for (std::size_t i = 0; configured_ && i < n && i < model_.n_states; ++i) {
+      x_[i] = x[i];
+    }
+  }
   /// Next output sample z_k (then advances the state). Returns 0 if not configured.
   double next();
   /// Current state x_k (the one the next call of next() observes), n_states entries.
