@@ -18,7 +18,8 @@
 // Not fitted: the sinusoid (nonlinear in f0; give it to the caller's own search).
 //
 // Cost: O(weight passes * (grid + golden) evaluations * n_points * p^2), p <= 6 parameters;
-// about 2 ms on the host for 50 points and one GM. Stack: ~5 kB (kMaxFitPoints points). No heap,
+// ~1.5 ms on the host for white + GM on 48 points (198 solves), ~25 ms for white + 2 GM + RRW
+// (1386 solves); see bench_bias_kf. Stack: ~5 kB (kMaxFitPoints points). No heap,
 // re-entrant.
 #ifndef IMU_MODEL_FIT_HPP
 #define IMU_MODEL_FIT_HPP
