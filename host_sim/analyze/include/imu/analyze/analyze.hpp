@@ -1,0 +1,123 @@
+// imu-sim analyze: close the loop between a recorded channel and its error model (issue 6).
+//
+// Pipeline (analyze()):
+//  1. counts = round(y / lsb); online ADEV (fw OnlineAdev<8,22>) of the raw record.
+//  2. "before": the seed's first-order model (white + one GM) fitted over [Ts, 100 s]
+//     (fw model_fit), its bias filter run over the record (NIS mean) and the covariance check.
+//  3. Time domain, on the bias filter's normalised innovations nu: outliers are |nu| above the
+//     Bonferroni gate (family-wise false-alarm rate `alpha` over the record) after scaling nu by
+//     its robust spread (1.4826 MAD); they are replaced by the filter's prediction. Bias steps:
+//     fw StepDetector at scales tau = 8 B Ts (B = 2^p), each normalised by the data's own AVAR at
+//     that tau, threshold Bonferroni over the effectively independent positions of every scale;
+//     the strongest excursion is one step, removed, and the search repeats (at most 3).
+//  4. ADEV residual, over every tau up to T/10 (T = record length), of the cleaned record: the
+//     base family (white + GM) is refitted over that range, then terms are added greedily
+//     (quantization Q, rate random walk K, ramp R, sinusoid A, f0): a term is accepted when
+//     (a) the current model leaves a run of >= min_run consecutive taus with z < -z_run in the
+//     region where the term acts (short taus for Q, the longest taus for K and R, anywhere for the
+//     sinusoid), and (b) the drop of the cost sum(z^2) exceeds cost_factor * chi2_{1-alpha}(1)
+//     (cost_factor accounts for the correlation of neighbouring overlapping estimates). The
+//     sinusoid's frequency comes from the bump (f ~ 0.371 / tau_peak) refined by a periodogram
+//     and a golden-section search of the DTFT of block means, its amplitude from the
+//     least-squares fit at that frequency.
+//  5. "after": the joint fit of the base family plus the accepted terms over [Ts, T/10], its
+//     filter NIS mean and covariance check on the cleaned record.
+// Errors: RMS and max of |ADEV_model / ADEV_data - 1| over every tau in [Ts, T/10] and over
+// [Ts, 100 s]; "before" against the raw record's ADEV, "after" against the cleaned record's
+// ADEV (the same taus; they are the same numbers when no step or outlier was found).
+//
+// Cost: O(n) passes over the record (ADEV twice or thrice, two filters, step detectors), fits of
+// ~100 points; about 1-2 s for 1e6 samples on one core. Host only (std::vector, std::string).
+#ifndef IMU_ANALYZE_ANALYZE_HPP
+#define IMU_ANALYZE_ANALYZE_HPP
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "imu/error_model.hpp"
+#include "imu/online_adev.hpp"
+
+namespace imu::analyze {
+
+struct Options {
+  double fs_hz = 100.0;
+  double lsb = 0.0;           ///< physical value of one count; <= 0: derived (see lsb_note)
+  double alpha = 0.01;        ///< family-wise false-alarm rate of each detector
+  double cost_factor = 4.0;   ///< ADEV cost-drop inflation for correlated taus (tuned, see README)
+  double z_run = 2.0;         ///< |z| above this is outside the 68 % interval by 2 sigma
+  std::size_t min_run = 4;    ///< consecutive taus (one octave at 4 taus per octave)
+  double seed_tau_max_s = 100.0;  ///< the seed's fit range [Ts, 100 s]
+  double tau_max_fraction = 0.1;  ///< residuals over taus up to this fraction of the record
+  int max_steps = 3;
+};
+
+struct ErrorStats {
+  double adev_rms_rel = 0.0;  ///< over [tau_min_s, tau_max_s]
+  double adev_max_rel = 0.0;
+  double tau_min_s = 0.0;
+  double tau_max_s = 0.0;
+  std::size_t n_taus = 0;
+  double seed_rms_rel = 0.0;  ///< over [Ts, 100 s]
+  double seed_max_rel = 0.0;
+  double seed_tau_max_s = 0.0;
+  double cost = 0.0;           ///< sum of z^2 over [tau_min_s, tau_max_s]
+  double cov_ratio = 0.0;      ///< robust std / predicted std of the integral at T_int (0: n/a)
+  double nis_mean = 0.0;       ///< mean NIS of the bias filter
+  std::size_t filter_states = 0;
+};
+
+struct Effect {
+  std::string type;  ///< quantization, rate_random_walk, ramp, sinusoid, bias_step, outliers
+  double q = 0.0;          ///< quantization Q [unit s]
+  double k = 0.0;          ///< rate random walk K [unit / sqrt(s)]
+  double r = 0.0;          ///< ramp R [unit / s]
+  double freq_hz = 0.0;    ///< sinusoid
+  double amplitude = 0.0;  ///< sinusoid [unit]
+  double time_s = 0.0;     ///< bias step: time of the first sample after it
+  double size = 0.0;       ///< bias step [unit]
+  std::uint64_t count = 0; ///< outliers
+  double statistic = 0.0;  ///< evidence: cost drop (ADEV terms), |z| (step), max |nu| (outliers)
+  double threshold = 0.0;  ///< the threshold the statistic passed
+};
+
+struct Report {
+  std::string channel;
+  double fs_hz = 0.0;
+  std::uint64_t samples = 0;
+  double lsb = 0.0;
+  std::string lsb_note;  ///< where the LSB came from
+  std::vector<AdevPoint> adev;        ///< raw record
+  std::vector<AdevPoint> adev_clean;  ///< after removing steps and outliers
+  ModelParams model_before{};
+  ModelParams model_after{};
+  ErrorStats error_before{};
+  ErrorStats error_after{};
+  std::vector<Effect> effects;
+  std::vector<std::string> notes;  ///< warnings and decisions, one line each
+  double seconds = 0.0;            ///< wall time of analyze()
+};
+
+/// Analyze one channel (physical units). Fails (returns false, `error` set to one line) on an
+/// empty or too short record (< 1000 samples), non-finite samples, bad fs or LSB, or a fit that
+/// does not converge.
+[[nodiscard]] bool analyze(const std::vector<double>& y, const std::string& channel,
+                           const Options& options, Report& out, std::string& error);
+
+/// LSB for data without one: the smallest nonzero difference of the sorted values when every
+/// value is an integer multiple of it (within 1e-6 of a count), else robust std / 4096.
+[[nodiscard]] double derive_lsb(const std::vector<double>& y, std::string& note);
+
+[[nodiscard]] std::string to_json(const Report& r);
+[[nodiscard]] std::string to_text(const Report& r);
+/// CSV always (DIR/CHANNEL_adev.csv); SVG via gnuplot if found. message says what was written.
+[[nodiscard]] bool write_plots(const Report& r, const std::string& dir, std::string& message);
+
+/// `analyze FILE.mat --channel NAME [--fs HZ] [--json OUT] [--plots DIR]` (argv[0] = "analyze").
+/// Prints the text report on stdout; returns 0, or 2 with a one-line error on stderr.
+int cli_main(int argc, char** argv);
+
+}  // namespace imu::analyze
+
+#endif  // IMU_ANALYZE_ANALYZE_HPP

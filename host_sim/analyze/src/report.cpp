@@ -1,0 +1,241 @@
+// JSON, text report and plots of the analysis.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "imu/analyze/analyze.hpp"
+
+namespace imu::analyze {
+namespace {
+
+std::string num(double v) {
+  if (!std::isfinite(v)) {
+    return "null";
+  }
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+std::string quoted(const std::string& s) {
+  std::string o = "\"";
+  for (const char c : s) {
+    if (c == '"' || c == '\\') {
+      o += '\\';
+      o += c;
+    } else if (static_cast<unsigned char>(c) < 0x20) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
+      o += buf;
+    } else {
+      o += c;
+    }
+  }
+  return o + "\"";
+}
+
+std::string model_json(const ModelParams& p) {
+  std::ostringstream s;
+  s << "{\"n\": " << num(p.n) << ", \"q\": " << num(p.q) << ", \"gm\": [";
+  for (std::size_t i = 0; i < p.n_gm; ++i) {
+    s << (i > 0 ? ", " : "") << "{\"sb\": " << num(p.gm[i].sb) << ", \"tb_s\": "
+      << num(p.gm[i].tb_s) << "}";
+  }
+  s << "], \"k\": " << num(p.k) << ", \"r\": " << num(p.r) << ", \"sin_a\": " << num(p.sin_a)
+    << ", \"sin_f0_hz\": " << num(p.sin_f0_hz) << "}";
+  return s.str();
+}
+
+std::string error_json(const ErrorStats& e) {
+  std::ostringstream s;
+  s << "{\"adev_rms_rel\": " << num(e.adev_rms_rel) << ", \"adev_max_rel\": "
+    << num(e.adev_max_rel) << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": "
+    << num(e.tau_max_s) << ", \"n_taus\": " << e.n_taus << ", \"seed_range\": {\"adev_rms_rel\": "
+    << num(e.seed_rms_rel) << ", \"adev_max_rel\": " << num(e.seed_max_rel)
+    << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": " << num(e.seed_tau_max_s)
+    << "}, \"cost_sum_z2\": " << num(e.cost) << ", \"covariance_ratio\": " << num(e.cov_ratio)
+    << ", \"nis_mean\": " << num(e.nis_mean) << ", \"filter_states\": " << e.filter_states << "}";
+  return s.str();
+}
+
+std::string effect_json(const Effect& e) {
+  std::ostringstream s;
+  s << "{\"type\": " << quoted(e.type);
+  if (e.type == "quantization") {
+    s << ", \"Q\": " << num(e.q);
+  } else if (e.type == "rate_random_walk") {
+    s << ", \"K\": " << num(e.k);
+  } else if (e.type == "ramp") {
+    s << ", \"R\": " << num(e.r);
+  } else if (e.type == "sinusoid") {
+    s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"amplitude\": " << num(e.amplitude);
+  } else if (e.type == "bias_step") {
+    s << ", \"time_s\": " << num(e.time_s) << ", \"size\": " << num(e.size);
+  } else if (e.type == "outliers") {
+    s << ", \"count\": " << e.count;
+  }
+  s << ", \"statistic\": " << num(e.statistic) << ", \"threshold\": " << num(e.threshold) << "}";
+  return s.str();
+}
+
+double model_adev(const ModelParams& p, double tau) { return std::sqrt(model_avar(p, tau)); }
+
+}  // namespace
+
+std::string to_json(const Report& r) {
+  std::ostringstream s;
+  s << "{\n  \"channel\": " << quoted(r.channel) << ",\n  \"fs_hz\": " << num(r.fs_hz)
+    << ",\n  \"samples\": " << r.samples << ",\n  \"lsb\": " << num(r.lsb)
+    << ",\n  \"lsb_note\": " << quoted(r.lsb_note) << ",\n  \"adev\": [";
+  for (std::size_t i = 0; i < r.adev.size(); ++i) {
+    const AdevPoint& p = r.adev[i];
+    s << (i > 0 ? "," : "") << "\n    {\"tau_s\": " << num(p.tau_s) << ", \"adev\": "
+      << num(p.adev) << ", \"edf\": " << num(p.edf) << ", \"ci_lo\": " << num(p.ci_lo)
+      << ", \"ci_hi\": " << num(p.ci_hi) << "}";
+  }
+  s << "\n  ],\n  \"model_before\": " << model_json(r.model_before)
+    << ",\n  \"error_before\": " << error_json(r.error_before) << ",\n  \"effects\": [";
+  for (std::size_t i = 0; i < r.effects.size(); ++i) {
+    s << (i > 0 ? "," : "") << "\n    " << effect_json(r.effects[i]);
+  }
+  s << (r.effects.empty() ? "" : "\n  ") << "],\n  \"model_after\": " << model_json(r.model_after)
+    << ",\n  \"error_after\": " << error_json(r.error_after) << ",\n  \"notes\": [";
+  for (std::size_t i = 0; i < r.notes.size(); ++i) {
+    s << (i > 0 ? ", " : "") << quoted(r.notes[i]);
+  }
+  s << "],\n  \"seconds\": " << num(r.seconds) << "\n}\n";
+  return s.str();
+}
+
+std::string to_text(const Report& r) {
+  std::ostringstream s;
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "channel %s: %llu samples at %g Hz (%.1f s), %s\n",
+                r.channel.c_str(), static_cast<unsigned long long>(r.samples), r.fs_hz,
+                static_cast<double>(r.samples) / r.fs_hz, r.lsb_note.c_str());
+  s << buf;
+  const auto model_line = [&](const char* name, const ModelParams& p) {
+    std::snprintf(buf, sizeof buf, "%s: N = %.4e", name, p.n);
+    s << buf;
+    if (p.q > 0.0) {
+      std::snprintf(buf, sizeof buf, ", Q = %.4e", p.q);
+      s << buf;
+    }
+    for (std::size_t i = 0; i < p.n_gm; ++i) {
+      std::snprintf(buf, sizeof buf, ", GM Sb = %.4e Tb = %.1f s (peak ADEV %.3e)", p.gm[i].sb,
+                    p.gm[i].tb_s, kGmPeakAdevFactor * std::sqrt(p.gm[i].sb * p.gm[i].tb_s));
+      s << buf;
+    }
+    if (p.k > 0.0) {
+      std::snprintf(buf, sizeof buf, ", K = %.4e", p.k);
+      s << buf;
+    }
+    if (p.r > 0.0) {
+      std::snprintf(buf, sizeof buf, ", R = %.4e", p.r);
+      s << buf;
+    }
+    if (p.sin_a > 0.0) {
+      std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin_a, p.sin_f0_hz);
+      s << buf;
+    }
+    s << "\n";
+  };
+  const auto error_line = [&](const char* name, const ErrorStats& e) {
+    std::snprintf(buf, sizeof buf,
+                  "%s: |ADEV_model/ADEV_data - 1| RMS %.3f max %.3f over %zu taus [%.3g, %.4g] s;"
+                  " RMS %.3f max %.3f over [%.3g, %.4g] s; covariance ratio %.3f; NIS mean %.3f "
+                  "(%zu-state filter)\n",
+                  name, e.adev_rms_rel, e.adev_max_rel, e.n_taus, e.tau_min_s, e.tau_max_s,
+                  e.seed_rms_rel, e.seed_max_rel, e.tau_min_s, e.seed_tau_max_s, e.cov_ratio,
+                  e.nis_mean, e.filter_states);
+    s << buf;
+  };
+  model_line("model before (white + GM over [Ts, 100 s])", r.model_before);
+  error_line("error before", r.error_before);
+  if (r.effects.empty()) {
+    s << "effects: none (the first-order model explains the data within the intervals)\n";
+  }
+  for (const auto& e : r.effects) {
+    if (e.type == "quantization") {
+      std::snprintf(buf, sizeof buf, "effect quantization: Q = %.4e", e.q);
+    } else if (e.type == "rate_random_walk") {
+      std::snprintf(buf, sizeof buf, "effect rate_random_walk: K = %.4e", e.k);
+    } else if (e.type == "ramp") {
+      std::snprintf(buf, sizeof buf, "effect ramp: R = %.4e", e.r);
+    } else if (e.type == "sinusoid") {
+      std::snprintf(buf, sizeof buf, "effect sinusoid: f = %.6g Hz (period %.4g s), A = %.4e",
+                    e.freq_hz, 1.0 / e.freq_hz, e.amplitude);
+    } else if (e.type == "bias_step") {
+      std::snprintf(buf, sizeof buf, "effect bias_step: at t = %.1f s, size %.4e", e.time_s,
+                    e.size);
+    } else {
+      std::snprintf(buf, sizeof buf, "effect outliers: %llu samples",
+                    static_cast<unsigned long long>(e.count));
+    }
+    s << buf;
+    std::snprintf(buf, sizeof buf, " (statistic %.3g > threshold %.3g)\n", e.statistic,
+                  e.threshold);
+    s << buf;
+  }
+  model_line("model after (joint fit over [Ts, T/10])", r.model_after);
+  error_line("error after", r.error_after);
+  for (const auto& n : r.notes) {
+    s << "note: " << n << "\n";
+  }
+  std::snprintf(buf, sizeof buf, "analysis time %.2f s\n", r.seconds);
+  s << buf;
+  return s.str();
+}
+
+bool write_plots(const Report& r, const std::string& dir, std::string& message) {
+  const std::string base = dir + "/" + r.channel;
+  const std::string csv = base + "_adev.csv";
+  {
+    std::ofstream f(csv);
+    if (!f) {
+      message = "cannot write " + csv;
+      return false;
+    }
+    f << "tau_s,adev_raw,ci_lo_raw,ci_hi_raw,adev_clean,ci_lo_clean,ci_hi_clean,model_before,"
+         "model_after\n";
+    for (std::size_t i = 0; i < r.adev.size(); ++i) {
+      const AdevPoint& p = r.adev[i];
+      const AdevPoint& c = i < r.adev_clean.size() ? r.adev_clean[i] : p;
+      f << num(p.tau_s) << ',' << num(p.adev) << ',' << num(p.ci_lo) << ',' << num(p.ci_hi) << ','
+        << num(c.adev) << ',' << num(c.ci_lo) << ',' << num(c.ci_hi) << ','
+        << num(model_adev(r.model_before, p.tau_s)) << ','
+        << num(model_adev(r.model_after, p.tau_s)) << '\n';
+    }
+  }
+  message = "wrote " + csv;
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    message += "; gnuplot not found: no SVG (install gnuplot-nox)";
+    return true;
+  }
+  const std::string gp = base + "_adev.gp";
+  {
+    std::ofstream g(gp);
+    g << "set datafile separator ','\nset terminal svg size 900,600\nset logscale xy\n"
+         "set format y '%.0e'\nset grid\nset key bottom left\nset xlabel 'tau [s]'\n"
+         "set ylabel 'ADEV'\n";
+    g << "set output '" << base << "_before.svg'\n";
+    g << "set title '" << r.channel << ": before (white + GM over [Ts, 100 s]), band = 68 % interval'\n";
+    g << "plot '" << csv << "' skip 1 using 1:2:3:4 with yerrorbars title 'data ADEV', '' skip 1 "
+         "using 1:8 with lines lw 2 title 'model before'\n";
+    g << "set output '" << base << "_after.svg'\n";
+    g << "set title '" << r.channel << ": after (joint fit with the effects found)'\n";
+    g << "plot '" << csv << "' skip 1 using 1:5:6:7 with yerrorbars title 'data ADEV (cleaned)', "
+         "'' skip 1 using 1:9 with lines lw 2 title 'model after'\n";
+  }
+  const std::string cmd = "gnuplot '" + gp + "' 2>/dev/null";
+  if (std::system(cmd.c_str()) != 0) {
+    message += "; gnuplot failed on " + gp;
+    return true;
+  }
+  message += ", " + base + "_before.svg, " + base + "_after.svg";
+  return true;
+}
+
+}  // namespace imu::analyze

@@ -1,0 +1,96 @@
+// imu::analyze::cli_main on a synthetic MAT file: text report, JSON keys, plots, bad input.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "imu/analyze/analyze.hpp"
+#include "imu/analyze/synth.hpp"
+#include "imu/mat/mat_writer.hpp"
+
+namespace {
+
+std::string tmp_path(const std::string& name) {
+  return std::string(::testing::TempDir()) + "imu_analyze_" + name;
+}
+
+int call(std::vector<std::string> args) {
+  std::vector<char*> argv;
+  for (auto& a : args) {
+    argv.push_back(a.data());
+  }
+  return imu::analyze::cli_main(static_cast<int>(argv.size()), argv.data());
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+class AnalyzeCli : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    imu::analyze::SynthSpec s;
+    s.samples = 200000;  // 2000 s: short enough for a unit test
+    s.seed = 7;
+    s.n_outliers = 10;
+    s.outlier_size = 0.4;
+    const std::vector<double> y = imu::analyze::synthesize(s);
+    ASSERT_EQ(y.size(), s.samples);
+    // Stored as exact multiples of an LSB, like the ADIS16405 files.
+    constexpr double kLsb = 1e-4;
+    std::vector<double> q(y.size());
+    for (std::size_t i = 0; i < y.size(); ++i) {
+      q[i] = std::round(y[i] / kLsb) * kLsb;
+    }
+    imu::mat::MatWriter w;
+    ASSERT_TRUE(w.add_column("acc_x", q).ok());
+    ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
+    ASSERT_TRUE(w.add_scalar("acc_lsb", kLsb).ok());
+    mat_ = tmp_path("in.mat");
+    std::ofstream f(mat_, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(w.bytes().data()),
+            static_cast<std::streamsize>(w.bytes().size()));
+    ASSERT_TRUE(f.good());
+  }
+  std::string mat_;
+};
+
+TEST_F(AnalyzeCli, WritesJsonWithTheFixedKeys) {
+  const std::string json = tmp_path("out.json");
+  ASSERT_EQ(call({"analyze", mat_, "--channel", "acc_x", "--json", json}), 0);
+  const std::string j = slurp(json);
+  for (const char* key : {"\"channel\"", "\"fs_hz\"", "\"samples\"", "\"adev\"", "\"model_before\"",
+                          "\"error_before\"", "\"effects\"", "\"model_after\"", "\"error_after\"",
+                          "\"tau_s\"", "\"edf\"", "\"ci_lo\"", "\"ci_hi\"", "\"adev_rms_rel\"",
+                          "\"adev_max_rel\"", "\"tau_min_s\"", "\"tau_max_s\""}) {
+    EXPECT_NE(j.find(key), std::string::npos) << key;
+  }
+  EXPECT_NE(j.find("\"samples\": 200000"), std::string::npos);
+  // The 10 spikes of 0.4 (12 sigma of the white noise) are the only effect.
+  EXPECT_NE(j.find("{\"type\": \"outliers\", \"count\": 10,"), std::string::npos) << j;
+  EXPECT_NE(j.find("LSB from the file"), std::string::npos);
+}
+
+TEST_F(AnalyzeCli, WritesCsvPlot) {
+  const std::string dir = ::testing::TempDir();
+  ASSERT_EQ(call({"analyze", mat_, "--channel", "acc_x", "--plots", dir}), 0);
+  const std::string csv = slurp(dir + "/acc_x_adev.csv");
+  EXPECT_EQ(csv.rfind("tau_s,adev_raw,", 0), 0U);
+}
+
+TEST_F(AnalyzeCli, BadInputGivesNonZeroExit) {
+  EXPECT_NE(call({"analyze"}), 0);
+  EXPECT_NE(call({"analyze", mat_}), 0);  // no --channel
+  EXPECT_NE(call({"analyze", mat_, "--channel", "nope"}), 0);
+  EXPECT_NE(call({"analyze", tmp_path("missing.mat"), "--channel", "acc_x"}), 0);
+  EXPECT_NE(call({"analyze", mat_, "--channel", "acc_x", "--fs", "-3"}), 0);
+  EXPECT_NE(call({"analyze", mat_, "--channel", "acc_x", "--bogus"}), 0);
+}
+
+}  // namespace

@@ -1,0 +1,35 @@
+// Threshold tuning and exploration (not a test): runs the synthetic cases on seeds given on the
+// command line (tuning seeds are >= 1000, the tests use 1..5) and prints the effects found.
+// usage: tune_analyze CASE SEED_FIRST SEED_COUNT [SAMPLES]
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+
+#include "imu/analyze/analyze.hpp"
+#include "imu/analyze/synth.hpp"
+#include "synth_cases.hpp"
+
+int main(int argc, char** argv) {
+  if (argc < 4) {
+    std::fprintf(stderr, "usage: tune_analyze CASE SEED_FIRST SEED_COUNT [SAMPLES]\n");
+    return 2;
+  }
+  const std::string name = argv[1];
+  const auto first = std::strtoull(argv[2], nullptr, 10);
+  const auto count = std::strtoull(argv[3], nullptr, 10);
+  for (unsigned long long s = first; s < first + count; ++s) {
+    imu::analyze::SynthSpec spec = imu::analyze::test::make_case(name, s);
+    if (argc > 4) {
+      spec.samples = std::strtoull(argv[4], nullptr, 10);
+    }
+    const std::vector<double> y = imu::analyze::synthesize(spec);
+    imu::analyze::Report r;
+    std::string err;
+    if (!imu::analyze::analyze(y, name, imu::analyze::Options{}, r, err)) {
+      std::fprintf(stderr, "%s\n", err.c_str());
+      return 1;
+    }
+    std::printf("== %s seed %llu ==\n%s", name.c_str(), s, imu::analyze::to_text(r).c_str());
+  }
+  return 0;
+}
