@@ -17,9 +17,7 @@
 #include "run.hpp"
 
 #ifdef IMU_HAVE_ANALYZE
-namespace imu::analyze {
-int cli_main(int argc, char** argv);  // host_sim/analyze (issue 6)
-}  // namespace imu::analyze
+#include "imu/analyze/analyze.hpp"  // imu::analyze::cli_main (host_sim/analyze, issue 6)
 #endif
 
 namespace imu::sim {
@@ -38,7 +36,7 @@ constexpr const char* kUsage =
     "  run --mat FILE [--channel acc_z] [--bus loopback|vcan0|can0] [--rate max|realtime]\n"
     "      [--node inproc|spawn|external] [--out DIR] [--json FILE] [--N --B --Tp [--K]]\n"
     "      [--no-plots] [--quiet] [--T-avg 10] [--T-int 20] [--sim-windows 1000] [--seed 2]\n"
-    "      [--timeout 30] [--window 4096] [--layout fd|classic] [--only-channel] [--fw PATH]\n"
+    "      [--timeout 30] [--window 4096] [--layout auto|fd|classic] [--only-channel] [--fw PATH]\n"
     "        sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON,\n"
     "        CSV, SVG/PNG plots in DIR, default out/run)\n"
     "  analyze ...   (host_sim/analyze)\n";

@@ -28,7 +28,7 @@ extern "C" void on_signal(int /*sig*/) { g_stop.store(true); }
 constexpr const char* kFwUsage =
     "usage: imu-fw --bus loopback[:NAME]|vcan0|can0 [--gpio-chip CHIP --static-line NAME\n"
     "              --alarm-line NAME] [--N 3.3e-3 --B 9e-4 --Tp 300] [--gyro-N 5.8e-4\n"
-    "              --gyro-B 1.2e-4 --gyro-Tp 300] [--listen-only] [--layout fd|classic]\n"
+    "              --gyro-B 1.2e-4 --gyro-Tp 300] [--listen-only] [--layout auto|fd|classic]\n"
     "              [--idle-ms 200] [--exit-idle-s S] [--status-period 100]\n"
     "              [--adev-period 6000] [--init-samples 1000] [--quiet]\n"
     "Runs until the stream ends: the loopback peer closes, or (CAN) no frame for --exit-idle-s\n"
@@ -82,11 +82,11 @@ int fw_main(int argc, char** argv) {
     const double* p = c < 3 ? v : v + 3;
     nc.model[c] = node::ChannelModel{p[0], p[1], p[2]};
   }
-  const std::string layout = a.get("--layout", "fd");
-  if (layout != "fd" && layout != "classic") {
-    return fail(kCmd, "--layout must be fd or classic", 2);
+  const std::string layout = a.get("--layout", "auto");
+  if (layout != "fd" && layout != "classic" && layout != "auto") {
+    return fail(kCmd, "--layout must be auto, fd or classic", 2);
   }
-  nc.layout = layout == "fd" ? hal::Layout::kFd : hal::Layout::kClassic;
+  nc.layout = layout == "classic" ? hal::Layout::kClassic : hal::Layout::kFd;
   nc.telemetry = !a.has("--listen-only");
   nc.status_period_samples = static_cast<std::uint32_t>(status_p);
   nc.adev_period_samples = static_cast<std::uint32_t>(adev_p);
@@ -129,6 +129,9 @@ int fw_main(int argc, char** argv) {
   hal::CanSocket sock;
   if (sock.open(bus.c_str()) != hal::IoStatus::kOk) {
     return fail(kCmd, std::string("cannot open bus: ") + sock.error());
+  }
+  if (layout == "auto" && !sock.fd_capable()) {
+    nc.layout = hal::Layout::kClassic;  // CAN interface with MTU 16: classic frames only
   }
   auto nd = std::make_unique<node::Node>();
   if (nd->configure(nc, sock, static_in, alarm_out) != node::NodeStatus::kOk) {

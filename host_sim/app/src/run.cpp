@@ -286,11 +286,11 @@ int cmd_run(int argc, char** argv) {
   if (node_mode != "inproc" && node_mode != "spawn" && node_mode != "external") {
     return fail(kCmd, "--node must be inproc, spawn or external", 2);
   }
-  const std::string layout_s = a.get("--layout", "fd");
-  if (layout_s != "fd" && layout_s != "classic") {
-    return fail(kCmd, "--layout must be fd or classic", 2);
+  std::string layout_s = a.get("--layout", "auto");
+  if (layout_s != "fd" && layout_s != "classic" && layout_s != "auto") {
+    return fail(kCmd, "--layout must be auto, fd or classic", 2);
   }
-  const hal::Layout layout = layout_s == "fd" ? hal::Layout::kFd : hal::Layout::kClassic;
+  hal::Layout layout = layout_s == "classic" ? hal::Layout::kClassic : hal::Layout::kFd;
   const std::string out_dir = a.get("--out", "out/run");
   ReportOptions ro;
   ro.out_dir = out_dir;
@@ -352,7 +352,6 @@ int cmd_run(int argc, char** argv) {
   pid_t child = -1;
   std::string bus_used = bus;
   node::NodeConfig nc;
-  nc.layout = layout;
   if (ro.given_model) {
     const std::size_t first = chan < 3 ? 0 : 3;
     for (std::size_t c = first; c < first + 3; ++c) {
@@ -375,6 +374,10 @@ int cmd_run(int argc, char** argv) {
       return fail(kCmd, std::string("cannot open bus: ") +
                             (sock.error()[0] != '\0' ? sock.error() : inproc->sock.error()));
     }
+    if (layout_s == "auto" && !sock.fd_capable()) {
+      layout = hal::Layout::kClassic;  // CAN interface with MTU 16: classic frames only
+    }
+    nc.layout = layout;
     if (inproc->node.configure(nc, inproc->sock, &inproc->static_line, &inproc->alarm_line) !=
         node::NodeStatus::kOk) {
       return fail(kCmd, "node configuration rejected (model parameters)");
@@ -387,6 +390,10 @@ int cmd_run(int argc, char** argv) {
     if (sock.open(bus_used.c_str()) != hal::IoStatus::kOk) {
       return fail(kCmd, std::string("cannot open bus: ") + sock.error());
     }
+    if (layout_s == "auto" && !sock.fd_capable()) {
+      layout = hal::Layout::kClassic;  // CAN interface with MTU 16: classic frames only
+    }
+    layout_s = layout == hal::Layout::kFd ? "fd" : "classic";
     if (node_mode == "spawn") {
       const std::string fw = a.get("--fw", self_dir() + "/imu-fw");
       if (access(fw.c_str(), X_OK) != 0) {
