@@ -2,7 +2,7 @@
 """Independent check of the MAT v5 writer: run mat_writer_sample, then parse its files with the
 standard library only (struct + zlib) and compare with the values the sample writes.
 
-    python3 check_mat_writer.py <path to mat_writer_sample> <scratch dir>
+    python3 check_mat_writer.py <scratch dir> [emulator args...] <path to mat_writer_sample>
 
 Exit status 0 when both files (plain and compressed) hold exactly acc_z = 0.5 i - 3
 (i = 0..99999, 100000 x 1 double), fs = 100 (1 x 1 double) and units = "m/s^2" (1 x 5 char).
@@ -65,9 +65,9 @@ def parse(path):
     return out
 
 
-def main(exe, scratch):
+def main(scratch, command):
     os.makedirs(scratch, exist_ok=True)
-    subprocess.run([exe, scratch], check=True)
+    subprocess.run(command + [scratch], check=True)
     for f in ("writer_plain.mat", "writer_compressed.mat"):
         v = parse(os.path.join(scratch, f))
         if sorted(v) != ["acc_z", "fs", "units"]:
@@ -86,4 +86,4 @@ def main(exe, scratch):
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2])
+    main(sys.argv[1], sys.argv[2:])
