@@ -73,6 +73,12 @@ TEST(NoiseSim, UnconfiguredSimulatorReturnsZeroAndBadModelIsRejected) {
   EXPECT_NEAR(sim.next(), 0.0, 0.0);
   imu::DiscreteModel<1> d;  // ts_s = 0
   EXPECT_EQ(sim.configure(d, 1), imu::ModelStatus::kBadParameter);
+  imu::OnlineAdev<8, 22> adev(0.01, 1e-6);
+  EXPECT_EQ(imu::simulate_adev(d, 1, 10, 1e-6, adev).status, imu::ModelStatus::kBadParameter);
+  d.ts_s = 0.01;
+  d.r_white = 1.0;
+  EXPECT_EQ(imu::simulate_adev(d, 1, 10, 0.0, adev).status, imu::ModelStatus::kBadParameter);
+  EXPECT_EQ(adev.samples(), 0U);  // nothing pushed on failure
 }
 
 TEST(NoiseSim, SimulatedAdevMatchesTheAnalyticSumOfTerms) {
@@ -85,13 +91,13 @@ TEST(NoiseSim, SimulatedAdevMatchesTheAnalyticSumOfTerms) {
   ASSERT_EQ(c.add_rrw(1.3e-4), imu::ModelStatus::kOk);
   imu::DiscreteModel<6> d;
   ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
-  imu::ModelSimulator<6> sim;
-  ASSERT_EQ(sim.configure(d, 2024), imu::ModelStatus::kOk);
   constexpr double kLsb = 1e-6;
   imu::OnlineAdev<8, 22> adev(0.01, kLsb);
-  for (int i = 0; i < 1000000; ++i) {
-    adev.push(imu::quantize(sim.next(), kLsb).counts);
-  }
+  const imu::SimAdevResult sr = imu::simulate_adev(d, 2024, 1000000, kLsb, adev);
+  ASSERT_EQ(sr.status, imu::ModelStatus::kOk);
+  EXPECT_EQ(sr.samples, 1000000U);
+  EXPECT_EQ(sr.saturated, 0U);
+  EXPECT_EQ(adev.samples(), 1000000U);
   imu::AdevPoint pts[imu::OnlineAdev<8, 22>::kMaxPoints];
   const std::size_t n = adev.snapshot(pts, imu::OnlineAdev<8, 22>::kMaxPoints);
   std::size_t inside = 0;

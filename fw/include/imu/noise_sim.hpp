@@ -10,6 +10,8 @@
 // x_{k+1} = Phi x_k + L_Q e_k (L_Q L_Q^T = Qd), x_0 ~ N(0, P0). Quantization is simulated
 // exactly as the first difference of white phase noise. Cost per sample: O(n^2) multiply-adds
 // and n + 2 normal draws. No heap; not re-entrant on one instance.
+//
+// simulate_adev(): the model's ADEV by simulation, through the online estimator.
 #ifndef IMU_NOISE_SIM_HPP
 #define IMU_NOISE_SIM_HPP
 
@@ -18,6 +20,7 @@
 
 #include "imu/error_model.hpp"
 #include "imu/linalg.hpp"
+#include "imu/online_adev.hpp"
 
 namespace imu {
 
@@ -81,6 +84,39 @@ class ModelSimulator {
   double white_sd_ = 0.0;
   bool configured_ = false;
 };
+
+/// Result of simulate_adev().
+struct SimAdevResult {
+  ModelStatus status = ModelStatus::kOk;
+  std::uint64_t samples = 0;    ///< pushed into the estimator
+  std::uint64_t saturated = 0;  ///< samples that did not fit in int32 counts (clamped)
+};
+
+/// The model's ADEV by simulation: n_samples of `model` (seed `seed`) quantized with `lsb`
+/// (imu::quantize) and pushed into `adev` (which the caller has configured with the model's Ts
+/// and the same lsb; read it with adev.snapshot()). Cost O(n_samples n^2). No heap.
+template <std::size_t kMaxStates, std::size_t M, std::size_t L>
+[[nodiscard]] SimAdevResult simulate_adev(const DiscreteModel<kMaxStates>& model,
+                                          std::uint64_t seed, std::uint64_t n_samples,
+                                          double lsb, OnlineAdev<M, L>& adev) {
+  SimAdevResult r;
+  ModelSimulator<kMaxStates> sim;
+  r.status = sim.configure(model, seed);
+  if (r.status != ModelStatus::kOk) {
+    return r;
+  }
+  if (!(lsb > 0.0)) {
+    r.status = ModelStatus::kBadParameter;
+    return r;
+  }
+  for (std::uint64_t i = 0; i < n_samples; ++i) {
+    const QuantizeResult q = quantize(sim.next(), lsb);
+    r.saturated += q.saturated ? 1U : 0U;
+    adev.push(q.counts);
+  }
+  r.samples = n_samples;
+  return r;
+}
 
 }  // namespace imu
 
