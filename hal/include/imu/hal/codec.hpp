@@ -78,6 +78,16 @@ inline constexpr std::uint32_t kIdMonitorFd = 0x220;
 inline constexpr std::uint32_t kIdStatsFd = 0x230;
 
 inline constexpr std::size_t kChannels = 6;  ///< ax, ay, az (accelerometer), gx, gy, gz (gyro)
+
+// Recommended LSBs (hal/README.md, "Resolution and range"). Counts are int32 per channel and
+// the LSB of each channel travels in the ConfigRecord, so any of these can be used:
+/// ADIS16405 native resolution (3.33 mg, 0.05 deg/s): the sensor's counts travel unchanged.
+inline constexpr double kAdisAccLsb_mps2 = 0.00333 * 9.80665;
+inline constexpr double kAdisGyroLsb_rps = 0.05 * 3.14159265358979323846 / 180.0;
+/// For double-precision records (simulation, other sensors): range +-219 g and
+/// +-12,300 deg/s in int32; quantisation noise LSB/sqrt(12) = 2.9e-7 m/s^2 and 2.9e-8 rad/s.
+inline constexpr double kFineAccLsb_mps2 = 1e-6;
+inline constexpr double kFineGyroLsb_rps = 1e-7;
 inline constexpr std::size_t kClassicPayload = 7;  ///< record bytes per classic frame
 inline constexpr std::size_t kMaxRecordLen = 64;
 inline constexpr std::size_t kMaxFragments = 10;   ///< ceil(64 / 7)
