@@ -59,8 +59,9 @@ RefPoint brute_avar(const std::vector<std::int32_t>& y, const std::vector<bool>&
     return {0.0, 0};
   }
   const auto afl = static_cast<long double>(af);
-  return {static_cast<double>(static_cast<long double>(lsb) * lsb * sum / (2 * afl * afl * terms)),
-          terms};
+  const auto lsbl = static_cast<long double>(lsb);
+  const auto terms_l = static_cast<long double>(terms);
+  return {static_cast<double>(lsbl * lsbl * sum / (2 * afl * afl * terms_l)), terms};
 }
 
 std::vector<imu::AdevPoint> snap(const Adev& a) {
