@@ -201,4 +201,30 @@ TEST(BiasKf, ThreeStateFloatFilterIsConsistentOnSimulatedData) {
   }
 }
 
+TEST(BiasKf, CovarianceOfAnUnobservedRandomWalkIsCappedAndStaysPsd) {
+  // GM + RRW, never static: the RRW variance grows by K^2 Ts per sample without bound; the cap
+  // (1e6 x the largest initial/per-step variance = 1e6 x 1e-2) must hold it, and the capped P
+  // must stay positive semi-definite (2x2: diagonals >= 0, determinant >= 0).
+  imu::ContinuousModel<6> c;
+  ASSERT_EQ(c.add_white(1e-2), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_gauss_markov(1e-4, 10.0), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_rrw(1.0), imu::ModelStatus::kOk);  // K^2 Ts = 1e-2 per sample
+  imu::DiscreteModel<6> d;
+  ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
+  imu::KalmanFilter<double, 2> kf;
+  ASSERT_EQ(kf.configure(d), imu::KfStatus::kOk);
+  // A few updates first so that P has off-diagonal terms (the states are correlated through z).
+  for (int i = 0; i < 100; ++i) {
+    (void)kf.step(0.0, true);
+  }
+  for (int i = 0; i < 1200000; ++i) {  // 1.2e6 x 1e-2 = 1.2e4 > cap 1e4 (GM prior 5e-4)
+    (void)kf.step(0.0, false);
+  }
+  const auto& p = kf.covariance();
+  EXPECT_GT(kf.stats().covariance_capped, 0U);
+  EXPECT_LE(p(1, 1), 1e4 * (1.0 + 1e-12));  // the cap, up to the rounding of the scaling
+  EXPECT_GE(p(0, 0), 0.0);
+  EXPECT_GE(p(0, 0) * p(1, 1) - p(0, 1) * p(1, 0), -1e-12 * p(0, 0) * p(1, 1));
+}
+
 }  // namespace

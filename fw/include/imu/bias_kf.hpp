@@ -10,8 +10,9 @@
 // units) is a parameter: set_known_signal(). R is DiscreteModel::r_filter(): white noise plus the
 // quantization MA(1) variance treated as white (error_model.hpp explains the approximation).
 // Non-finite z is not used (counted in stats.rejected_nonfinite, prediction still done).
-// Diagonal entries of P are floored at 0 and capped at p_max (stats counters), so P stays
-// positive and bounded even if the model were inconsistent.
+// Diagonal entries of P are floored at 0 and capped at p_max (stats counters; the n-state
+// filter caps by scaling row and column, which keeps P positive semi-definite), so P stays
+// positive and bounded even for a random-walk state that is never observed.
 //
 // Float accuracy: the model is discretised in double and rounded to T once. Per-sample rounding
 // in float is ~6e-8 relative; the filter is stable (|Phi (1 - K H)| < 1) so errors do not
@@ -220,7 +221,13 @@ class KalmanFilter {
         p_(i, i) = T(0);
         ++stats_.covariance_floored;
       } else if (p_(i, i) > p_max_) {
-        p_(i, i) = p_max_;
+        // Scale row and column i by s = sqrt(p_max / P_ii): D P D with D > 0 diagonal keeps P
+        // positive semi-definite (clipping only the diagonal would not).
+        const T sc = std::sqrt(p_max_ / p_(i, i));
+        for (std::size_t j = 0; j < N; ++j) {
+          p_(i, j) *= sc;
+          p_(j, i) *= sc;
+        }
         ++stats_.covariance_capped;
       }
     }
