@@ -8,7 +8,11 @@
 #include <cstdlib>
 #include <new>
 
+#include "imu/bias_kf.hpp"
+#include "imu/error_model.hpp"
+#include "imu/model_fit.hpp"
 #include "imu/online_adev.hpp"
+#include "imu/residual_monitor.hpp"
 
 namespace {
 std::atomic<std::uint64_t> g_allocs{0};
@@ -38,7 +42,7 @@ void operator delete(void* p, std::size_t /*size*/) noexcept { std::free(p); }
 
 namespace {
 
-TEST(FwNoAlloc, MillionUpdatesAllocateNothing) {
+TEST(FwNoAlloc, MillionUpdatesFilterAndFitAllocateNothing) {
   // The counter must work: one deliberate allocation is seen.
   g_counting = true;
   int* volatile probe = new int(1);
@@ -62,8 +66,28 @@ TEST(FwNoAlloc, MillionUpdatesAllocateNothing) {
     }
     imu::AdevPoint pts[imu::OnlineAdev<8, 22>::kMaxPoints];
     const std::size_t n = adev.channel(0).snapshot(pts, std::size(pts));
-    g_counting = false;
     EXPECT_GT(n, 50U);
+
+    // The rest of what the co-processor runs: seed model, float bias filter and monitors per
+    // sample, and the fit of the model to the ADEV.
+    imu::FirstOrderGm gm{};
+    ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, gm), imu::ModelStatus::kOk);
+    imu::ScalarBiasKf<float> kf;
+    ASSERT_EQ(kf.configure(gm, 9.81), imu::KfStatus::kOk);
+    imu::ResidualMonitors<4> mon;
+    ASSERT_EQ(mon.configure(), imu::MonitorStatus::kOk);
+    for (int i = 0; i < 1000000; ++i) {
+      const auto s = kf.step(9.81F + 0.03F * static_cast<float>((i % 201) - 100) / 100.0F,
+                             (i / 1000) % 2 == 0);
+      if (s.updated) {
+        mon.push(s.innovation, s.innovation_var);
+      }
+    }
+    imu::FitOptions opt;
+    opt.tau_max_s = 100.0;
+    const imu::FitResult fr = imu::fit(pts, n, opt);
+    g_counting = false;
+    EXPECT_EQ(fr.status, imu::FitStatus::kOk);
   }
   g_counting = false;
   EXPECT_EQ(g_allocs.load(), 0U);
