@@ -4,7 +4,7 @@ standard library only (struct + zlib) and compare with the values the sample wri
 
     python3 check_mat_writer.py <scratch dir> [emulator args...] <path to mat_writer_sample>
 
-Exit status 0 when both files (plain and compressed) hold exactly acc_z = 0.5 i - 3
+Exit status 0 when the three files (plain, fixed-Huffman compressed, stored) hold exactly acc_z = 0.5 i - 3
 (i = 0..99999, 100000 x 1 double), fs = 100 (1 x 1 double) and units = "m/s^2" (1 x 5 char).
 """
 import os
@@ -68,7 +68,7 @@ def parse(path):
 def main(scratch, command):
     os.makedirs(scratch, exist_ok=True)
     subprocess.run(command + [scratch], check=True)
-    for f in ("writer_plain.mat", "writer_compressed.mat"):
+    for f in ("writer_plain.mat", "writer_compressed.mat", "writer_stored.mat"):
         v = parse(os.path.join(scratch, f))
         if sorted(v) != ["acc_z", "fs", "units"]:
             fail("%s: variables %r" % (f, sorted(v)))

@@ -54,7 +54,7 @@ TEST(MatWriter, ScalarBytesMatchTheFormatByHand) {
 }
 
 TEST(MatWriter, CompressedScalarIsAStoredZlibStream) {
-  MatWriter w(WriterOptions{true});
+  MatWriter w(WriterOptions{true, imu::mat::Deflate::stored});
   ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
   const Bytes& b = w.bytes();
   // miCOMPRESSED tag, zlib header 78 01, one final stored block of 64 bytes, Adler-32.
@@ -68,7 +68,8 @@ TEST(MatWriter, CompressedScalarIsAStoredZlibStream) {
   EXPECT_EQ(b[141], 0xFF - 64U);  // NLEN low byte
 }
 
-class WriterRoundTrip : public ::testing::TestWithParam<bool> {};
+// (compress, deflate) combinations.
+class WriterRoundTrip : public ::testing::TestWithParam<WriterOptions> {};
 
 TEST_P(WriterRoundTrip, ReaderGetsBackEveryValue) {
   std::vector<double> acc(1000);
@@ -77,7 +78,7 @@ TEST_P(WriterRoundTrip, ReaderGetsBackEveryValue) {
   }
   acc[3] = -0.0;
   acc[4] = 1e-310;  // subnormal survives
-  MatWriter w(WriterOptions{GetParam()});
+  MatWriter w(GetParam());
   ASSERT_TRUE(w.add_column("acc_z", acc).ok());
   ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
   ASSERT_TRUE(w.add_string("units", "m/s^2").ok());
@@ -104,10 +105,19 @@ TEST_P(WriterRoundTrip, ReaderGetsBackEveryValue) {
   const auto list = f.value().list_variables();
   ASSERT_TRUE(list.ok());
   ASSERT_EQ(list.value().size(), 5U);
-  EXPECT_EQ(list.value()[0].compressed, GetParam());
+  EXPECT_EQ(list.value()[0].compressed, GetParam().compress);
 }
 
-INSTANTIATE_TEST_SUITE_P(Mat, WriterRoundTrip, ::testing::Values(false, true));
+INSTANTIATE_TEST_SUITE_P(
+    Mat, WriterRoundTrip,
+    ::testing::Values(WriterOptions{false, imu::mat::Deflate::fixed_huffman},
+                      WriterOptions{true, imu::mat::Deflate::fixed_huffman},
+                      WriterOptions{true, imu::mat::Deflate::stored}),
+    [](const ::testing::TestParamInfo<WriterOptions>& i) {
+      return !i.param.compress ? std::string("plain")
+             : i.param.deflate == imu::mat::Deflate::stored ? std::string("stored")
+                                                             : std::string("fixed_huffman");
+    });
 
 TEST(MatWriter, SaveAndReadBackFromDisk) {
   const std::string path = ::testing::TempDir() + "imu_mat_writer_test.mat";

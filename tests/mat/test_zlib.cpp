@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstring>
 #include <cstdint>
 #include <fstream>
 #include <iterator>
@@ -299,6 +300,47 @@ TEST(Zlib, StoreRoundTrips) {
     EXPECT_EQ(r.in_consumed, z.size());
     EXPECT_EQ(out, data);
   }
+}
+
+TEST(Zlib, FixedCompressorRoundTrips) {
+  std::vector<Bytes> inputs;
+  inputs.emplace_back();                 // empty
+  inputs.emplace_back(1, 0x42);          // one byte
+  inputs.emplace_back(100000, 'a');      // long runs: overlapping distance-1 matches of 258
+  Bytes noise(70000);
+  std::uint32_t x = 12345U;
+  for (auto& b : noise) {
+    x = x * 1664525U + 1013904223U;
+    b = static_cast<std::uint8_t>(x >> 24U);  // LCG: hardly any matches, 8/9-bit literals
+  }
+  inputs.push_back(noise);
+  Bytes imu;  // quantised doubles: 8-byte patterns at distances that are multiples of 8
+  for (int i = 0; i < 40000; ++i) {
+    x = x * 1664525U + 1013904223U;
+    const double v = -9.81 + 0.0326561445 * static_cast<double>(static_cast<int>(x >> 29U) - 4);
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &v, 8);
+    for (unsigned k = 0; k < 8U; ++k) {
+      imu.push_back(static_cast<std::uint8_t>(bits >> (8U * k)));
+    }
+  }
+  inputs.push_back(imu);
+  for (const Bytes& in : inputs) {
+    SCOPED_TRACE(in.size());
+    for (const unsigned chain : {0U, 1U, 32U}) {
+      const Bytes z = imu::mat::zlib_compress_fixed(in.data(), in.size(), chain);
+      ASSERT_GE(z.size(), 3U);
+      EXPECT_EQ(z[2] & 7U, 3U);  // BFINAL = 1, BTYPE = 01 (fixed Huffman)
+      Bytes out;
+      const auto r = imu::mat::inflate_zlib(z.data(), z.size(), in.size(), InflateMode::whole, out);
+      ASSERT_EQ(r.status, InflateStatus::ok) << imu::mat::describe(r.status);
+      EXPECT_EQ(r.in_consumed, z.size());
+      EXPECT_EQ(out, in);
+    }
+  }
+  // Matching pays off: 'a' runs cost ~1 bit per 100 bytes, IMU-like doubles shrink > 3x.
+  EXPECT_LT(imu::mat::zlib_compress_fixed(inputs[2].data(), inputs[2].size()).size(), 1000U);
+  EXPECT_LT(imu::mat::zlib_compress_fixed(imu.data(), imu.size()).size(), imu.size() / 3U);
 }
 
 TEST(Zlib, SizeBoundFormula) {

@@ -123,7 +123,9 @@ Status MatWriter::check_name(std::string_view name) const {
 
 void MatWriter::append_variable(std::vector<std::uint8_t>& element) {
   if (options_.compress) {
-    const std::vector<std::uint8_t> z = zlib_store(element.data(), element.size());
+    const std::vector<std::uint8_t> z = options_.deflate == Deflate::stored
+                                            ? zlib_store(element.data(), element.size())
+                                            : zlib_compress_fixed(element.data(), element.size());
     put_u32(bytes_, kMiCompressed);
     put_u32(bytes_, static_cast<std::uint32_t>(z.size()));
     bytes_.insert(bytes_.end(), z.begin(), z.end());  // miCOMPRESSED is not padded

@@ -585,4 +585,151 @@ std::vector<std::uint8_t> zlib_store(const std::uint8_t* data, std::size_t size)
   return z;
 }
 
+namespace {
+
+// Deflate bit output: fields LSB first; Huffman codes are passed already bit-reversed.
+class BitSink {
+ public:
+  explicit BitSink(std::vector<std::uint8_t>& out) : out_(out) {}
+  void put(std::uint32_t value, unsigned n) {
+    buf_ |= static_cast<std::uint64_t>(value) << cnt_;
+    cnt_ += n;
+    while (cnt_ >= 8U) {
+      out_.push_back(static_cast<std::uint8_t>(buf_ & 0xFFU));
+      buf_ >>= 8U;
+      cnt_ -= 8U;
+    }
+  }
+  void flush() {
+    if (cnt_ > 0U) {
+      out_.push_back(static_cast<std::uint8_t>(buf_ & 0xFFU));
+    }
+    buf_ = 0;
+    cnt_ = 0;
+  }
+
+ private:
+  std::vector<std::uint8_t>& out_;
+  std::uint64_t buf_ = 0;
+  unsigned cnt_ = 0;
+};
+
+std::uint32_t reverse_bits(std::uint32_t code, unsigned n) {
+  std::uint32_t r = 0;
+  for (unsigned i = 0; i < n; ++i) {
+    r |= ((code >> i) & 1U) << (n - 1U - i);
+  }
+  return r;
+}
+
+// Fixed literal/length code of symbol s (RFC 1951 3.2.6), written MSB first.
+void put_fixed_litlen(BitSink& bs, unsigned s) {
+  if (s < 144U) {
+    bs.put(reverse_bits(0x30U + s, 8), 8);
+  } else if (s < 256U) {
+    bs.put(reverse_bits(0x190U + (s - 144U), 9), 9);
+  } else if (s < 280U) {
+    bs.put(reverse_bits(s - 256U, 7), 7);
+  } else {
+    bs.put(reverse_bits(0xC0U + (s - 280U), 8), 8);
+  }
+}
+
+void put_match(BitSink& bs, std::size_t len, std::size_t dist) {
+  std::size_t ls = kLenBase.size() - 1U;  // 258 -> symbol 285; 227..257 -> 284
+  while (kLenBase[ls] > len) {
+    --ls;
+  }
+  put_fixed_litlen(bs, 257U + static_cast<unsigned>(ls));
+  bs.put(static_cast<std::uint32_t>(len - kLenBase[ls]), kLenExtra[ls]);
+  std::size_t ds = kDistBase.size() - 1U;
+  while (kDistBase[ds] > dist) {
+    --ds;
+  }
+  bs.put(reverse_bits(static_cast<std::uint32_t>(ds), 5), 5);
+  bs.put(static_cast<std::uint32_t>(dist - kDistBase[ds]), kDistExtra[ds]);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> zlib_compress_fixed(const std::uint8_t* data, std::size_t size,
+                                              unsigned max_chain) {
+  constexpr std::size_t kWindow = 32768U;
+  constexpr std::size_t kMaxMatch = 258U;
+  constexpr unsigned kHashBits = 15U;
+  constexpr std::uint32_t kNone = 0xFFFFFFFFU;
+  std::vector<std::uint8_t> z;
+  z.reserve(size / 4U + 64U);
+  z.push_back(0x78U);
+  z.push_back(0x01U);
+  BitSink bs(z);
+  bs.put(1U, 1);  // BFINAL
+  bs.put(1U, 2);  // BTYPE = 01, fixed Huffman
+  std::vector<std::uint32_t> head(std::size_t{1} << kHashBits, kNone);
+  std::vector<std::uint32_t> prev(kWindow, kNone);
+  const auto hash = [data](std::size_t i) {
+    const std::uint32_t v = data[i] | (static_cast<std::uint32_t>(data[i + 1U]) << 8U) |
+                            (static_cast<std::uint32_t>(data[i + 2U]) << 16U);
+    return (v * 2654435761U) >> (32U - kHashBits);
+  };
+  const auto insert = [&](std::size_t i) {
+    if (i + 3U <= size) {
+      const std::uint32_t h = hash(i);
+      prev[i % kWindow] = head[h];
+      head[h] = static_cast<std::uint32_t>(i);
+    }
+  };
+  std::size_t i = 0;
+  // Positions are stored as uint32: inputs past 4 GiB are coded as literals only (never
+  // reached by a MAT element, whose size is 32-bit).
+  while (i < size) {
+    std::size_t best_len = 0;
+    std::size_t best_dist = 0;
+    if (i + 3U <= size && i < kNone) {
+      std::uint32_t cand = head[hash(i)];
+      const std::size_t max_len = std::min(kMaxMatch, size - i);
+      for (unsigned chain = 0; cand != kNone && chain < max_chain; ++chain) {
+        const std::size_t d = i - cand;
+        if (d == 0U || d > kWindow) {
+          break;
+        }
+        std::size_t l = 0;
+        while (l < max_len && data[cand + l] == data[i + l]) {
+          ++l;
+        }
+        if (l > best_len) {
+          best_len = l;
+          best_dist = d;
+          if (l == max_len) {
+            break;
+          }
+        }
+        const std::uint32_t next = prev[cand % kWindow];
+        if (next == kNone || next >= cand) {
+          break;  // chain left the window (slot reused by a newer position)
+        }
+        cand = next;
+      }
+    }
+    if (best_len >= 3U) {
+      put_match(bs, best_len, best_dist);
+      for (std::size_t k = 0; k < best_len; ++k) {
+        insert(i + k);
+      }
+      i += best_len;
+    } else {
+      put_fixed_litlen(bs, data[i]);
+      insert(i);
+      ++i;
+    }
+  }
+  put_fixed_litlen(bs, 256U);  // end of block
+  bs.flush();
+  const std::uint32_t a = adler32(data, size);
+  for (int shift = 24; shift >= 0; shift -= 8) {
+    z.push_back(static_cast<std::uint8_t>((a >> static_cast<unsigned>(shift)) & 0xFFU));
+  }
+  return z;
+}
+
 }  // namespace imu::mat

@@ -1,5 +1,5 @@
 // MAT-file level 5 writer (little-endian, MATLAB -v6 layout; optionally every variable in a
-// miCOMPRESSED zlib stream made of stored deflate blocks, which MATLAB -v7 readers accept).
+// miCOMPRESSED zlib stream, -v7 layout: one fixed-Huffman LZ77 block, or stored blocks).
 // Standard library only, host code.
 //
 // Writes double matrices (column-major), scalars and ASCII char row vectors, as MATLAB does:
@@ -21,8 +21,14 @@
 
 namespace imu::mat {
 
+enum class Deflate : std::uint8_t {
+  fixed_huffman,  ///< one fixed-Huffman block with LZ77 (zlib_compress_fixed)
+  stored,         ///< stored blocks only (zlib_store): no size gain, simplest stream
+};
+
 struct WriterOptions {
-  bool compress = false;  ///< wrap each variable in miCOMPRESSED (stored zlib blocks)
+  bool compress = false;  ///< wrap each variable in a miCOMPRESSED zlib stream
+  Deflate deflate = Deflate::fixed_huffman;  ///< how, when compress is set
 };
 
 class MatWriter {
