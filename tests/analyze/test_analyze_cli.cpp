@@ -19,6 +19,7 @@ std::string tmp_path(const std::string& name) {
 
 int call(std::vector<std::string> args) {
   std::vector<char*> argv;
+  argv.reserve(args.size());
   for (auto& a : args) {
     argv.push_back(a.data());
   }

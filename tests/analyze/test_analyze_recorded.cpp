@@ -37,7 +37,9 @@ TEST(AnalyzeRecorded, AllTwelveChannels) {
       imu::analyze::Report r;
       std::string err;
       ASSERT_TRUE(imu::analyze::analyze(col.value(), ch, o, r, err)) << err;
-      EXPECT_LT(r.seconds, 10.0) << file << " " << ch;
+      // Issue: < 10 s per 1e6-sample channel. CPU time, because the test machine is shared by
+      // several builds (wall time is printed too).
+      EXPECT_LT(r.cpu_seconds, 10.0) << file << " " << ch;
       EXPECT_LT(r.error_after.cost, r.error_before.cost) << file << " " << ch;
       std::string found;
       for (const auto& e : r.effects) {
@@ -45,13 +47,14 @@ TEST(AnalyzeRecorded, AllTwelveChannels) {
         found += (found.empty() ? "" : ", ") + e.type;
       }
       std::printf("%s %s: %s | before RMS %.3f max %.3f (all), %.3f/%.3f ([Ts,100 s]) | after "
-                  "RMS %.3f max %.3f, %.3f/%.3f | NIS %.3f -> %.3f | cov %.3f -> %.3f | %.2f s\n",
+                  "RMS %.3f max %.3f, %.3f/%.3f | NIS %.3f -> %.3f | cov %.3f -> %.3f | %.2f s wall %.2f s CPU\n",
                   file, ch, found.empty() ? "none" : found.c_str(), r.error_before.adev_rms_rel,
                   r.error_before.adev_max_rel, r.error_before.seed_rms_rel,
                   r.error_before.seed_max_rel, r.error_after.adev_rms_rel,
                   r.error_after.adev_max_rel, r.error_after.seed_rms_rel,
                   r.error_after.seed_max_rel, r.error_before.nis_mean, r.error_after.nis_mean,
-                  r.error_before.cov_ratio, r.error_after.cov_ratio, r.seconds);
+                  r.error_before.cov_ratio, r.error_after.cov_ratio, r.seconds,
+                  r.cpu_seconds);
     }
   }
 }

@@ -105,7 +105,8 @@ std::string to_json(const Report& r) {
   for (std::size_t i = 0; i < r.notes.size(); ++i) {
     s << (i > 0 ? ", " : "") << quoted(r.notes[i]);
   }
-  s << "],\n  \"seconds\": " << num(r.seconds) << "\n}\n";
+  s << "],\n  \"seconds\": " << num(r.seconds) << ",\n  \"cpu_seconds\": " << num(r.cpu_seconds)
+    << "\n}\n";
   return s.str();
 }
 
@@ -155,7 +156,9 @@ std::string to_text(const Report& r) {
   model_line("model before (white + GM over [Ts, 100 s])", r.model_before);
   error_line("error before", r.error_before);
   if (r.effects.empty()) {
-    s << "effects: none (the first-order model explains the data within the intervals)\n";
+    s << (r.model_after.n_gm > r.model_before.n_gm
+              ? "effects: none of the named effects (a second GM term was needed, see notes)\n"
+              : "effects: none (the first-order model explains the data within the intervals)\n");
   }
   for (const auto& e : r.effects) {
     if (e.type == "quantization") {
@@ -184,7 +187,8 @@ std::string to_text(const Report& r) {
   for (const auto& n : r.notes) {
     s << "note: " << n << "\n";
   }
-  std::snprintf(buf, sizeof buf, "analysis time %.2f s\n", r.seconds);
+  std::snprintf(buf, sizeof buf, "analysis time %.2f s wall, %.2f s CPU\n", r.seconds,
+                r.cpu_seconds);
   s << buf;
   return s.str();
 }

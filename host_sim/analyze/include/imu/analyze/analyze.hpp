@@ -97,6 +97,7 @@ struct Report {
   std::vector<Effect> effects;
   std::vector<std::string> notes;  ///< warnings and decisions, one line each
   double seconds = 0.0;            ///< wall time of analyze()
+  double cpu_seconds = 0.0;        ///< CPU time of analyze() (the machine may be shared)
 };
 
 /// Analyze one channel (physical units). Fails (returns false, `error` set to one line) on an
