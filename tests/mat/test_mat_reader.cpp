@@ -376,14 +376,20 @@ TEST(MatReaderErrors, Truncated) {
   const Bytes full = read_file(kDir + "/scipy_v5_compressed.mat");
   const Bytes cut(full.begin(), full.end() - 20);
   const std::string e = column_error(cut, "cube");
-  EXPECT_TRUE(contains(e, "t.mat: truncated: element at offset ")) << e;
+  EXPECT_TRUE(contains(e, "t.mat: truncated: variable 'cube' element at offset ")) << e;
   EXPECT_TRUE(contains(e, "remain")) << e;
   // Variables before the cut stay readable.
   const MatFile f = open_memory(cut);
   EXPECT_TRUE(f.read_column("d_col").ok());
   // Uncompressed: cut inside the last variable, and a stray partial tag.
   const Bytes plain = image({double_matrix("a", 2, 1, {1.0, 2.0}), double_matrix("b", 1, 1, {3.0})});
-  EXPECT_TRUE(contains(column_error(Bytes(plain.begin(), plain.end() - 3), "b"), "truncated"));
+  EXPECT_TRUE(contains(column_error(Bytes(plain.begin(), plain.end() - 3), "b"),
+                       "truncated: variable 'b' element at offset"));
+  // Cut inside the header of a compressed variable: no name to give, the offset still says where.
+  const Bytes packed = image({compressed(double_matrix("a", 2, 1, {1.0, 2.0}))});
+  const std::string h = column_error(Bytes(packed.begin(), packed.begin() + 128 + 8 + 7), "a");
+  // 91 = zlib header 2 + stored block header 5 + 80-byte miMATRIX element + Adler-32 4.
+  EXPECT_EQ(h, "t.mat: truncated: element at offset 128 declares 91 bytes, only 7 remain");
   Bytes stray = plain;
   stray.push_back(14);
   stray.push_back(0);

@@ -530,6 +530,27 @@ Result<MatFile> MatFile::open(const std::string& path) {
 namespace {
 
 // Read the top-level element tag at `off`.
+// The name of a variable from the first `avail` bytes of its element ("" if they do not show it).
+std::string name_from_prefix(const std::uint8_t* p, std::size_t avail, std::uint32_t type,
+                             bool big_endian) {
+  std::vector<std::uint8_t> scratch;
+  if (type == kMiCompressed) {
+    // Status ignored on purpose: whatever inflated before the fault may hold the header.
+    static_cast<void>(inflate_zlib(p, avail, kPeekBytes, InflateMode::prefix, scratch));
+    if (scratch.size() < 8U || load_u32(scratch.data(), big_endian) != kMiMatrix) {
+      return {};
+    }
+    p = scratch.data() + 8;
+    avail = scratch.size() - 8U;
+  } else if (type != kMiMatrix) {
+    return {};
+  }
+  Matrix m;
+  std::string ignored;
+  return parse_matrix(p, avail, big_endian, true, m, ignored) == Parse::ok ? m.name
+                                                                            : std::string();
+}
+
 Status next_element(const std::string& file, const std::uint8_t* data, std::size_t size,
                     std::size_t off, bool big_endian, std::uint32_t& type, std::size_t& payload,
                     std::size_t& bytes, std::size_t& next) {
@@ -541,9 +562,11 @@ Status next_element(const std::string& file, const std::uint8_t* data, std::size
   bytes = load_u32(data + off + 4U, big_endian);
   payload = off + 8U;
   if (bytes > size - payload) {
-    return MatError{file + ": truncated: element at offset " + std::to_string(off) + " declares " +
-                    std::to_string(bytes) + " bytes, only " + std::to_string(size - payload) +
-                    " remain"};
+    const std::string name = name_from_prefix(data + payload, size - payload, type, big_endian);
+    const std::string who = name.empty() ? std::string() : "variable '" + name + "' ";
+    return MatError{file + ": truncated: " + who + "element at offset " + std::to_string(off) +
+                    " declares " + std::to_string(bytes) + " bytes, only " +
+                    std::to_string(size - payload) + " remain"};
   }
   std::size_t padded = bytes;
   if (type != kMiCompressed) {
