@@ -30,6 +30,7 @@ inline CliResult run(const std::vector<std::string>& args, bool fw = false) {
   std::vector<std::string> store = args;
   store.insert(store.begin(), fw ? "imu-fw" : "imu-sim");
   std::vector<char*> argv;
+  argv.reserve(store.size() + 1);
   for (std::string& s : store) {
     argv.push_back(s.data());
   }

@@ -36,7 +36,7 @@ constexpr const char* kUsage =
     "  run --mat FILE [--channel acc_z] [--bus loopback|vcan0|can0] [--rate max|realtime]\n"
     "      [--node inproc|spawn|external] [--out DIR] [--json FILE] [--N --B --Tp [--K]]\n"
     "      [--no-plots] [--quiet] [--T-avg 10] [--T-int 20] [--sim-windows 1000] [--seed 2]\n"
-    "      [--timeout 30] [--window 4096] [--layout auto|fd|classic] [--only-channel] [--fw PATH]\n"
+    "      [--timeout 30] [--window 4096|256] [--layout auto|fd|classic] [--only-channel] [--fw PATH]\n"
     "        sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON,\n"
     "        CSV, SVG/PNG plots in DIR, default out/run)\n"
     "  analyze ...   (host_sim/analyze)\n";

@@ -108,12 +108,20 @@ void appendf(std::string& out, const char* fmt, ...) {
   char buf[1024];
   va_list ap;
   va_start(ap, fmt);
+  va_list again;
+  va_copy(again, ap);
+  // NOLINTNEXTLINE(clang-analyzer-valist.Uninitialized): ap is started above
   const int n = std::vsnprintf(buf, sizeof buf, fmt, ap);
   va_end(ap);
-  if (n > 0) {
-    out.append(buf, static_cast<std::size_t>(n) < sizeof buf ? static_cast<std::size_t>(n)
-                                                             : sizeof buf - 1);
+  if (n > 0 && static_cast<std::size_t>(n) < sizeof buf) {
+    out.append(buf, static_cast<std::size_t>(n));
+  } else if (n > 0) {  // longer than the stack buffer: format again into the string itself
+    const std::size_t old = out.size();
+    out.resize(old + static_cast<std::size_t>(n) + 1);
+    (void)std::vsnprintf(&out[old], static_cast<std::size_t>(n) + 1, fmt, again);
+    out.resize(old + static_cast<std::size_t>(n));
   }
+  va_end(again);
 }
 
 bool make_dirs(const std::string& path, std::string& err) {

@@ -50,7 +50,7 @@ class Args {
 /// Monotonic seconds.
 [[nodiscard]] double now_s();
 
-/// printf to a std::string.
+/// printf appended to a std::string (any length).
 __attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char* fmt, ...);
 
 /// Create a directory and its parents; false with err on failure.

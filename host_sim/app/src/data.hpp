@@ -20,6 +20,7 @@ struct ChannelData {
   std::uint64_t off_grid = 0;   ///< samples that are not an integer multiple of lsb (> 1e-6 lsb)
 };
 
+// NOLINTNEXTLINE(bugprone-reserved-identifier): '__i0' is the compiler's implicit array copy loop
 struct SensorData {
   std::string path;
   double fs_hz = 0.0;

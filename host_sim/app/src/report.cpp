@@ -545,20 +545,30 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
       for (const char* base : {"fig1_adev", "fig2_covariance"}) {
         const std::string b = base;
         const std::string h = b == "fig1_adev" ? "700" : "900";
-        const std::string cmd =
-            "cd " + quote_sh(d) + " && gnuplot -e " +
-            quote_sh("set terminal svg size 1000," + h + " dynamic; set output '" + b + ".svg'") +
-            " " + b + ".gp >/dev/null 2>" + b + ".gnuplot.log && gnuplot -e " +
-            quote_sh(std::string("set terminal ") + png_term + "; set output '" + b + ".png'") +
-            " " + b + ".gp >/dev/null 2>>" + b + ".gnuplot.log";
+        std::string svg_term;
+        appendf(svg_term, "set terminal svg size 1000,%s dynamic; set output '%s.svg'", h.c_str(),
+                b.c_str());
+        std::string png;
+        appendf(png, "set terminal %s; set output '%s.png'", png_term, b.c_str());
+        std::string cmd;
+        appendf(cmd,
+                "cd %s && gnuplot -e %s %s.gp >/dev/null 2>%s.gnuplot.log && gnuplot -e %s %s.gp "
+                ">/dev/null 2>>%s.gnuplot.log",
+                quote_sh(d).c_str(), quote_sh(svg_term).c_str(), b.c_str(), b.c_str(),
+                quote_sh(png).c_str(), b.c_str(), b.c_str());
         if (std::system(cmd.c_str()) != 0) {
           ok = false;
-          plot_note += "plots: gnuplot failed on " + b + ".gp (see " + b + ".gnuplot.log)\n";
+          appendf(plot_note, "plots: gnuplot failed on %s.gp (see %s.gnuplot.log)\n", b.c_str(),
+                  b.c_str());
         } else {
-          plot_files.push_back(d + "/" + b + ".svg");
-          plot_files.push_back(d + "/" + b + ".png");
-          std::string ignore;
-          (void)std::remove((d + "/" + b + ".gnuplot.log").c_str());
+          std::string path;
+          appendf(path, "%s/%s", d.c_str(), b.c_str());
+          plot_files.push_back(path);
+          plot_files.back() += ".svg";
+          plot_files.push_back(path);
+          plot_files.back() += ".png";
+          path += ".gnuplot.log";
+          (void)std::remove(path.c_str());
         }
       }
       if (ok) {

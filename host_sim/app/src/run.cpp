@@ -302,7 +302,11 @@ int cmd_run(int argc, char** argv) {
   }
   ro.given_model = given == 3;
   double timeout_s = 30.0;
-  double window = 4096.0;
+  // Credit window: on the loopback bus back-pressure already protects the node; on SocketCAN
+  // the sender must not get further ahead than the node's socket queue holds (a few hundred
+  // frames at the default buffer size).
+  const double window_default = is_loopback ? 4096.0 : 256.0;
+  double window = window_default;
   double sim_windows = 1000.0;
   double seed = 1.0;
   double lsb_opt = 0.0;
@@ -311,7 +315,7 @@ int cmd_run(int argc, char** argv) {
       !a.number("--Tp", 0.0, ro.tp_s, err) || !a.number("--K", 0.0, ro.k, err) ||
       !a.number("--T-avg", 10.0, ro.t_avg_s, err) || !a.number("--T-int", 20.0, ro.t_int_s, err) ||
       !a.number("--sim-windows", 1000.0, sim_windows, err) || !a.number("--seed", 2.0, seed, err) ||
-      !a.number("--timeout", 30.0, timeout_s, err) || !a.number("--window", 4096.0, window, err) ||
+      !a.number("--timeout", 30.0, timeout_s, err) || !a.number("--window", window_default, window, err) ||
       !a.number("--lsb", 0.0, lsb_opt, err) || !a.number("--fs", 0.0, fs_opt, err)) {
     return fail(kCmd, err, 2);
   }
@@ -345,6 +349,12 @@ int cmd_run(int argc, char** argv) {
   }
   const double t_load = now_s() - t0;
   const std::size_t n = sd.n_samples;
+  if (n < 16) {
+    return fail(kCmd, path + ": " + std::to_string(n) + " samples: too short for an ADEV (16 or more)");
+  }
+  if (n > 0xFFFFFFFFULL) {
+    return fail(kCmd, path + ": more than 2^32 samples (the sequence number would wrap)");
+  }
 
   // ---- Bus and node ------------------------------------------------------------------------
   hal::CanSocket sock;
@@ -429,6 +439,7 @@ int cmd_run(int argc, char** argv) {
           ::close(fd);
         }
         std::vector<char*> av;
+        av.reserve(args.size() + 1);
         for (std::string& s : args) {
           av.push_back(s.data());
         }
@@ -463,10 +474,12 @@ int cmd_run(int argc, char** argv) {
       hal::encode(cfg, layout, cfg_tid++, fr);
       for (std::size_t i = 0; i < fr.count && status == 0; ++i) {
         if (!link.send(fr.frame[i], k == 0 ? 10000 : 0, err)) {
-          status = fail(kCmd, "send on " + bus_used + " failed: " + err +
-                                  (k == 0 && node_mode != "inproc"
-                                       ? " (is imu-fw running on this bus?)"
-                                       : ""));
+          std::string msg = "send on " + bus_used + " failed: ";
+          msg += err;
+          if (k == 0 && node_mode != "inproc") {
+            msg += " (is imu-fw running on this bus?)";
+          }
+          status = fail(kCmd, msg);
         }
       }
     }
@@ -479,8 +492,10 @@ int cmd_run(int argc, char** argv) {
     }
     if (rate == "realtime") {
       const double due = t_send0 + static_cast<double>(k) / sd.fs_hz;
-      for (double now = now_s(); now < due; now = now_s()) {
+      double now = now_s();
+      while (now < due) {
         link.service(static_cast<int>(std::ceil((due - now) * 1000.0)), false);
+        now = now_s();
       }
     }
     while (credit > 0 && k >= tel.processed() + credit && status == 0) {
@@ -499,7 +514,9 @@ int cmd_run(int argc, char** argv) {
     hal::encode(s, layout, fr);
     for (std::size_t i = 0; i < fr.count && status == 0; ++i) {
       if (!link.send(fr.frame[i], 0, err)) {
-        status = fail(kCmd, "send on " + bus_used + " failed: " + err);
+        std::string msg = "send on " + bus_used + " failed: ";
+        msg += err;
+        status = fail(kCmd, msg);
       }
     }
     if ((k & 63U) == 63U) {
