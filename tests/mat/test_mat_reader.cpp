@@ -97,6 +97,26 @@ Bytes double_matrix(const std::string& name, std::uint32_t rows, std::uint32_t c
   e.insert(e.end(), body.begin(), body.end());
   return e;
 }
+// A miMATRIX element of any class with the real part given as raw bytes of storage `type`.
+Bytes raw_matrix(std::uint32_t cls, std::uint32_t rows, std::uint32_t cols, const std::string& name,
+                 std::uint32_t type, const Bytes& raw) {
+  Bytes body;
+  for (const std::uint32_t w : {6U, 8U, cls, 0U, 5U, 8U, rows, cols, 1U}) {
+    u32(body, w);
+  }
+  u32(body, static_cast<std::uint32_t>(name.size()));
+  body.insert(body.end(), name.begin(), name.end());
+  pad8(body);
+  u32(body, type);
+  u32(body, static_cast<std::uint32_t>(raw.size()));
+  body.insert(body.end(), raw.begin(), raw.end());
+  pad8(body);
+  Bytes e;
+  u32(e, 14);
+  u32(e, static_cast<std::uint32_t>(body.size()));
+  e.insert(e.end(), body.begin(), body.end());
+  return e;
+}
 Bytes compressed(const Bytes& element) {
   const Bytes z = imu::mat::zlib_store(element.data(), element.size());
   Bytes e;
@@ -313,6 +333,27 @@ TEST(MatReader, HeaderLongerThanThePeekFallsBackToWholeInflate) {
   const auto a = f.read_scalar("after");
   ASSERT_TRUE(a.ok()) << a.error().message;
   EXPECT_EQ(bits_of(a.value()), bits_of(5.0));
+}
+
+TEST(MatReader, CharEncodingsToUtf8) {
+  // U+00E9 and U+1F600 (surrogate pair D83D DE00 in UTF-16), per storage type.
+  const Bytes utf16 = {'a', 0, 0xE9, 0, 0x3D, 0xD8, 0x00, 0xDE};            // miUINT16, 1x4
+  const Bytes utf8 = {'a', 0xC3, 0xA9, 0xF0, 0x9F, 0x98, 0x80};              // miUTF8, 1x3
+  const Bytes latin1 = {'a', 0xE9};                                          // miUINT8, 1x2
+  const Bytes utf32 = {'a', 0, 0, 0, 0x00, 0xF6, 0x01, 0x00};                // miUTF32, 1x2
+  const Bytes b = image({raw_matrix(4, 1, 4, "u16", 4, utf16), raw_matrix(4, 1, 3, "u8", 16, utf8),
+                         raw_matrix(4, 1, 2, "l1", 2, latin1), raw_matrix(4, 1, 2, "u32", 18, utf32)});
+  const MatFile f = open_memory(b);
+  const std::string want16 = "a\xC3\xA9\xF0\x9F\x98\x80";
+  EXPECT_EQ(f.read_string("u16").value(), want16);
+  EXPECT_EQ(f.read_string("u8").value(), want16);
+  EXPECT_EQ(f.read_string("l1").value(), "a\xC3\xA9");
+  EXPECT_EQ(f.read_string("u32").value(), "a\xF0\x9F\x98\x80");
+  // Char stored as miDOUBLE is not a valid char array.
+  const Bytes bad = image({raw_matrix(4, 1, 1, "c", 9, Bytes(8, 0))});
+  const auto r = open_memory(bad).read_string("c");
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, "t.mat: variable 'c': corrupt: storage type miDOUBLE (9) is not valid for class char");
 }
 
 // --- bad files: one test per kind ------------------------------------------------------------------
