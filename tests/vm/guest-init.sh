@@ -16,6 +16,15 @@ mount -t tmpfs tmpfs /tmp
 echo "VMTEST-BOOT kernel=$(uname -r) uptime_s=$(cut -d' ' -f1 /proc/uptime)"
 
 pass=0 fail=0 skip=0
+# Console copy of files that explain a failure: "VMLOG <file>| <line>" (first 4 and last 12
+# lines of each).
+dump() {
+  local f
+  for f in "$@"; do
+    [ -f "$f" ] || continue
+    { head -n 4 "$f"; echo ...; tail -n 12 "$f"; } | sed "s|^|VMLOG $f\| |"
+  done
+}
 result() {
   echo "VMTEST $1 $2 $3"
   case $2 in
@@ -251,29 +260,207 @@ t_hal_gpio() {
 }
 
 # ---------------------------------------------------------------------------------------------
-# The firmware node end to end (issue 7). TODO: wire these when imu-sim / imu-fw land: each
-# runs the real check when its binaries are in /opt/imu/bin, else SKIPs.
+# The firmware node end to end: imu-sim (sensor emulator) -> vcan0 -> imu-fw (the node, with
+# the fw/ ADEV, bias filter and monitors), can-utils as the independent peer, gpio-sim lines.
+MAT=$(ls /data/*.mat 2>/dev/null | head -n1)
+# The acc_z ADEV table (tau, adev, ci, edf, n_terms rows) from imu-fw's or imu-sim adev's output.
+fw_table() { sed -n '/^final ADEV of acc_z/,/^$/p' "$1" | grep -E '^ +[0-9]'; }
+adev_table() { grep -E '^ +[0-9]' "$1"; }
+fw_header() { grep '^final ADEV of acc_z' "$1"; }
+# "imu-fw: stream ended (...): S samples, M missing, F frames, C crc errors, ..." fields.
+fw_field() { sed -n "s/^imu-fw: stream ended.* \([0-9][0-9]*\) $2.*/\1/p" "$1" | head -n1; }
+fw_drops() { sed -n 's/^imu-fw: stream ended.*kernel drops \([0-9]*\).*/\1/p' "$1" | head -n1; }
+# Starts imu-fw on vcan0 in the background (extra options in "$@"), output to $FW_OUT.
+start_fw() {
+  FW_OUT=$1
+  shift
+  # timeout: imu-fw only starts its idle clock at the first frame. busybox timeout execs the
+  # program in place, so $! is imu-fw itself.
+  timeout 240 imu-fw --bus vcan0 --exit-idle-s 4 "$@" >"$FW_OUT" 2>&1 &
+  FW_PID=$!
+  # Highest priority for the node: the guest has one CPU and on a real bus the sensor is another
+  # machine; at --rate max a sender with equal priority overruns imu-fw's socket buffer.
+  renice -20 $FW_PID >/dev/null 2>&1
+  sleep 0.7
+}
+sim_run() {  # sim_run MAT OUTDIR [options]: imu-sim as the sensor on vcan0, node external
+  local mat=$1 out=$2
+  shift 2
+  timeout 240 imu-sim run --mat "$mat" --bus vcan0 --node external --no-plots --quiet \
+    --sim-windows 20 --timeout 200 --out "$out" "$@" >"$out.txt" 2>&1
+}
 
+# A recorded ADIS16405 MAT-file (1e6 samples) through vcan0 at full speed with back-pressure:
+# imu-fw's online ADEV of acc_z equals the in-process one (imu-sim adev, same fw code on the
+# same counts) line for line; no sample missing, no kernel drop.
 t_imu_stream() {
-  have imu-sim && have imu-fw || { result imu_stream SKIP "TODO: imu-sim/imu-fw not built yet"; return; }
-  result imu_stream SKIP "TODO: imu-sim -> vcan0 -> imu-fw ADEV vs in-process, frame counters"
+  have imu-sim && have imu-fw || { result imu_stream SKIP "imu-sim/imu-fw not built"; return; }
+  [ -n "$MAT" ] || { result imu_stream SKIP "no MAT-file in /data (IMU_SHARED_DIR unset?)"; return; }
+  local t0 t1
+  t0=$(cut -d' ' -f1 /proc/uptime)
+  start_fw /tmp/fw_stream.txt
+  sim_run "$MAT" /tmp/run_stream --rate max
+  local sim_rc=$?
+  wait $FW_PID
+  t1=$(cut -d' ' -f1 /proc/uptime)
+  imu-sim adev "$MAT" --channel acc_z >/tmp/adev_inproc.txt 2>&1
+  fw_table /tmp/fw_stream.txt >/tmp/t_fw
+  adev_table /tmp/adev_inproc.txt >/tmp/t_in
+  local rows samples missing drops
+  rows=$(wc -l </tmp/t_fw)
+  samples=$(fw_field /tmp/fw_stream.txt samples)
+  missing=$(fw_field /tmp/fw_stream.txt missing)
+  drops=$(fw_drops /tmp/fw_stream.txt)
+  if [ $sim_rc = 0 ] && [ "$rows" -gt 10 ] && cmp -s /tmp/t_fw /tmp/t_in && [ "$missing" = 0 ] &&
+     [ "$drops" = 0 ] && [ "$samples" -gt 0 ]; then
+    result imu_stream PASS "$(basename "$MAT"): $samples samples over vcan0, missing 0, kernel drops 0; acc_z ADEV identical to in-process ($rows taus); $(awk "BEGIN{print $t1-$t0}") s"
+  else
+    dump /tmp/fw_stream.txt /tmp/run_stream.txt
+    result imu_stream FAIL "imu-sim exit $sim_rc, rows $rows, samples '$samples' missing '$missing' drops '$drops'; $(tail -n 3 /tmp/run_stream.txt | tr '\n' ' ') | $(diff /tmp/t_fw /tmp/t_in | head -n 4 | tr '\n' ' ')"
+  fi
 }
+
+# A realistic rate: 20 s of synthetic acc_z at the IMU's real 100 Hz (imu-sim --rate realtime),
+# candump recording the sensor's frames (config 0x080, repeated by imu-sim, and samples 0x100)
+# as the independent log; candump is stopped with SIGINT once imu-fw has finished.
+t_imu_realtime() {
+  have imu-sim && have imu-fw && have imu-vm-stepmat ||
+    { result imu_realtime SKIP "imu-sim/imu-fw/imu-vm-stepmat not built"; return; }
+  imu-vm-stepmat --out /tmp/clean.mat --duration 20 >/dev/null || { result imu_realtime FAIL "stepmat"; return; }
+  candump -L vcan0,080:7FF,100:7FF >/tmp/rt.log &
+  local dump=$!
+  start_fw /tmp/fw_rt.txt
+  sim_run /tmp/clean.mat /tmp/run_rt --rate realtime
+  local sim_rc=$?
+  wait $FW_PID
+  kill -INT $dump
+  wait $dump
+  imu-sim adev /tmp/clean.mat --channel acc_z >/tmp/adev_clean.txt 2>&1
+  fw_table /tmp/fw_rt.txt >/tmp/t_fw
+  adev_table /tmp/adev_clean.txt >/tmp/t_in
+  local samples missing drops logged configs
+  samples=$(fw_field /tmp/fw_rt.txt samples)
+  missing=$(fw_field /tmp/fw_rt.txt missing)
+  drops=$(fw_drops /tmp/fw_rt.txt)
+  logged=$(grep -c ' 100##' /tmp/rt.log)
+  configs=$(grep -c ' 080##' /tmp/rt.log)
+  if [ $sim_rc = 0 ] && [ "$samples" = 2000 ] && [ "$missing" = 0 ] && [ "$drops" = 0 ] &&
+     [ "$logged" = 2000 ] && [ "$configs" -ge 1 ] && cmp -s /tmp/t_fw /tmp/t_in; then
+    result imu_realtime PASS "2000 samples at 100 Hz real time: missing 0, kernel drops 0, candump logged 2000 sample + $configs config frames, ADEV identical to in-process"
+  else
+    dump /tmp/fw_rt.txt /tmp/run_rt.txt
+    result imu_realtime FAIL "imu-sim exit $sim_rc samples '$samples' missing '$missing' drops '$drops' candump $logged samples, $configs configs; $(tail -n 2 /tmp/run_rt.txt | tr '\n' ' ')"
+  fi
+}
+
+# canplayer replays candump's log into a fresh imu-fw: same ADEV, same bias estimate.
 t_imu_replay() {
-  have imu-fw || { result imu_replay SKIP "TODO: imu-fw not built yet"; return; }
-  result imu_replay SKIP "TODO: candump log of the stream replayed by canplayer into imu-fw"
+  have imu-fw || { result imu_replay SKIP "imu-fw not built"; return; }
+  [ -s /tmp/rt.log ] && [ -s /tmp/fw_rt.txt ] || { result imu_replay SKIP "no log from imu_realtime"; return; }
+  start_fw /tmp/fw_replay.txt
+  canplayer -t -g 1 -I /tmp/rt.log
+  wait $FW_PID
+  fw_table /tmp/fw_replay.txt >/tmp/t_rp
+  fw_table /tmp/fw_rt.txt >/tmp/t_rt
+  local samples missing
+  samples=$(fw_field /tmp/fw_replay.txt samples)
+  missing=$(fw_field /tmp/fw_replay.txt missing)
+  if [ "$samples" = 2000 ] && [ "$missing" = 0 ] && cmp -s /tmp/t_rp /tmp/t_rt &&
+     [ "$(fw_header /tmp/fw_replay.txt)" = "$(fw_header /tmp/fw_rt.txt)" ]; then
+    result imu_replay PASS "canplayer replay: 2000 samples, missing 0, ADEV and bias line identical to the live stream ($(fw_header /tmp/fw_replay.txt | sed 's/.*(//; s/).*//'))"
+  else
+    dump /tmp/fw_replay.txt /tmp/rt.log
+    result imu_replay FAIL "samples '$samples' missing '$missing'; $(diff /tmp/t_rp /tmp/t_rt | head -n 4 | tr '\n' ' ') $(fw_header /tmp/fw_replay.txt) vs $(fw_header /tmp/fw_rt.txt)"
+  fi
 }
+
+# The same replay with cangen flooding random frames of every kind alongside: they are counted
+# (frames beyond those of the log) and rejected; the estimate does not change.
 t_imu_flood() {
-  have imu-fw || { result imu_flood SKIP "TODO: imu-fw not built yet"; return; }
-  result imu_flood SKIP "TODO: cangen flood alongside, counted as rejected, estimate unchanged"
+  have imu-fw || { result imu_flood SKIP "imu-fw not built"; return; }
+  [ -s /tmp/fw_replay.txt ] || { result imu_flood SKIP "no clean replay to compare with"; return; }
+  start_fw /tmp/fw_flood.txt
+  cangen vcan0 -m -g 1 -n 2000 -p 10 &
+  local gen=$!
+  canplayer -t -g 1 -I /tmp/rt.log
+  wait $gen
+  wait $FW_PID
+  local fw_rc=$?
+  fw_table /tmp/fw_flood.txt >/tmp/t_fl
+  fw_table /tmp/fw_replay.txt >/tmp/t_rp
+  local samples missing frames rejected
+  samples=$(fw_field /tmp/fw_flood.txt samples)
+  missing=$(fw_field /tmp/fw_flood.txt missing)
+  frames=$(fw_field /tmp/fw_flood.txt frames)
+  rejected=$((${frames:-0} - $(wc -l </tmp/rt.log)))  # frames beyond the replayed log
+  if [ $fw_rc = 0 ] && [ "$samples" = 2000 ] && [ "$missing" = 0 ] && [ $rejected -gt 0 ] &&
+     cmp -s /tmp/t_fl /tmp/t_rp && [ "$(fw_header /tmp/fw_flood.txt)" = "$(fw_header /tmp/fw_replay.txt)" ]; then
+    result imu_flood PASS "2000 cangen -m frames alongside: $rejected frames rejected, imu-fw exit 0, 2000 samples, ADEV and bias unchanged"
+  else
+    dump /tmp/fw_flood.txt
+    result imu_flood FAIL "imu-fw exit $fw_rc samples '$samples' missing '$missing' rejected $rejected; $(fw_header /tmp/fw_flood.txt)"
+  fi
 }
+
+# GPIO: "static" gates the bias filter updates (static_flag and the filter's std follow the
+# line), "alarm" stays low on clean data and goes high on data with an injected step (read on
+# the simulator side while imu-fw holds the line), a missing line name is a clear error.
+ALARM_CLEAN="" ALARM_STEP=""
+gpio_run() {  # gpio_run TAG MAT PULL: stream MAT with static pulled PULL; sets ALARM_VALUE
+  echo "$3" >$GPIO_SIM/sim_gpio0/pull
+  start_fw /tmp/fw_$1.txt --gpio-chip "$GPIO_CHIP" --static-line static --alarm-line alarm
+  sim_run "$2" /tmp/run_$1 --rate max
+  ALARM_VALUE=$(cat $GPIO_SIM/sim_gpio1/value)  # imu-fw is still running (exit-idle 4 s)
+  wait $FW_PID
+}
+static_flag() { sed -n 's/.*static_flag \([0-9]\).*/\1/p' "$1" | tail -n1; }
+filter_bias() { sed -n 's/^  bias \([^ ]*\) std [^ ]* static_flag.*/\1/p' "$1" | tail -n1; }
+filter_std() { sed -n 's/^  bias [^ ]* std \([^ ]*\) static_flag.*/\1/p' "$1" | tail -n1; }
 t_imu_gpio() {
-  have imu-fw || { result imu_gpio SKIP "TODO: imu-fw (GPIO) not built yet"; return; }
-  result imu_gpio SKIP "TODO: static gates bias updates, alarm high on injected step, missing line error"
+  have imu-sim && have imu-fw && have imu-vm-stepmat ||
+    { result imu_gpio SKIP "imu-sim/imu-fw/imu-vm-stepmat not built"; return; }
+  [ -n "$GPIO_CHIP" ] || { result imu_gpio SKIP "no gpio-sim chip"; return; }
+  imu-vm-stepmat --out /tmp/g_clean.mat --duration 30 >/dev/null &&
+    imu-vm-stepmat --out /tmp/g_step.mat --duration 30 --step 0.1 --step-at-s 20 >/dev/null ||
+    { result imu_gpio FAIL "stepmat"; return; }
+  gpio_run moving /tmp/g_clean.mat pull-down
+  local a_moving=$ALARM_VALUE
+  gpio_run static /tmp/g_clean.mat pull-up
+  local a_clean=$ALARM_VALUE
+  gpio_run step /tmp/g_step.mat pull-up
+  local a_step=$ALARM_VALUE
+  local f_mov f_sta s_mov s_sta b_mov
+  f_mov=$(static_flag /tmp/run_moving/report.txt)
+  f_sta=$(static_flag /tmp/run_static/report.txt)
+  s_mov=$(filter_std /tmp/run_moving/report.txt)
+  s_sta=$(filter_std /tmp/run_static/report.txt)
+  b_mov=$(filter_bias /tmp/run_moving/report.txt)
+  # Gated: with "static" low the filter never updates, so its bias stays at the prior (exactly
+  # 0: x0 = 0 and the prediction only scales it) and its std stays at the prior's, above the
+  # std of the filter that did update.
+  local gated
+  gated=$(awk "BEGIN{print ($b_mov == 0 && $s_mov > $s_sta) ? 1 : 0}" 2>/dev/null)
+  local msg rc_missing
+  msg=$(imu-fw --bus vcan0 --gpio-chip "$GPIO_CHIP" --static-line no_such_line 2>&1) && rc_missing=0 || rc_missing=$?
+  local detail="static low: flag $f_mov bias $b_mov std $s_mov; static high: flag $f_sta std $s_sta; alarm clean $a_clean, step $a_step (moving $a_moving); missing line: exit $rc_missing '$(echo "$msg" | head -n1)'"
+  if [ "$f_mov" = 0 ] && [ "$f_sta" = 1 ] && [ "$gated" = 1 ] && [ "$a_clean" = 0 ] &&
+     [ "$a_step" = 1 ] && [ $rc_missing != 0 ] && echo "$msg" | grep -q no_such_line; then
+    result imu_gpio PASS "$detail"
+  else
+    dump /tmp/run_moving/report.txt /tmp/fw_step.txt
+    result imu_gpio FAIL "$detail"
+  fi
 }
 
 TESTS="can_vcan_fd can_roundtrip can_replay gpio_sim gpio_static_input gpio_alarm_output
        gpio_missing_line hal_can_stream hal_can_replay hal_can_flood hal_can_gap hal_gpio
-       imu_stream imu_replay imu_flood imu_gpio"
+       imu_stream imu_realtime imu_replay imu_flood imu_gpio"
+# Kernel command line "imu_tests=a,b" (vm-run.sh: IMU_VM_TESTS="a b") runs only those checks
+# after the two set-up ones (vcan0, gpio-sim): for quick iterations on one check.
+only=$(sed -n 's/.*imu_tests=\([^ ]*\).*/\1/p' /proc/cmdline | tr ',' ' ')
+if [ -n "$only" ]; then
+  TESTS="can_vcan_fd gpio_sim $only"
+fi
 for t in $TESTS; do
   t_$t
 done

@@ -5,8 +5,10 @@
 #   tests/vm/vm-run.sh WORK_DIR [PROJECT_BINARY...]
 # WORK_DIR holds the initramfs tree and the console log (vm-console.log). Environment:
 #   IMU_VM_CACHE    cache for kernel and modules (default /var/cache/imu-vm, see vm-prepare.sh)
-#   IMU_SHARED_DIR  shared data folder; its data/*.mat go to /data in the guest if present
+#   IMU_SHARED_DIR  shared data folder; an excerpt of its first data/*.mat goes to /data
+#   IMU_VM_MAT_SAMPLES  samples of that excerpt (default 50000; "all": the whole file)
 #   IMU_VM_TIMEOUT  seconds before the guest is killed (default 600)
+#   IMU_VM_TESTS    run only these guest checks (space-separated names, see guest-init.sh)
 # Exit 0 when the guest printed its marker with fail=0, 77 (skip) when a prerequisite is
 # missing, 1 otherwise. Prints "VM-TEST PASS|FAIL ..." with the total time.
 set -euo pipefail
@@ -65,12 +67,23 @@ for ko in "$m/net/can/can.ko" "$m/net/can/can-raw.ko" "$m/drivers/net/can/dev/ca
 done
 
 shared=${IMU_SHARED_DIR:-}
-# Only needed by the project's binaries: skip the 10 MB when there are none.
-if [ $# -gt 0 ] && [ -n "$shared" ] && ls "$shared"/data/*.mat >/dev/null 2>&1; then
-  # Hard links when possible (same file system), else copies: the data stays out of the repo.
-  for f in "$shared"/data/*.mat; do
-    ln "$f" "$root/data/" 2>/dev/null || cp "$f" "$root/data/"
-  done
+# The recorded data for the end-to-end check, only when the project's binaries are there: an
+# excerpt (IMU_VM_MAT_SAMPLES, default 50000 = 500 s at 100 Hz) of the first recording, cut on
+# the host by imu-vm-stepmat (the emulated CPU streams 1e6 samples in about 4 minutes, too long
+# for every run). IMU_VM_MAT_SAMPLES=all copies the whole file instead.
+stepmat=""
+for bin in "$@"; do
+  [ "$(basename "$bin")" = imu-vm-stepmat ] && [ -x "$bin" ] && stepmat=$bin
+done
+mat_src=$(ls "$shared"/data/*.mat 2>/dev/null | head -n1 || true)
+if [ $# -gt 0 ] && [ -n "$mat_src" ]; then
+  n=${IMU_VM_MAT_SAMPLES:-50000}
+  if [ "$n" = all ] || [ -z "$stepmat" ]; then
+    cp "$mat_src" "$root/data/"
+  else
+    "$stepmat" --excerpt "$mat_src" --samples "$n" \
+      --out "$root/data/$(basename "$mat_src" .mat)_first$n.mat" >/dev/null
+  fi
 fi
 
 initrd="$work/initrd.gz"
@@ -82,10 +95,11 @@ echo "vm-run: kernel $ABI, initramfs $(du -h "$initrd" | cut -f1), booting (TCG)
 rc=0
 timeout "${IMU_VM_TIMEOUT:-600}" qemu-system-x86_64 -accel tcg -cpu max -m 512 -nographic \
   -no-reboot -nic none -kernel "$KROOT/boot/vmlinuz-$ABI" -initrd "$initrd" \
-  -append "console=ttyS0 panic=-1 quiet" </dev/null >"$log" 2>&1 || rc=$?
+  -append "console=ttyS0 panic=-1 quiet${IMU_VM_TESTS:+ imu_tests=${IMU_VM_TESTS// /,}}" \
+  </dev/null >"$log" 2>&1 || rc=$?
 t_end=$(ms)
 tr -d '\r' <"$log" >"$log.txt"
-grep -E '^VMTEST' "$log.txt" || true
+grep -E '^VM(TEST|LOG)' "$log.txt" || true
 
 secs() { printf '%d.%03d' $(( $1 / 1000 )) $(( $1 % 1000 )); }
 timing="prepare $(secs $((t_prep - t_start))) s, initramfs $(secs $((t_initrd - t_prep))) s, boot+tests $(secs $((t_end - t_initrd))) s, total $(secs $((t_end - t_start))) s"
