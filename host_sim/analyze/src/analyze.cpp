@@ -611,15 +611,20 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     const double scale = robust_scale(fb.nu);
     const double thr = two_sided_normal_threshold(o.alpha / n_d);
     OutlierGate gate;
+    std::vector<double> times;
     if (scale > 0.0 && gate.configure(thr) == EffectStatus::kOk) {
       for (std::size_t i = 0; i < y.size(); ++i) {
         if (gate.push(fb.nu[i] / scale)) {
           outlier[i] = 1;
           y[i] = fb.pred[i];
+          if (times.size() < 100) {
+            times.push_back(static_cast<double>(i) * ts);
+          }
         }
       }
       if (gate.stats().outliers > 0) {
         Effect e;
+        e.times_s = times;
         e.type = "outliers";
         e.count = gate.stats().outliers;
         e.statistic = gate.stats().max_abs;

@@ -74,7 +74,11 @@ std::string effect_json(const Effect& e) {
   } else if (e.type == "bias_step") {
     s << ", \"time_s\": " << num(e.time_s) << ", \"size\": " << num(e.size);
   } else if (e.type == "outliers") {
-    s << ", \"count\": " << e.count;
+    s << ", \"count\": " << e.count << ", \"times_s\": [";
+    for (std::size_t i = 0; i < e.times_s.size(); ++i) {
+      s << (i > 0 ? ", " : "") << num(e.times_s[i]);
+    }
+    s << "]";
   }
   s << ", \"statistic\": " << num(e.statistic) << ", \"threshold\": " << num(e.threshold) << "}";
   return s.str();

@@ -78,6 +78,7 @@ struct Effect {
   double time_s = 0.0;     ///< bias step: time of the first sample after it
   double size = 0.0;       ///< bias step [unit]
   std::uint64_t count = 0; ///< outliers
+  std::vector<double> times_s;  ///< outliers: times of the first 100 [s]
   double statistic = 0.0;  ///< evidence: cost drop (ADEV terms), |z| (step), max |nu| (outliers)
   double threshold = 0.0;  ///< the threshold the statistic passed
 };
