@@ -51,16 +51,18 @@ bool is_link_error(int err) {
          err == ECONNRESET || err == ENOTCONN;
 }
 
-void set_int_opt(int fd, int level, int name, int value) {
-  // Best effort: a kernel without the option still works, with fewer diagnostics (counted:
-  // rx_no_timestamp, and kernel_drops stays 0).
-  (void)setsockopt(fd, level, name, &value, sizeof value);
+bool set_int_opt(int fd, int level, int name, int value) {
+  return setsockopt(fd, level, name, &value, sizeof value) == 0;
 }
 
-void configure_data_fd(int fd, const BusOptions& opt) {
-  set_int_opt(fd, SOL_SOCKET, SO_TIMESTAMPNS, 1);
-  set_int_opt(fd, SOL_SOCKET, SO_RXQ_OVFL, 1);
-  set_int_opt(fd, SOL_SOCKET, SO_RCVBUF, opt.rcvbuf_bytes);
+/// Best effort: without an option the socket still works, with fewer diagnostics (no kernel
+/// timestamps: rx_no_timestamp counts; no SO_RXQ_OVFL: kernel_drops stays 0). Returns whether
+/// kernel receive timestamps are on (qemu-user, for one, refuses SO_TIMESTAMPNS).
+bool configure_data_fd(int fd, const BusOptions& opt) {
+  const bool stamps = set_int_opt(fd, SOL_SOCKET, SO_TIMESTAMPNS, 1);
+  (void)set_int_opt(fd, SOL_SOCKET, SO_RXQ_OVFL, 1);
+  (void)set_int_opt(fd, SOL_SOCKET, SO_RCVBUF, opt.rcvbuf_bytes);
+  return stamps;
 }
 
 socklen_t loopback_address(const char* name, sockaddr_un& addr) {
@@ -109,6 +111,7 @@ void CanSocket::move_from(CanSocket& other) noexcept {
   connector_ = other.connector_;
   pair_ = other.pair_;
   fd_capable_ = other.fd_capable_;
+  kernel_ts_ = other.kernel_ts_;
   down_ = other.down_;
   opt_ = other.opt_;
   std::memcpy(name_, other.name_, sizeof name_);
@@ -198,7 +201,7 @@ IoStatus CanSocket::open_can() {
   if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) != 0) {
     return fail(IoStatus::kSysError, errno, "setsockopt(CAN_RAW_ERR_FILTER)");
   }
-  configure_data_fd(fd, opt_);
+  kernel_ts_ = configure_data_fd(fd, opt_);
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = static_cast<int>(ifindex);
@@ -222,7 +225,7 @@ IoStatus CanSocket::open_loopback() {
       return fail(IoStatus::kSysError, errno, "socket(AF_UNIX)");
     }
     if (connect(fd, reinterpret_cast<const sockaddr*>(&addr), len) == 0) {
-      configure_data_fd(fd, opt_);
+      kernel_ts_ = configure_data_fd(fd, opt_);
       data_fd_ = fd;
       connector_ = true;
       ++stats_.link_up;
@@ -272,7 +275,7 @@ IoStatus CanSocket::open_pair(CanSocket& a, CanSocket& b) {
     s.fd_capable_ = true;
     s.down_ = false;
     s.data_fd_ = sv[i];
-    configure_data_fd(sv[i], s.opt_);
+    s.kernel_ts_ = configure_data_fd(sv[i], s.opt_);
     ++s.stats_.link_up;
   }
   return IoStatus::kOk;
@@ -330,7 +333,7 @@ IoStatus CanSocket::ensure_link(int timeout_ms) {
   if (fd < 0) {
     return IoStatus::kTimeout;
   }
-  configure_data_fd(fd, opt_);
+  kernel_ts_ = configure_data_fd(fd, opt_);
   data_fd_ = fd;
   ++stats_.link_up;
   return IoStatus::kOk;

@@ -62,6 +62,9 @@ class CanSocket final : public FrameSource, public FrameSink {
   [[nodiscard]] BusKind kind() const { return kind_; }
   /// True when FD frames can be sent (CAN interface MTU 72, or loopback).
   [[nodiscard]] bool fd_capable() const { return fd_capable_; }
+  /// True when the kernel accepted SO_TIMESTAMPNS on the data socket (rx_time_ns is the
+  /// kernel's receive time); false: rx_time_ns is read by the reader at batch time.
+  [[nodiscard]] bool kernel_timestamps() const { return kernel_ts_; }
   /// Human-readable text of the last failure, naming the bus ("" if none).
   [[nodiscard]] const char* error() const { return error_; }
   /// Descriptor to poll for input (the data socket, or the listening socket before a peer).
@@ -82,6 +85,7 @@ class CanSocket final : public FrameSource, public FrameSink {
   bool connector_ = false;  // loopback side that connects
   bool pair_ = false;       // in-process pair: no reconnection possible
   bool fd_capable_ = false;
+  bool kernel_ts_ = false;
   bool down_ = false;
   BusOptions opt_{};
   char name_[64] = {};
