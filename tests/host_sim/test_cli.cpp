@@ -125,6 +125,19 @@ TEST(SimCli, BadFilesExit1WithOneLine) {
   EXPECT_NE(run({"adev", synth, "--channel", "gyro_x"}).err.find("gyro_x"), std::string::npos);
 }
 
+TEST(SimCli, MissingBusExit1WithOneLine) {
+  simtest::TempDir dir;
+  const std::string mat = dir.file("s.mat");
+  ASSERT_EQ(run({"synth", "--out", mat, "--duration", "10"}).status, 0);
+  auto r = run({"run", "--mat", mat, "--bus", "nosuchcan9", "--out", dir.file("o")});
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(count_lines(r.err), 1U) << r.err;
+  EXPECT_NE(r.err.find("nosuchcan9"), std::string::npos) << r.err;
+  r = run({"--bus", "nosuchcan9"}, true);
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_NE(r.err.find("imu-fw: cannot open bus: bus 'nosuchcan9'"), std::string::npos) << r.err;
+}
+
 /// synth (30,000 samples) -> run in-process over the loopback bus -> compare with adev.
 TEST(SimCli, RunOverLoopbackLosesNothingAndMatchesAdev) {
   simtest::TempDir dir;
