@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "imu/noise_sim.hpp"
+#include "imu/online_adev.hpp"
 
 namespace {
 
@@ -160,6 +161,54 @@ TEST(AdevResidualCheck, FindsARunAndIgnoresSmallResiduals) {
   ASSERT_EQ(r.n_runs, 1U);  // the 3-point bump stays below z_single, the single point passes
   EXPECT_EQ(r.runs[0].first, 15U);
   EXPECT_EQ(r.runs[0].count, 1U);
+}
+
+// The co-processor scenario: OnlineAdev snapshot of the seed's model against the true model (no
+// alarm), and of the same record with a sinusoid added (alarm, run at the bump near 0.371 / f).
+TEST(AdevResidualCheck, OnlineSnapshotAgainstTheTrueModel) {
+  imu::FirstOrderGm gm{};
+  ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, gm), imu::ModelStatus::kOk);
+  imu::ModelParams p{};
+  p.n = 3.3e-3;
+  p.n_gm = 1;
+  p.gm[0] = imu::GmParam{gm.sb, gm.tb_s};
+  imu::ContinuousModel<6> c;
+  imu::DiscreteModel<6> d;
+  ASSERT_EQ(imu::build_model(p, c), imu::ModelStatus::kOk);
+  ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
+  imu::ModelSimulator<6> sim;
+  ASSERT_EQ(sim.configure(d, 5), imu::ModelStatus::kOk);
+  constexpr double kLsb = 1e-5;
+  constexpr double kF = 0.2;  // Hz: bump near 1.9 s, well inside a 2^18-sample record
+  imu::OnlineAdev<8, 22> clean(0.01, kLsb);
+  imu::OnlineAdev<8, 22> with_sine(0.01, kLsb);
+  for (std::size_t i = 0; i < (std::size_t{1} << 18); ++i) {
+    const double z = sim.next();
+    const double s = 4e-3 * std::sin(2.0 * 3.14159265358979 * kF * 0.01 * static_cast<double>(i));
+    clean.push(imu::quantize(z, kLsb).counts);
+    with_sine.push(imu::quantize(z + s, kLsb).counts);
+  }
+  imu::AdevPoint pts[imu::OnlineAdev<8, 22>::kMaxPoints];
+  imu::AdevCheckOptions o;
+  o.tau_max_s = 262.0;  // T / 10
+  o.threshold = 2.0;
+  o.min_run = 4;
+  o.z_single = imu::two_sided_normal_threshold(0.01 / 60.0);  // Bonferroni over ~60 taus
+  imu::AdevCheckResult<8> r;
+  std::size_t n = clean.snapshot(pts, imu::OnlineAdev<8, 22>::kMaxPoints);
+  ASSERT_EQ(imu::check_adev_residual(pts, n, p, o, r, nullptr), imu::EffectStatus::kOk);
+  EXPECT_FALSE(r.alarm()) << "max |z| " << r.max_abs_z;
+  n = with_sine.snapshot(pts, imu::OnlineAdev<8, 22>::kMaxPoints);
+  ASSERT_EQ(imu::check_adev_residual(pts, n, p, o, r, nullptr), imu::EffectStatus::kOk);
+  ASSERT_TRUE(r.alarm());
+  bool bump_seen = false;
+  for (std::size_t i = 0; i < r.n_runs; ++i) {
+    const double tau0 = pts[r.runs[i].first].tau_s;
+    const double tau1 = pts[r.runs[i].first + r.runs[i].count - 1].tau_s;
+    // The model lies below the data (negative z) around the bump at 0.371 / f = 1.86 s.
+    bump_seen = bump_seen || (r.runs[i].sign < 0 && tau0 <= 1.86 && tau1 >= 1.86);
+  }
+  EXPECT_TRUE(bump_seen);
 }
 
 }  // namespace
