@@ -473,6 +473,31 @@ TEST(MatReaderErrors, HugeDimensionsAllocateNothing) {
   EXPECT_TRUE(contains(column_error(claim, "big"), "compressed bytes can hold")) << column_error(claim, "big");
 }
 
+TEST(MatReaderErrors, StreamShorterThanItsConsistentClaim) {
+  // Dims, real-part size and miMATRIX size all claim 1e6 doubles (8 MB), the zlib stream (valid,
+  // padded with junk after its end so the 1032:1 bound admits the claim) holds only the header.
+  Bytes e = double_matrix("acc_z", 1000000, 1, {});
+  const std::uint32_t real = 8000000U;
+  const std::size_t tag = e.size() - 4U;  // size field of the (empty) miDOUBLE real part
+  for (unsigned i = 0; i < 4U; ++i) {
+    e[tag + i] = static_cast<std::uint8_t>(real >> (8U * i));
+  }
+  const auto n = static_cast<std::uint32_t>(e.size() - 8U + real);
+  for (unsigned i = 0; i < 4U; ++i) {
+    e[4U + i] = static_cast<std::uint8_t>(n >> (8U * i));
+  }
+  Bytes c = compressed(e);
+  c.resize(c.size() + 9000U, 0x5A);
+  const auto z = static_cast<std::uint32_t>(c.size() - 8U);
+  for (unsigned i = 0; i < 4U; ++i) {
+    c[4U + i] = static_cast<std::uint8_t>(z >> (8U * i));
+  }
+  EXPECT_EQ(column_error(image({c}), "acc_z"),
+            "t.mat: variable 'acc_z': truncated: zlib stream inflates to " +
+                std::to_string(e.size()) + " bytes, the matrix declares " +
+                std::to_string(n + 8U));
+}
+
 TEST(MatReaderErrors, StreamInflatesBeyondDeclaredSize) {
   Bytes e = double_matrix("x", 2, 1, {1.0, 2.0});
   e.resize(e.size() + 16U, 0xAB);  // the stream holds 16 bytes more than the miMATRIX declares

@@ -767,8 +767,15 @@ Status MatFile::load(std::string_view name, const Element& elem, std::vector<std
                       " bytes, more than " + std::to_string(elem.payload_bytes) +
                       " compressed bytes can hold"};
     }
+    if (!m.has_data) {
+      return Status{};  // cell, struct, ...: the caller rejects the class, nothing to inflate
+    }
+    // Bound: the declared size. Initial buffer: the declared size only up to 16 x the compressed
+    // size (IMU data inflates ~14x); beyond that the buffer grows with what actually inflates,
+    // so a consistent but false claim of gigabytes costs nothing until the stream delivers.
     const std::size_t want = inner_bytes + 8U;
-    const InflateResult ir = inflate_zlib(p, n, want, InflateMode::whole, scratch, want);
+    const std::size_t hint = std::min(want, 16U * elem.payload_bytes + (std::size_t{1} << 16U));
+    const InflateResult ir = inflate_zlib(p, n, want, InflateMode::whole, scratch, hint);
     if (ir.status != InflateStatus::ok) {
       return MatError{where + "corrupt zlib stream (" + describe(ir.status) + ")"};
     }
