@@ -194,24 +194,30 @@ IoStatus CanSocket::open_can() {
     }
     return fail(IoStatus::kSysError, err, "socket(AF_CAN)");
   }
-  data_fd_ = fd;
+  // Configure and bind a local descriptor; it becomes data_fd_ only once it is usable, so a
+  // failed re-bind after ENODEV never leaves a half-open socket behind.
   const int on = 1;
   const bool fd_frames = setsockopt(fd, SOL_CAN_RAW, CAN_RAW_FD_FRAMES, &on, sizeof on) == 0;
   const can_err_mask_t err_mask = CAN_ERR_MASK;
   if (setsockopt(fd, SOL_CAN_RAW, CAN_RAW_ERR_FILTER, &err_mask, sizeof err_mask) != 0) {
-    return fail(IoStatus::kSysError, errno, "setsockopt(CAN_RAW_ERR_FILTER)");
+    const int err = errno;
+    ::close(fd);
+    return fail(IoStatus::kSysError, err, "setsockopt(CAN_RAW_ERR_FILTER)");
   }
-  kernel_ts_ = configure_data_fd(fd, opt_);
+  const bool stamps = configure_data_fd(fd, opt_);
   sockaddr_can addr{};
   addr.can_family = AF_CAN;
   addr.can_ifindex = static_cast<int>(ifindex);
   if (bind(fd, reinterpret_cast<const sockaddr*>(&addr), sizeof addr) != 0) {
     const int err = errno;
+    ::close(fd);
     return fail(err == ENODEV ? IoStatus::kNoSuchInterface : IoStatus::kSysError, err, "bind");
   }
   ifreq ifr{};
   std::snprintf(ifr.ifr_name, sizeof ifr.ifr_name, "%s", name_);
   fd_capable_ = fd_frames && ioctl(fd, SIOCGIFMTU, &ifr) == 0 && ifr.ifr_mtu == CANFD_MTU;
+  kernel_ts_ = stamps;
+  data_fd_ = fd;
   ++stats_.link_up;
   return IoStatus::kOk;
 }
