@@ -42,18 +42,37 @@ TEST(AnalyzeRecorded, AllTwelveChannels) {
       EXPECT_LT(r.cpu_seconds, 10.0) << file << " " << ch;
       EXPECT_LT(r.error_after.cost, r.error_before.cost) << file << " " << ch;
       std::string found;
+      char buf[160];
       for (const auto& e : r.effects) {
         EXPECT_EQ(types.count(e.type), 1U) << e.type;
-        found += (found.empty() ? "" : ", ") + e.type;
+        if (e.type == "outliers") {
+          std::snprintf(buf, sizeof buf, "outliers: %llu", static_cast<unsigned long long>(e.count));
+        } else if (e.type == "bias_step") {
+          std::snprintf(buf, sizeof buf, "step %+.3g at %.0f s", e.size, e.time_s);
+        } else if (e.type == "rate_random_walk") {
+          std::snprintf(buf, sizeof buf, "RRW K=%.2g", e.k);
+        } else if (e.type == "ramp") {
+          std::snprintf(buf, sizeof buf, "ramp R=%.2g", e.r);
+        } else if (e.type == "quantization") {
+          std::snprintf(buf, sizeof buf, "Q=%.2g", e.q);
+        } else {
+          std::snprintf(buf, sizeof buf, "sinusoid %.4g Hz, A=%.2g", e.freq_hz, e.amplitude);
+        }
+        found += (found.empty() ? "" : "; ") + std::string(buf);
       }
-      std::printf("%s %s: %s | before RMS %.3f max %.3f (all), %.3f/%.3f ([Ts,100 s]) | after "
-                  "RMS %.3f max %.3f, %.3f/%.3f | NIS %.3f -> %.3f | cov %.3f -> %.3f | %.2f s wall %.2f s CPU\n",
-                  file, ch, found.empty() ? "none" : found.c_str(), r.error_before.adev_rms_rel,
-                  r.error_before.adev_max_rel, r.error_before.seed_rms_rel,
-                  r.error_before.seed_max_rel, r.error_after.adev_rms_rel,
-                  r.error_after.adev_max_rel, r.error_after.seed_rms_rel,
-                  r.error_after.seed_max_rel, r.error_before.nis_mean, r.error_after.nis_mean,
-                  r.error_before.cov_ratio, r.error_after.cov_ratio, r.seconds,
+      if (r.model_after.n_gm > r.model_before.n_gm) {
+        std::snprintf(buf, sizeof buf, "(2nd GM: Tb %.2g, %.2g s)", r.model_after.gm[0].tb_s,
+                      r.model_after.gm[1].tb_s);
+        found += (found.empty() ? "" : "; ") + std::string(buf);
+      }
+      const auto& b = r.error_before;
+      const auto& a = r.error_after;
+      // One markdown row of the README table.
+      std::printf("| %s %s | %s | %.3f / %.3f | %.3f / %.3f | %.3f / %.3f | %.3f / %.3f | "
+                  "%.3f / %.3f | %.3f / %.3f | %.2f |\n",
+                  file + 10, ch, found.empty() ? "none" : found.c_str(), b.adev_rms_rel,
+                  b.adev_max_rel, a.adev_rms_rel, a.adev_max_rel, b.seed_rms_rel, b.seed_max_rel,
+                  a.seed_rms_rel, a.seed_max_rel, b.nis_mean, a.nis_mean, b.cov_ratio, a.cov_ratio,
                   r.cpu_seconds);
     }
   }
