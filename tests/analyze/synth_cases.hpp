@@ -22,6 +22,15 @@ inline constexpr double kStepSize = 0.03;
 inline constexpr std::size_t kOutliers = 50;  // outliers: 10 x the white std per sample (0.033)
 inline constexpr double kOutlierSize = 0.33;
 
+// "_alt" cases: another first-order model (N = 5e-4, B = 2e-4, Tp = 60 s, 3e5 samples), so the
+// thresholds are not tied to the seed's model.
+inline constexpr double kAltSinA = 2e-3;
+inline constexpr double kAltSinF = 2.0;
+inline constexpr double kAltStepTime = 1000.0;
+inline constexpr double kAltStepSize = 3e-3;
+inline constexpr std::size_t kAltOutliers = 30;
+inline constexpr double kAltR = 1e-5;
+
 inline SynthSpec make_case(const std::string& name, std::uint64_t seed) {
   SynthSpec s;
   s.seed = seed;
@@ -41,6 +50,25 @@ inline SynthSpec make_case(const std::string& name, std::uint64_t seed) {
   } else if (name == "outliers") {
     s.n_outliers = kOutliers;
     s.outlier_size = kOutlierSize;
+  }
+  if (name.size() > 4 && name.compare(name.size() - 4, 4, "_alt") == 0) {
+    // Another first-order model: gyro-like, short GM, shorter record (generalisation checks).
+    s.n = 5e-4;
+    s.b = 2e-4;
+    s.tp_s = 60.0;
+    s.samples = 300000;
+    if (name == "sinusoid_alt") {
+      s.sin_a = kAltSinA;
+      s.sin_f_hz = kAltSinF;
+    } else if (name == "bias_step_alt") {
+      s.step_time_s = kAltStepTime;
+      s.step_size = kAltStepSize;
+    } else if (name == "outliers_alt") {
+      s.n_outliers = kAltOutliers;
+      s.outlier_size = 0.05;  // 10 x the white std per sample (5e-3)
+    } else if (name == "ramp_alt") {
+      s.ramp_r = kAltR;
+    }
   }
   return s;  // "control": the seed's model alone
 }

@@ -18,8 +18,9 @@ namespace tc = imu::analyze::test;
 constexpr std::uint64_t kSeeds[] = {1, 2, 3, 4, 5};
 
 ia::Report run(const std::string& name, std::uint64_t seed) {
-  const std::vector<double> y = ia::synthesize(tc::make_case(name, seed));
-  EXPECT_EQ(y.size(), 1000000U);
+  const ia::SynthSpec spec = tc::make_case(name, seed);
+  const std::vector<double> y = ia::synthesize(spec);
+  EXPECT_EQ(y.size(), spec.samples);
   ia::Report r;
   std::string err;
   EXPECT_TRUE(ia::analyze(y, name, ia::Options{}, r, err)) << err;
@@ -122,6 +123,40 @@ TEST(AnalyzeSynthetic, Outliers) {
                   0.2 * static_cast<double>(tc::kOutliers))
           << "seed " << seed;  // issue: within 20 %
     }
+  }
+}
+
+// Generalisation: the same thresholds on another first-order model and a shorter record.
+TEST(AnalyzeSynthetic, OtherModelControlAndEffects) {
+  const double record_s = 3e5 / 100.0;
+  for (const auto seed : kSeeds) {
+    const ia::Report c = run("control_alt", seed);
+    EXPECT_TRUE(c.effects.empty()) << "seed " << seed << "\n" << describe(c);
+
+    const ia::Report s = run("sinusoid_alt", seed);
+    if (const ia::Effect* e = single_effect(s, "sinusoid")) {
+      EXPECT_NEAR(e->freq_hz, tc::kAltSinF, 0.05 * tc::kAltSinF);    // issue: 5 %
+      EXPECT_NEAR(e->amplitude, tc::kAltSinA, 0.25 * tc::kAltSinA);  // issue: 25 %
+    }
+    expect_error_lower(s);
+
+    const ia::Report st = run("bias_step_alt", seed);
+    if (const ia::Effect* e = single_effect(st, "bias_step")) {
+      EXPECT_NEAR(e->time_s, tc::kAltStepTime, 0.02 * record_s);          // 2 % of T
+      EXPECT_NEAR(e->size, tc::kAltStepSize, 0.25 * tc::kAltStepSize);    // 25 %
+    }
+
+    const ia::Report o = run("outliers_alt", seed);
+    if (const ia::Effect* e = single_effect(o, "outliers")) {
+      EXPECT_NEAR(static_cast<double>(e->count), static_cast<double>(tc::kAltOutliers),
+                  0.2 * static_cast<double>(tc::kAltOutliers));  // 20 %
+    }
+
+    const ia::Report r = run("ramp_alt", seed);
+    if (const ia::Effect* e = single_effect(r, "ramp")) {
+      EXPECT_NEAR(e->r, tc::kAltR, 0.25 * tc::kAltR);  // 25 %
+    }
+    expect_error_lower(r);
   }
 }
 
