@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,9 @@ const Expected kExpected[] = {
       {"gyro_y", 0x491efd6aU, {0xbf757254c2c98978U, 0xbf8acee9f37bebd6U, 0xbf857254c2c98978U}, 0x3f757254c2c98978U},
       {"gyro_z", 0xc83155bfU, {0x3f4c987103b761f5U, 0xbf8c987103b761f5U, 0xbf8e61f813f2d814U}, 0x3f4c987103b761f5U}}},
 };
+
+// Readable, deterministic ctest names (the default would dump the struct's bytes and pointers).
+void PrintTo(const Expected& e, std::ostream* os) { *os << e.file; }
 
 class SharedData : public ::testing::TestWithParam<Expected> {
  protected:

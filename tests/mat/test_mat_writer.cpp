@@ -8,11 +8,19 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <ostream>
 #include <string>
 #include <vector>
 
 #include "imu/mat/mat_reader.hpp"
 #include "imu/mat/mat_writer.hpp"
+
+namespace imu::mat {
+// Readable ctest names for the round-trip parameters (found by ADL).
+void PrintTo(const WriterOptions& o, std::ostream* os) {
+  *os << (!o.compress ? "plain" : o.deflate == Deflate::stored ? "stored" : "fixed_huffman");
+}
+}  // namespace imu::mat
 
 namespace {
 
