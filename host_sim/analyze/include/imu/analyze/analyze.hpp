@@ -9,19 +9,24 @@
 //     its robust spread (1.4826 MAD); they are replaced by the filter's prediction. Bias steps:
 //     fw StepDetector at scales tau = 8 B Ts (B = 2^p), each normalised by the data's own AVAR at
 //     that tau, threshold Bonferroni over the effectively independent positions of every scale;
-//     the strongest excursion is one step, removed, and the search repeats (at most 3).
+//     the strongest excursion is one step, removed, and the search repeats (at most 3); an
+//     excursion within one window of a step already found is a transient and ends the search.
 //  4. ADEV residual, over every tau up to T/10 (T = record length), of the cleaned record: the
-//     base family (white + GM) is refitted over that range, then terms are added greedily
-//     (quantization Q, rate random walk K, ramp R, sinusoid A, f0): a term is accepted when
-//     (a) the current model leaves a run of >= min_run consecutive taus with z < -z_run in the
-//     region where the term acts (short taus for Q, the longest taus for K and R, anywhere for the
-//     sinusoid), and (b) the drop of the cost sum(z^2) exceeds cost_factor * chi2_{1-alpha}(1)
-//     (cost_factor accounts for the correlation of neighbouring overlapping estimates). The
+//     base family (white + GM, the GM's ADEV peak bounded to T/20 so that a GM cannot stand in
+//     for a rate random walk) is refitted over that range, then terms are added greedily
+//     (quantization Q, rate random walk K, ramp R, sinusoid A, f0, and a second GM that is
+//     reported in the notes, not as an effect): a term is accepted when
+//     (a) the current model leaves a significant run (>= min_run consecutive taus with |z| >
+//     z_run, or one |z| above the Bonferroni level), and (b) the drop of the cost sum(z^2)
+//     exceeds cost_factor * chi2_{1-alpha}(1) (cost_factor accounts for the correlation of
+//     neighbouring overlapping estimates). A ramp must also leave no RRW need once the
+//     least-squares line is removed (else the RRW is taken). The
 //     sinusoid's frequency comes from the bump (f ~ 0.371 / tau_peak) refined by a periodogram
 //     and a golden-section search of the DTFT of block means, its amplitude from the
 //     least-squares fit at that frequency.
 //  5. "after": the joint fit of the base family plus the accepted terms over [Ts, T/10], its
-//     filter NIS mean and covariance check on the cleaned record.
+//     filter NIS mean and covariance check on the cleaned record ("before" again when no ADEV
+//     term was accepted).
 // Errors: RMS and max of |ADEV_model / ADEV_data - 1| over every tau in [Ts, T/10] and over
 // [Ts, 100 s]; "before" against the raw record's ADEV, "after" against the cleaned record's
 // ADEV (the same taus; they are the same numbers when no step or outlier was found).
