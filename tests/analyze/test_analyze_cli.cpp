@@ -69,7 +69,8 @@ TEST_F(AnalyzeCli, WritesJsonWithTheFixedKeys) {
   for (const char* key : {"\"channel\"", "\"fs_hz\"", "\"samples\"", "\"adev\"", "\"model_before\"",
                           "\"error_before\"", "\"effects\"", "\"model_after\"", "\"error_after\"",
                           "\"tau_s\"", "\"edf\"", "\"ci_lo\"", "\"ci_hi\"", "\"adev_rms_rel\"",
-                          "\"adev_max_rel\"", "\"tau_min_s\"", "\"tau_max_s\""}) {
+                          "\"adev_max_rel\"", "\"tau_min_s\"", "\"tau_max_s\"", "\"nis_mean\"",
+                          "\"covariance_ratio\"", "\"whiteness_flagged_fraction\""}) {
     EXPECT_NE(j.find(key), std::string::npos) << key;
   }
   EXPECT_NE(j.find("\"samples\": 200000"), std::string::npos);

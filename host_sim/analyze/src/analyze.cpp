@@ -16,6 +16,7 @@
 #include "imu/edf.hpp"
 #include "imu/effect_monitor.hpp"
 #include "imu/model_fit.hpp"
+#include "imu/residual_monitor.hpp"
 
 namespace imu::analyze {
 namespace {
@@ -145,6 +146,8 @@ FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, doub
 struct FilterRun {
   bool ok = false;
   double nis_mean = 0.0;
+  double nis_flagged = 0.0;        // fraction of NisMonitor blocks outside the band
+  double whiteness_flagged = 0.0;  // fraction of WhitenessMonitor blocks above the bound
   std::size_t states = 0;
   std::vector<double> nu;    // normalised innovation per sample (0 when not updated)
   std::vector<double> pred;  // predicted measurement per sample
@@ -214,6 +217,24 @@ FilterRun run_filter(const ModelParams& p, double ts, const std::vector<double>&
     case 5: run_kf<5>(d, y, known, skip, out); break;
     case 6: run_kf<6>(d, y, known, skip, out); break;
     default: break;
+  }
+  // The fw residual monitors over the normalised innovations of the updates.
+  NisMonitor nis;
+  WhitenessMonitor<4> white;
+  if (nis.configure(1000, 0.99) == MonitorStatus::kOk &&
+      white.configure(1000, 0.95) == MonitorStatus::kOk) {
+    for (std::size_t i = 0; i < y.size(); ++i) {
+      if (skip == nullptr || (*skip)[i] == 0) {
+        nis.push(static_cast<float>(out.nu[i]));
+        white.push(static_cast<float>(out.nu[i]));
+      }
+    }
+    out.nis_flagged = nis.blocks() > 0 ? static_cast<double>(nis.flagged_blocks()) /
+                                             static_cast<double>(nis.blocks())
+                                       : 0.0;
+    out.whiteness_flagged = white.blocks() > 0 ? static_cast<double>(white.flagged_blocks()) /
+                                                     static_cast<double>(white.blocks())
+                                               : 0.0;
   }
   return out;
 }
@@ -601,6 +622,8 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   const FilterRun fb = run_filter(out.model_before, ts, y_in, known_raw, nullptr);
   fill_errors(raw_pts_b, out.model_before, o, ts, tau_max, out.error_before);
   out.error_before.nis_mean = fb.nis_mean;
+  out.error_before.nis_flagged_fraction = fb.nis_flagged;
+  out.error_before.whiteness_flagged_fraction = fb.whiteness_flagged;
   out.error_before.filter_states = fb.states;
   out.error_before.cov_ratio = covariance_ratio(out.model_before, ts, y_in);
 
@@ -940,6 +963,8 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   const double known_clean = mean_of(y);
   const FilterRun fa = run_filter(cur_p, ts, y, known_clean, &outlier);
   out.error_after.nis_mean = fa.nis_mean;
+  out.error_after.nis_flagged_fraction = fa.nis_flagged;
+  out.error_after.whiteness_flagged_fraction = fa.whiteness_flagged;
   out.error_after.filter_states = fa.states;
   out.error_after.cov_ratio = covariance_ratio(cur_p, ts, y);
   if (!fb.ok || !fa.ok) {

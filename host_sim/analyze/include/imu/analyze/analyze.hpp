@@ -70,6 +70,11 @@ struct ErrorStats {
   double cost = 0.0;           ///< sum of z^2 over [tau_min_s, tau_max_s]
   double cov_ratio = 0.0;      ///< robust std / predicted std of the integral at T_int (0: n/a)
   double nis_mean = 0.0;       ///< mean NIS of the bias filter
+  /// Fraction of 1000-update blocks of the normalised innovations flagged by the fw monitors:
+  /// NIS mean outside its 99 % chi-square band, Box-Pierce (4 lags) above its 95 % bound. For a
+  /// correct model about 0.01 and 0.05.
+  double nis_flagged_fraction = 0.0;
+  double whiteness_flagged_fraction = 0.0;
   std::size_t filter_states = 0;
 };
 
