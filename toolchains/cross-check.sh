@@ -7,12 +7,14 @@
 #     compared with the host twin (imu_m4_check) and a direct ADEV.
 # Usage: toolchains/cross-check.sh            (build dirs build-aarch64, build-m4, build-m4host)
 #        IMU_CROSS_PREFIX=build-x toolchains/cross-check.sh   (build-x-aarch64, build-x-m4, ...)
+#        IMU_CROSS_ONLY=aarch64|m4 toolchains/cross-check.sh  (one target only)
 # Installs the arm64 multiarch libraries (gtest, benchmark, libgpiod) if missing (root/sudo).
 # Every stage runs even if an earlier one failed (a failing aarch64 test must not hide the M4
 # results); the script exits 1 at the end if any stage failed, listing them.
 set -uo pipefail
 cd "$(dirname "$0")/.."
 prefix=${IMU_CROSS_PREFIX:-build}
+only=${IMU_CROSS_ONLY:-}
 jobs=${IMU_CROSS_JOBS:-$(nproc)}
 ms() { echo $(( $(date +%s%N) / 1000000 )); }
 secs() { printf '%d.%d' $(( $1 / 1000 )) $(( $1 % 1000 / 100 )); }
@@ -33,6 +35,7 @@ check() {  # check NAME COMMAND...: run, record a failure under NAME
   "$@" || { echo "cross-check: FAILED: $name"; failed+=("$name"); return 1; }
 }
 
+if [ "$only" != m4 ]; then
 stage "arm64 multiarch libraries"
 need=()
 for p in libgtest-dev:arm64 libbenchmark-dev:arm64 libgpiod-dev:arm64; do
@@ -55,6 +58,9 @@ if check "aarch64 configure" cmake -S . -B "$a64" "${gen[@]}" \
   stage "aarch64: unit tests under qemu-aarch64"
   check "aarch64 unit tests" ctest --test-dir "$a64" -L unit -j"$jobs" --output-on-failure
 fi
+fi  # aarch64
+
+if [ "$only" != aarch64 ]; then
 
 stage "m4: configure + build fw and the bare-metal program"
 m4=$prefix-m4
@@ -87,9 +93,10 @@ if [ $m4_ok = 1 ] &&
    check "host twin build" cmake --build "$host" --target imu_m4_check -j"$jobs"; then
   check "m4 under qemu-system-arm" timeout 300 qemu-system-arm -M mps2-an386 -nographic \
       -monitor none -serial none -semihosting-config enable=on,target=native \
-      -kernel "$m4/toolchains/m4/imu_m4_demo_c6.elf" >"$log" &&
+      -kernel "$m4/toolchains/m4/imu_m4_demo_c6.elf" >"$log" 2>&1 &&
     check "m4 output vs host twin" "$host/tests/vm/m4/imu_m4_check" --compare "$log"
 fi
+fi  # m4
 
 stage "done"
 if [ ${#failed[@]} -gt 0 ]; then
