@@ -9,6 +9,16 @@
 
 #include "sim_test_util.hpp"
 
+// Under qemu-aarch64 user mode (cross build) on the build machines a process cannot start a
+// thread (a two-line std::thread program hangs in pthread_create: qemu 7.2, measured) nor exec
+// another aarch64 binary (no binfmt_misc): the end-to-end runs, which need the in-process node
+// thread or a spawned imu-fw, are skipped there; they run natively and in the VM test.
+#ifdef IMU_EMULATED_TARGET
+#define SKIP_IF_EMULATED() GTEST_SKIP() << "needs threads / exec, unavailable under qemu-user here"
+#else
+#define SKIP_IF_EMULATED() (void)0
+#endif
+
 namespace {
 
 using simtest::count_lines;
@@ -140,6 +150,7 @@ TEST(SimCli, MissingBusExit1WithOneLine) {
 
 /// synth (30,000 samples) -> run in-process over the loopback bus -> compare with adev.
 TEST(SimCli, RunOverLoopbackLosesNothingAndMatchesAdev) {
+  SKIP_IF_EMULATED();
   simtest::TempDir dir;
   const std::string mat = dir.file("synth.mat");
   auto r = run({"synth", "--out", mat, "--duration", "300", "--seed", "5"});
@@ -189,6 +200,7 @@ TEST(SimCli, RunOverLoopbackLosesNothingAndMatchesAdev) {
 
 /// imu-fw as its own process (spawned by imu-sim) over a named loopback bus.
 TEST(SimCli, RunWithSpawnedFirmwareProcess) {
+  SKIP_IF_EMULATED();
   simtest::TempDir dir;
   const std::string mat = dir.file("synth.mat");
   ASSERT_EQ(run({"synth", "--out", mat, "--duration", "100"}).status, 0);
@@ -207,6 +219,7 @@ TEST(SimCli, RunWithSpawnedFirmwareProcess) {
 
 /// The plots: gnuplot renders SVG (and PNG) from the CSV files, or the report says it is missing.
 TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
+  SKIP_IF_EMULATED();
   simtest::TempDir dir;
   const std::string mat = dir.file("synth.mat");
   ASSERT_EQ(run({"synth", "--out", mat, "--duration", "100"}).status, 0);
