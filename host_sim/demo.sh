@@ -17,13 +17,6 @@ elapsed() { echo "$(date +%s.%N) $t0" | awk '{printf "%.1f", $1 - $2}'; }
 
 echo "== 1/4 dependencies (toolchains/install-deps.sh core)"
 toolchains/install-deps.sh core
-# The project's configure step also reads tests/CMakeLists.txt, which requires GoogleTest.
-if ! dpkg-query -W -f='${Status}' libgtest-dev 2>/dev/null | grep -q "install ok installed"; then
-  echo "demo: installing libgtest-dev (needed by the configure step)"
-  SUDO=""; if [ "$(id -u)" != 0 ]; then SUDO=sudo; fi
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq --no-install-recommends \
-    libgtest-dev >/dev/null
-fi
 
 echo "== 2/4 build (cmake --preset release; imu-sim, imu-fw)"
 cmake --preset release >/dev/null
