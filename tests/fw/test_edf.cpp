@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "../golden/golden_csv.hpp"
 #include "imu/online_adev.hpp"
 
 namespace {
@@ -46,31 +47,8 @@ TEST(Chi2, GammaPLimits) {
   EXPECT_NEAR(imu::gamma_p(300.0, 300.0), 0.5076771, 2e-5);  // 1/2 + 1/(3 sqrt(2 pi a))
 }
 
-struct GoldenRow {
-  double af;
-  double adev;
-  double n_terms;
-  double lo;
-  double hi;
-};
-
-std::vector<GoldenRow> read_golden(const std::string& path) {
-  std::vector<GoldenRow> rows;
-  std::ifstream f(path);
-  std::string line;
-  while (std::getline(f, line)) {
-    if (line.empty() || line[0] == '#' || line[0] == 'a') {
-      continue;
-    }
-    std::replace(line.begin(), line.end(), ',', ' ');
-    std::istringstream is(line);
-    GoldenRow r{};
-    double tau = 0.0;
-    is >> r.af >> tau >> r.adev >> r.n_terms >> r.lo >> r.hi;
-    rows.push_back(r);
-  }
-  return rows;
-}
+using imu::test::GoldenRow;
+using imu::test::read_golden;
 
 // allantools computes its intervals with Greenhall's EDF (white FM, fully overlapping: stride
 // factor S = m) and scipy's chi2.ppf. Our independent implementation must give the same interval

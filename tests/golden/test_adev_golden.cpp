@@ -12,36 +12,14 @@
 #include <string>
 #include <vector>
 
+#include "golden_csv.hpp"
 #include "imu/mat/mat_reader.hpp"
 #include "imu/online_adev.hpp"
 
 namespace {
 
-struct GoldenRow {
-  double af;
-  double tau_s;
-  double adev;
-  double n_terms;
-  double lo;
-  double hi;
-};
-
-std::vector<GoldenRow> read_golden(const std::string& path) {
-  std::vector<GoldenRow> rows;
-  std::ifstream f(path);
-  std::string line;
-  while (std::getline(f, line)) {
-    if (line.empty() || line[0] == '#' || line[0] == 'a') {
-      continue;
-    }
-    std::replace(line.begin(), line.end(), ',', ' ');
-    std::istringstream is(line);
-    GoldenRow r{};
-    is >> r.af >> r.tau_s >> r.adev >> r.n_terms >> r.lo >> r.hi;
-    rows.push_back(r);
-  }
-  return rows;
-}
+using imu::test::GoldenRow;
+using imu::test::read_golden;
 
 struct ChannelResult {
   int taus = 0;
