@@ -16,6 +16,16 @@
 #include "imu/hal/rx_pump.hpp"
 #include "imu/online_adev.hpp"
 
+// Under qemu-aarch64 user mode on the build machines a dynamically linked process cannot start a
+// thread (pthread_create hangs: qemu 7.2, measured); the producer/consumer tests skip there and
+// run natively and in the VM test.
+#ifdef IMU_EMULATED_TARGET
+#define SKIP_IF_EMULATED() GTEST_SKIP() << "needs threads, unavailable under qemu-user here"
+#else
+#define SKIP_IF_EMULATED() (void)0
+#endif
+
+
 namespace {
 
 using imu::hal::CanFrame;
@@ -212,6 +222,7 @@ TEST(CanSocket, GapDuplicateReorderAndTruncationThroughTheSocket) {
 }
 
 TEST(CanSocket, FloodFasterThanTheConsumerIsBackPressureNotLoss) {
+  SKIP_IF_EMULATED();
   CanSocket a;
   CanSocket b;
   ASSERT_EQ(CanSocket::open_pair(a, b), IoStatus::kOk);
@@ -323,6 +334,7 @@ TEST(CanSocket, SocketCanOpenErrorsNameTheInterface) {
 // estimate must be the one of an estimator fed directly with the same counts and told about the
 // same gap, i.e. the transport neither loses nor invents anything.
 TEST(CanSocket, GapsReachTheAdevAsMissingMarks) {
+  SKIP_IF_EMULATED();
   CanSocket a;
   CanSocket b;
   ASSERT_EQ(CanSocket::open_pair(a, b), IoStatus::kOk);
