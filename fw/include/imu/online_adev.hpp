@@ -128,15 +128,20 @@ class OnlineAdev {
   /// batch's oldest point, which are exact in double (|relative phase| < 2^53, see push_batch).
   void push_block(const std::int32_t* counts, std::size_t n) {
     std::uint64_t xs[kBatch];
+    double xd[kBatch];
     while (n > 0) {
       const std::size_t b = n < kBatch ? n : kBatch;
+      const std::uint64_t base = x_;  // every level's batch array is relative to this phase
       for (std::size_t j = 0; j < b; ++j) {
         x_ += static_cast<std::uint64_t>(static_cast<std::int64_t>(counts[j]));
         xs[j] = x_;
       }
+      for (std::size_t j = 0; j < b; ++j) {
+        xd[j] = exact_relative(xs[j], base);
+      }
       const std::uint64_t first = n_ + 1;  // sample (= point) index of xs[0]
       n_ += b;
-      push_batch(level0_, first, xs, 1, b);
+      push_batch(level0_, first, xs, xd, base, 1, b);
       for (std::size_t k = 1; k <= L; ++k) {
         // Level-k points are the phases at indices that are multiples of 2^k.
         const std::uint64_t q0 = (first + (std::uint64_t{1} << k) - 1) >> k;
@@ -144,7 +149,8 @@ class OnlineAdev {
         if (q1 < q0) {
           break;  // no multiple of 2^k in the batch, hence none of 2^(k+1) either
         }
-        push_batch(upper_[k - 1], q0, xs + ((q0 << k) - first), std::size_t{1} << k,
+        const std::size_t off = static_cast<std::size_t>((q0 << k) - first);
+        push_batch(upper_[k - 1], q0, xs + off, xd + off, base, std::size_t{1} << k,
                    static_cast<std::size_t>(q1 - q0 + 1));
       }
       counts += b;
@@ -249,14 +255,28 @@ class OnlineAdev {
     }
   }
 
-  // Push cnt consecutive points of one level, the first with point index p0. In steady state
-  // (ring full) the terms are summed in registers over a local array of the ring history and the
-  // new points, all relative to the oldest: relative phases span (2M + cnt) points of at most
-  // 2^k * 2^31 counts each, below 2^53 for every level and batch size used here, so the doubles
-  // and the second differences formed from them are exact integers.
+  // x - base as a double, exact for |x - base| < 2^51: adding the bit pattern of 1.5 * 2^52
+  // to the integer gives the double 1.5 * 2^52 + (x - base), from which 1.5 * 2^52 is subtracted
+  // exactly. Branch-free integer add and one subtraction, so the loops over it vectorise.
+  static double exact_relative(std::uint64_t x, std::uint64_t base) {
+    constexpr std::uint64_t kMagicBits = 0x4338000000000000ULL;  // 1.5 * 2^52
+    constexpr double kMagic = 6755399441055744.0;
+    const std::uint64_t u = (x - base) + kMagicBits;
+    double d;
+    std::memcpy(&d, &u, sizeof d);
+    return d - kMagic;
+  }
+
+  // Push cnt consecutive points of one level, the first with point index p0; xs are the points
+  // (every `stride`-th entry), xd the same points relative to `base` as exact doubles. In steady
+  // state (ring full) the terms are summed in registers over a local array of the ring history
+  // and the new points, all relative to `base`: they span at most (2M + cnt) 2^k samples of at
+  // most 2^31 counts, below 2^51 for the levels that take this path (cnt >= 8 means
+  // 2^k <= kBatch / 8), so every double and every second difference formed from them is exact.
   template <std::size_t kTaus, std::size_t kMLo>
   static void push_batch(Level<kTaus, kMLo>& lv, std::uint64_t p0, const std::uint64_t* xs,
-                         std::size_t stride, std::size_t cnt) {
+                         const double* xd, std::uint64_t base, std::size_t stride,
+                         std::size_t cnt) {
     if (lv.seg_points < kRing || cnt < 8) {
       for (std::size_t j = 0; j < cnt; ++j) {
         push_point(lv, p0 + j, xs[j * stride]);
@@ -264,36 +284,38 @@ class OnlineAdev {
       return;
     }
     double arr[kRing + kBatch];
-    const std::uint64_t base = lv.ring[(p0 - kRing) % kRing];
     for (std::size_t i = 0; i < kRing; ++i) {
-      arr[i] = static_cast<double>(static_cast<std::int64_t>(lv.ring[(p0 - kRing + i) % kRing] - base));
+      arr[i] = exact_relative(lv.ring[(p0 - kRing + i) % kRing], base);
     }
     for (std::size_t j = 0; j < cnt; ++j) {
-      arr[kRing + j] = static_cast<double>(static_cast<std::int64_t>(xs[j * stride] - base));
+      arr[kRing + j] = xd[j * stride];
     }
-    // Per tau, terms are formed two at a time in a 2-lane vector (GNU vector extension: SSE2 on
-    // x86-64, NEON on aarch64, plain scalar code on a Cortex-M4) with two accumulators.
-    double acc[kTaus] = {};
+    // Two consecutive points per iteration in a 2-lane vector (GNU vector extension: SSE2 on
+    // x86-64, NEON on aarch64, plain scalar code on a Cortex-M4); the taus are the inner loop
+    // (unrolled, one register accumulator each), so x_j is loaded once for all taus and the
+    // points shared between taus (x_{j-2m} of m equals x_{j-m'} of m' = 2m) are loaded once.
+    V2 vacc[kTaus] = {};
     const std::size_t end = kRing + cnt;
+    std::size_t j = kRing;
+    for (; j + 1 < end; j += 2) {
+      const V2 xj = load2(arr + j);
+      for (std::size_t i = 0; i < kTaus; ++i) {
+        const std::size_t m = kMLo + 1 + i;
+        const V2 a = load2(arr + j - m);
+        const V2 d = xj - (a + a) + load2(arr + j - 2 * m);
+        vacc[i] += d * d;
+      }
+    }
+    double acc[kTaus];
     for (std::size_t i = 0; i < kTaus; ++i) {
-      const std::size_t m = kMLo + 1 + i;
-      V2 a0 = {0.0, 0.0};
-      V2 a1 = {0.0, 0.0};
-      std::size_t j = kRing;
-      for (; j + 3 < end; j += 4) {
-        const V2 b0 = load2(arr + j - m);
-        const V2 d0 = load2(arr + j) - (b0 + b0) + load2(arr + j - 2 * m);
-        const V2 b1 = load2(arr + j + 2 - m);
-        const V2 d1 = load2(arr + j + 2) - (b1 + b1) + load2(arr + j + 2 - 2 * m);
-        a0 += d0 * d0;
-        a1 += d1 * d1;
-      }
-      double tail = 0.0;
-      for (; j < end; ++j) {
+      acc[i] = vacc[i][0] + vacc[i][1];
+    }
+    if (j < end) {  // odd count: the last point alone
+      for (std::size_t i = 0; i < kTaus; ++i) {
+        const std::size_t m = kMLo + 1 + i;
         const double d = arr[j] - 2.0 * arr[j - m] + arr[j - 2 * m];
-        tail += d * d;
+        acc[i] += d * d;
       }
-      acc[i] = (a0[0] + a0[1]) + (a1[0] + a1[1]) + tail;
     }
     // Flush at the same block boundaries as push_point (a block may hold up to kBatch more terms).
     const bool crosses = ((p0 + cnt - 1) >> 16) != (p0 >> 16) || (p0 & kBlockMask) == 0;
@@ -305,8 +327,8 @@ class OnlineAdev {
       }
     }
     const std::size_t keep = cnt < kRing ? cnt : kRing;
-    for (std::size_t j = cnt - keep; j < cnt; ++j) {
-      lv.ring[(p0 + j) % kRing] = xs[j * stride];
+    for (std::size_t q = cnt - keep; q < cnt; ++q) {
+      lv.ring[(p0 + q) % kRing] = xs[q * stride];
     }
     lv.seg_points += cnt;
   }
