@@ -262,7 +262,7 @@ class OnlineAdev {
     constexpr std::uint64_t kMagicBits = 0x4338000000000000ULL;  // 1.5 * 2^52
     constexpr double kMagic = 6755399441055744.0;
     const std::uint64_t u = (x - base) + kMagicBits;
-    double d;
+    double d = 0.0;
     std::memcpy(&d, &u, sizeof d);
     return d - kMagic;
   }
