@@ -47,7 +47,6 @@ TEST(Chi2, GammaPLimits) {
   EXPECT_NEAR(imu::gamma_p(300.0, 300.0), 0.5076771, 2e-5);  // 1/2 + 1/(3 sqrt(2 pi a))
 }
 
-using imu::test::GoldenRow;
 using imu::test::read_golden;
 
 // allantools computes its intervals with Greenhall's EDF (white FM, fully overlapping: stride
