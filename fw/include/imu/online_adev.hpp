@@ -225,25 +225,17 @@ class OnlineAdev {
 
   template <std::size_t kTaus, std::size_t kMLo>
   static void push_point(Level<kTaus, kMLo>& lv, std::uint64_t p, std::uint64_t x) {
-    if (lv.seg_points >= kRing) {  // steady state: every tau of the level has its three points
-      for (std::size_t i = 0; i < kTaus; ++i) {
-        constexpr std::size_t kFirst = kMLo + 1;
-        const std::size_t m = kFirst + i;
-        const std::uint64_t a = lv.ring[(p - m) % kRing];
-        const std::uint64_t b = lv.ring[(p - 2 * m) % kRing];
-        const auto d = static_cast<double>(static_cast<std::int64_t>(x - 2 * a + b));
-        lv.partial[i] += d * d;
+    // Taus are in increasing m, so the ones with their three points in the current segment
+    // (2m <= points before this one) are a prefix: stop at the first that is not.
+    for (std::size_t i = 0; i < kTaus; ++i) {
+      const std::size_t m = kMLo + 1 + i;
+      if (lv.seg_points < 2 * m) {
+        break;
       }
-    } else {
-      for (std::size_t i = 0; i < kTaus; ++i) {
-        const std::size_t m = kMLo + 1 + i;
-        if (lv.seg_points >= 2 * m) {
-          const std::uint64_t a = lv.ring[(p - m) % kRing];
-          const std::uint64_t b = lv.ring[(p - 2 * m) % kRing];
-          const auto d = static_cast<double>(static_cast<std::int64_t>(x - 2 * a + b));
-          lv.partial[i] += d * d;
-        }
-      }
+      const std::uint64_t a = lv.ring[(p - m) % kRing];
+      const std::uint64_t b = lv.ring[(p - 2 * m) % kRing];
+      const auto d = static_cast<double>(static_cast<std::int64_t>(x - 2 * a + b));
+      lv.partial[i] += d * d;
     }
     lv.ring[p % kRing] = x;
     ++lv.seg_points;
