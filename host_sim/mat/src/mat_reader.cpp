@@ -799,14 +799,9 @@ Status MatFile::read_column_into(std::string_view name, std::size_t column,
                                  std::vector<double>& out) const {
   out.clear();
   const std::string where = name_ + ": variable '" + std::string(name) + "': ";
-  Element elem;
-  Status st = find(name, elem);
-  if (!st.ok()) {
-    return st;
-  }
   std::vector<std::uint8_t> scratch;
   Matrix m;
-  st = load(name, elem, scratch, m);
+  Status st = find_and_load(name, scratch, m);
   if (!st.ok()) {
     return st;
   }
@@ -851,16 +846,21 @@ Result<std::vector<double>> MatFile::read_column(std::string_view name, std::siz
   return out;
 }
 
+Status MatFile::find_and_load(std::string_view name, std::vector<std::uint8_t>& scratch,
+                              Matrix& m) const {
+  Element elem;
+  const Status st = find(name, elem);
+  if (!st.ok()) {
+    return st;
+  }
+  return load(name, elem, scratch, m);
+}
+
 Result<double> MatFile::read_scalar(std::string_view name) const {
   const std::string where = name_ + ": variable '" + std::string(name) + "': ";
-  Element elem;
-  Status st = find(name, elem);
-  if (!st.ok()) {
-    return st.error();
-  }
   std::vector<std::uint8_t> scratch;
   Matrix m;
-  st = load(name, elem, scratch, m);
+  Status st = find_and_load(name, scratch, m);
   if (!st.ok()) {
     return st.error();
   }
@@ -881,14 +881,9 @@ Result<double> MatFile::read_scalar(std::string_view name) const {
 
 Result<std::string> MatFile::read_string(std::string_view name) const {
   const std::string where = name_ + ": variable '" + std::string(name) + "': ";
-  Element elem;
-  Status st = find(name, elem);
-  if (!st.ok()) {
-    return st.error();
-  }
   std::vector<std::uint8_t> scratch;
   Matrix m;
-  st = load(name, elem, scratch, m);
+  Status st = find_and_load(name, scratch, m);
   if (!st.ok()) {
     return st.error();
   }

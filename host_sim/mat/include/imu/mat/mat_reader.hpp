@@ -97,6 +97,9 @@ class MatFile {
   [[nodiscard]] Status find(std::string_view name, detail::Element& elem) const;
   [[nodiscard]] Status load(std::string_view name, const detail::Element& elem,
                             std::vector<std::uint8_t>& scratch, detail::Matrix& m) const;
+  /// find() then load(): the common start of every read_*(); m may point into scratch.
+  [[nodiscard]] Status find_and_load(std::string_view name, std::vector<std::uint8_t>& scratch,
+                                     detail::Matrix& m) const;
 
   std::string name_;
   std::vector<std::uint8_t> owned_;
