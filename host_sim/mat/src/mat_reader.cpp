@@ -849,7 +849,7 @@ Result<std::vector<double>> MatFile::read_column(std::string_view name, std::siz
 Status MatFile::find_and_load(std::string_view name, std::vector<std::uint8_t>& scratch,
                               Matrix& m) const {
   Element elem;
-  const Status st = find(name, elem);
+  Status st = find(name, elem);
   if (!st.ok()) {
     return st;
   }
