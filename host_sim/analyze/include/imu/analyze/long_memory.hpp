@@ -1,0 +1,92 @@
+// Time-domain likelihood test for a rate random walk (issue 6, "RRW vs a GM peaking near T/10").
+//
+// Over taus up to T/10 the ADEV of a Gauss-Markov term whose peak (1.89 Tb) sits near the end of
+// the range is the same curve as a rate random walk, and the few degrees of freedom there cannot
+// tell them apart. The record can: a random walk keeps wandering over the whole record, a GM with
+// Tb <= T/10 reverts to its mean many times. This module compares the two with the exact Gaussian
+// likelihood of the record's block means:
+//
+//   y_k = (1/h) int_{kh}^{(k+1)h} (sum_i g_i(t) + w(t)) dt + e_k,     e_k ~ N(0, white_var)
+//
+// g_i first-order GM (drive PSD sb_i, time tb_i), w a random walk of intensity K^2 with a diffuse
+// start (K = 0: an unknown constant, the record's offset), e_k the block mean of the white and
+// other short-correlated noise. The states at block boundaries are Markov; the block integral
+// shares its noise with the next state, which the Kalman filter below carries as the
+// cross-covariance S (closed forms, no matrix exponential). The first block is conditioned on
+// (the diffuse start), in both hypotheses alike.
+//
+// test_rrw(): H0 = white + GMs (tb <= tb_max), H1 = H0 + K; each maximised by Nelder-Mead in
+// log parameters from several starts; LR = 2 (l1 - l0) is chi-square(1)-like under H0 (K = 0 is
+// on the boundary, so the 1 % level of chi2(1), 6.63, is conservative). With a ramp in the model
+// the record is detrended first, so the ramp is not taken for a random walk.
+//
+// Cost: one likelihood is O(blocks) with n_gm + 1 <= 3 states (about 20 us for 2048 blocks); a
+// test is a few thousand of them, about 0.05-0.2 s. Host only (std::vector).
+#ifndef IMU_ANALYZE_LONG_MEMORY_HPP
+#define IMU_ANALYZE_LONG_MEMORY_HPP
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "imu/error_model.hpp"
+
+namespace imu::analyze {
+
+struct BlockModel {
+  double white_var = 0.0;  ///< variance of the white part of one block mean [unit^2]
+  std::size_t n_gm = 0;
+  GmParam gm[kMaxGmTerms] = {};  ///< drive PSD sb [unit^2/s], correlation time tb_s [s]
+  double k = 0.0;          ///< rate random walk K [unit/sqrt(s)]; 0: the walk is a constant
+};
+
+/// Means of consecutive blocks of `per_block` samples (a trailing partial block is dropped).
+[[nodiscard]] std::vector<double> block_means(const std::vector<double>& y, std::size_t per_block);
+
+/// Log-likelihood (without the 2 pi constant) of the block means under m, block length block_s.
+/// w0_var < 0: the walk starts diffuse and the first block is conditioned on (its term left
+/// out); w0_var >= 0: w(0) ~ N(0, w0_var) and every block counts (tests). resets: sorted block
+/// indices before which the walk's level becomes unknown again (a bias step already found and
+/// removed: what its estimate left behind is not evidence of a walk); their terms are left out.
+/// Returns -inf for an invalid model (non-positive white_var, tb or sb).
+[[nodiscard]] double block_loglik(const std::vector<double>& means, double block_s,
+                                  const BlockModel& m, double w0_var = -1.0,
+                                  const std::vector<std::size_t>& resets = {});
+
+struct LikelihoodFit {
+  bool ok = false;
+  BlockModel model{};
+  double loglik = 0.0;
+  int evaluations = 0;
+};
+
+/// Maximise block_loglik over white_var, each GM's (sb, tb) with tb in [tb_min_s, tb_max_s], and
+/// K if fit_k (else K stays at start.k). n_gm is start.n_gm. Nelder-Mead in log parameters.
+[[nodiscard]] LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
+                                            const BlockModel& start, bool fit_k,
+                                            double tb_min_s, double tb_max_s,
+                                            const std::vector<std::size_t>& resets = {});
+
+struct RrwLikelihoodTest {
+  bool ok = false;
+  double block_s = 0.0;
+  std::size_t blocks = 0;
+  LikelihoodFit h0{};  ///< white + GMs
+  LikelihoodFit h1{};  ///< white + GMs + K
+  double lr = 0.0;     ///< 2 (l1 - l0), >= 0
+};
+
+/// The test on the record y (sample period ts_s), in about target_blocks blocks. start: the
+/// ADEV fit's parameters (its GMs, at least one, and K if any), tb_max_s: the largest GM
+/// correlation time H0 may use (a GM beyond it is what the record calls a random walk).
+/// detrend: remove the least-squares line first (when a ramp is already in the model; a walk
+/// that happens to run one way over the record is then largely removed with it).
+/// step_samples: sample indices of bias steps found and removed (the level is reset there).
+[[nodiscard]] RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s,
+                                         const ModelParams& start, double tb_max_s, bool detrend,
+                                         const std::vector<std::uint64_t>& step_samples = {},
+                                         std::size_t target_blocks = 2048);
+
+}  // namespace imu::analyze
+
+#endif  // IMU_ANALYZE_LONG_MEMORY_HPP

@@ -1,0 +1,420 @@
+// Block-mean likelihood of white + GMs + random walk, and the RRW test (see long_memory.hpp).
+#include "imu/analyze/long_memory.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+namespace imu::analyze {
+namespace {
+
+constexpr std::size_t kMaxStates = kMaxGmTerms + 1;
+
+// One independent state of the block model: x' = f x + w, block integral / h = hm x + u,
+// Var(w) = q, Var(u) = ru, Cov(w, u) = s.
+struct Component {
+  double f = 0.0;
+  double q = 0.0;
+  double hm = 0.0;
+  double ru = 0.0;
+  double s = 0.0;
+  double p0 = 0.0;  // initial variance
+};
+
+// First-order GM of drive PSD sb and time tb over a block of length h (closed forms; x = h/tb):
+// Var(w) = sigma^2 (1 - e^2), hm = (1 - e) tb / h, Var(u) = sb tb^3 (x - 2 (1 - e) + (1 - e^2) / 2)
+// / h^2, Cov = sb tb^2 (1 - e)^2 / (2 h), sigma^2 = sb tb / 2, e = exp(-x).
+Component gm_component(double sb, double tb, double h) {
+  const double x = h / tb;
+  const double om = -std::expm1(-x);       // 1 - e
+  const double om2 = -std::expm1(-2.0 * x);  // 1 - e^2
+  const double var = 0.5 * sb * tb;
+  Component c;
+  c.f = 1.0 - om;
+  c.q = var * om2;
+  c.hm = om * tb / h;
+  c.ru = sb * tb * tb * tb * (x - 2.0 * om + 0.5 * om2) / (h * h);
+  c.s = sb * tb * tb * om * om / (2.0 * h);
+  c.p0 = var;
+  return c;
+}
+
+// Random walk of intensity k^2: Var(w) = k^2 h, hm = 1, Var(u) = k^2 h / 3, Cov = k^2 h / 2.
+Component walk_component(double k, double h, double p0) {
+  const double k2 = k * k;
+  Component c;
+  c.f = 1.0;
+  c.q = k2 * h;
+  c.hm = 1.0;
+  c.ru = k2 * h / 3.0;
+  c.s = k2 * h / 2.0;
+  c.p0 = p0;
+  return c;
+}
+
+double sample_variance(const std::vector<double>& v) {
+  double m = 0.0;
+  for (double x : v) {
+    m += x;
+  }
+  m /= static_cast<double>(v.size());
+  double s = 0.0;
+  for (double x : v) {
+    s += (x - m) * (x - m);
+  }
+  return v.size() > 1 ? s / static_cast<double>(v.size() - 1) : 0.0;
+}
+
+// Nelder-Mead minimisation of f from x0 with initial steps `step` (one restart from the best).
+std::vector<double> nelder_mead(const std::function<double(const std::vector<double>&)>& f,
+                                std::vector<double> x0, double step, int max_evals,
+                                int& evals) {
+  const std::size_t n = x0.size();
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<std::vector<double>> xs(n + 1, x0);
+    std::vector<double> fs(n + 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      xs[i + 1][i] += step;
+    }
+    for (std::size_t i = 0; i <= n; ++i) {
+      fs[i] = f(xs[i]);
+      ++evals;
+    }
+    std::vector<std::size_t> idx(n + 1);
+    for (int it = 0; it < max_evals; ++it) {
+      for (std::size_t i = 0; i <= n; ++i) {
+        idx[i] = i;
+      }
+      std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return fs[a] < fs[b]; });
+      const std::size_t best = idx[0];
+      const std::size_t worst = idx[n];
+      const std::size_t second = idx[n - 1];
+      double size = 0.0;
+      for (std::size_t i = 0; i <= n; ++i) {
+        for (std::size_t j = 0; j < n; ++j) {
+          size = std::max(size, std::fabs(xs[i][j] - xs[best][j]));
+        }
+      }
+      if (fs[worst] - fs[best] < 1e-6 && size < 1e-4) {
+        break;
+      }
+      std::vector<double> c(n, 0.0);
+      for (std::size_t i = 0; i <= n; ++i) {
+        if (i != worst) {
+          for (std::size_t j = 0; j < n; ++j) {
+            c[j] += xs[i][j] / static_cast<double>(n);
+          }
+        }
+      }
+      const auto along = [&](double t) {
+        std::vector<double> p(n);
+        for (std::size_t j = 0; j < n; ++j) {
+          p[j] = c[j] + t * (xs[worst][j] - c[j]);
+        }
+        return p;
+      };
+      const std::vector<double> xr = along(-1.0);
+      const double fr = f(xr);
+      ++evals;
+      if (fr < fs[best]) {
+        const std::vector<double> xe = along(-2.0);
+        const double fe = f(xe);
+        ++evals;
+        if (fe < fr) {
+          xs[worst] = xe;
+          fs[worst] = fe;
+        } else {
+          xs[worst] = xr;
+          fs[worst] = fr;
+        }
+      } else if (fr < fs[second]) {
+        xs[worst] = xr;
+        fs[worst] = fr;
+      } else {
+        const bool outside = fr < fs[worst];
+        const std::vector<double> xc = along(outside ? -0.5 : 0.5);
+        const double fc = f(xc);
+        ++evals;
+        if (fc < (outside ? fr : fs[worst])) {
+          xs[worst] = xc;
+          fs[worst] = fc;
+        } else {  // shrink towards the best
+          for (std::size_t i = 0; i <= n; ++i) {
+            if (i != best) {
+              for (std::size_t j = 0; j < n; ++j) {
+                xs[i][j] = xs[best][j] + 0.5 * (xs[i][j] - xs[best][j]);
+              }
+              fs[i] = f(xs[i]);
+              ++evals;
+            }
+          }
+        }
+      }
+    }
+    std::size_t b = 0;
+    for (std::size_t i = 1; i <= n; ++i) {
+      b = fs[i] < fs[b] ? i : b;
+    }
+    x0 = xs[b];
+    step *= 0.25;  // the restart explores a smaller simplex around the optimum
+  }
+  return x0;
+}
+
+// Log-parameter vector <-> model. tb is mapped into [tb_min, tb_max] by a logistic.
+struct Packing {
+  std::size_t n_gm = 0;
+  bool fit_k = false;
+  double k_fixed = 0.0;
+  double ln_tb_min = 0.0;
+  double ln_tb_span = 0.0;
+
+  [[nodiscard]] std::size_t size() const { return 1 + 2 * n_gm + (fit_k ? 1 : 0); }
+
+  [[nodiscard]] BlockModel unpack(const std::vector<double>& v) const {
+    BlockModel m;
+    m.white_var = std::exp(v[0]);
+    m.n_gm = n_gm;
+    for (std::size_t i = 0; i < n_gm; ++i) {
+      const double u = v[1 + 2 * i + 1];
+      m.gm[i].sb = std::exp(v[1 + 2 * i]);
+      m.gm[i].tb_s = std::exp(ln_tb_min + ln_tb_span / (1.0 + std::exp(-u)));
+    }
+    m.k = fit_k ? std::exp(v[1 + 2 * n_gm]) : k_fixed;
+    return m;
+  }
+
+  [[nodiscard]] std::vector<double> pack(const BlockModel& m) const {
+    std::vector<double> v(size());
+    v[0] = std::log(m.white_var);
+    for (std::size_t i = 0; i < n_gm; ++i) {
+      v[1 + 2 * i] = std::log(m.gm[i].sb);
+      double frac = ln_tb_span > 0.0 ? (std::log(m.gm[i].tb_s) - ln_tb_min) / ln_tb_span : 0.5;
+      frac = std::clamp(frac, 0.02, 0.98);
+      v[1 + 2 * i + 1] = std::log(frac / (1.0 - frac));
+    }
+    if (fit_k) {
+      v[1 + 2 * n_gm] = std::log(m.k);
+    }
+    return v;
+  }
+};
+
+}  // namespace
+
+std::vector<double> block_means(const std::vector<double>& y, std::size_t per_block) {
+  const std::size_t nb = per_block > 0 ? y.size() / per_block : 0;
+  std::vector<double> out(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    double s = 0.0;
+    for (std::size_t i = 0; i < per_block; ++i) {
+      s += y[b * per_block + i];
+    }
+    out[b] = s / static_cast<double>(per_block);
+  }
+  return out;
+}
+
+double block_loglik(const std::vector<double>& means, double block_s, const BlockModel& m,
+                    double w0_var, const std::vector<std::size_t>& resets) {
+  constexpr double kInvalid = -std::numeric_limits<double>::infinity();
+  if (!(m.white_var > 0.0) || !(block_s > 0.0) || means.empty() || m.n_gm > kMaxGmTerms ||
+      !(m.k >= 0.0)) {
+    return kInvalid;
+  }
+  const bool diffuse = w0_var < 0.0;
+  std::array<Component, kMaxStates> c{};
+  const std::size_t d = m.n_gm + 1;
+  double r = m.white_var;
+  for (std::size_t i = 0; i < m.n_gm; ++i) {
+    if (!(m.gm[i].sb > 0.0) || !(m.gm[i].tb_s > 0.0)) {
+      return kInvalid;
+    }
+    c[i] = gm_component(m.gm[i].sb, m.gm[i].tb_s, block_s);
+  }
+  // Diffuse start: a variance far above anything in the data (the limit is reached to ~1e-8).
+  const double big = 1e8 * (sample_variance(means) + m.white_var);
+  c[m.n_gm] = walk_component(m.k, block_s, diffuse ? big : w0_var);
+  for (std::size_t i = 0; i < d; ++i) {
+    r += c[i].ru;
+  }
+  std::array<double, kMaxStates> x{};
+  std::array<std::array<double, kMaxStates>, kMaxStates> p{};
+  for (std::size_t i = 0; i < d; ++i) {
+    p[i][i] = c[i].p0;
+  }
+  x[m.n_gm] = diffuse ? means[0] : 0.0;
+  double ll = 0.0;
+  std::size_t next_reset = 0;
+  for (std::size_t k = 0; k < means.size(); ++k) {
+    bool reset = false;
+    while (next_reset < resets.size() && resets[next_reset] <= k) {
+      reset = reset || resets[next_reset] == k;
+      ++next_reset;
+    }
+    if (reset && k > 0) {  // the walk's level is unknown again
+      p[m.n_gm][m.n_gm] += big;
+    }
+    std::array<double, kMaxStates> ph{};  // P hm
+    double pred = 0.0;
+    for (std::size_t i = 0; i < d; ++i) {
+      pred += c[i].hm * x[i];
+      for (std::size_t j = 0; j < d; ++j) {
+        ph[i] += p[i][j] * c[j].hm;
+      }
+    }
+    double s = r;
+    for (std::size_t i = 0; i < d; ++i) {
+      s += c[i].hm * ph[i];
+    }
+    if (!(s > 0.0)) {
+      return kInvalid;
+    }
+    const double nu = means[k] - pred;
+    if ((!diffuse || k > 0) && !reset) {
+      ll -= 0.5 * (std::log(s) + nu * nu / s);
+    }
+    // Predictor form with correlated noise: G = (F P hm + S) / s; x = F x + G nu;
+    // P = F P F + Q - G G s.
+    std::array<double, kMaxStates> g{};
+    for (std::size_t i = 0; i < d; ++i) {
+      g[i] = (c[i].f * ph[i] + c[i].s) / s;
+      x[i] = c[i].f * x[i] + g[i] * nu;
+    }
+    for (std::size_t i = 0; i < d; ++i) {
+      for (std::size_t j = 0; j < d; ++j) {
+        p[i][j] = c[i].f * p[i][j] * c[j].f - g[i] * g[j] * s + (i == j ? c[i].q : 0.0);
+      }
+    }
+  }
+  return ll;
+}
+
+LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
+                              const BlockModel& start, bool fit_k, double tb_min_s,
+                              double tb_max_s, const std::vector<std::size_t>& resets) {
+  LikelihoodFit out;
+  if (means.size() < 16 || !(tb_min_s > 0.0) || start.n_gm > kMaxGmTerms ||
+      !(start.white_var > 0.0) || (fit_k && !(start.k > 0.0))) {
+    return out;
+  }
+  Packing pk;
+  pk.n_gm = start.n_gm;
+  pk.fit_k = fit_k;
+  pk.k_fixed = start.k;
+  pk.ln_tb_min = std::log(tb_min_s);
+  pk.ln_tb_span = std::max(0.0, std::log(tb_max_s) - pk.ln_tb_min);
+  for (std::size_t i = 0; i < start.n_gm; ++i) {
+    if (!(start.gm[i].sb > 0.0) || !(start.gm[i].tb_s > 0.0)) {
+      return out;
+    }
+  }
+  const auto cost = [&](const std::vector<double>& v) {
+    const double ll = block_loglik(means, block_s, pk.unpack(v), -1.0, resets);
+    return std::isfinite(ll) ? -ll : 1e300;
+  };
+  int evals = 0;
+  const std::vector<double> best = nelder_mead(cost, pk.pack(start), 1.0, 3000, evals);
+  out.model = pk.unpack(best);
+  out.loglik = block_loglik(means, block_s, out.model, -1.0, resets);
+  out.evaluations = evals;
+  out.ok = std::isfinite(out.loglik);
+  return out;
+}
+
+RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const ModelParams& start,
+                           double tb_max_s, bool detrend,
+                           const std::vector<std::uint64_t>& step_samples,
+                           std::size_t target_blocks) {
+  RrwLikelihoodTest out;
+  if (!(ts_s > 0.0) || target_blocks < 64 || y.size() < 64) {
+    return out;
+  }
+  const std::size_t per_block = std::max<std::size_t>(1, y.size() / target_blocks);
+  std::vector<double> m = block_means(y, per_block);
+  const double h = static_cast<double>(per_block) * ts_s;
+  // Remove the mean, and with `detrend` the least-squares line through the block centres.
+  const double nb = static_cast<double>(m.size());
+  double sy = 0.0;
+  double sty = 0.0;
+  double stt = 0.0;
+  for (std::size_t k = 0; k < m.size(); ++k) {
+    const double t = static_cast<double>(k) - 0.5 * (nb - 1.0);
+    sy += m[k];
+    sty += t * m[k];
+    stt += t * t;
+  }
+  for (std::size_t k = 0; k < m.size(); ++k) {
+    const double t = static_cast<double>(k) - 0.5 * (nb - 1.0);
+    m[k] -= sy / nb + (detrend && stt > 0.0 ? sty / stt : 0.0) * t;
+  }
+  // A step inside block b mixes two levels there: the level is reset before b and b + 1.
+  std::vector<std::size_t> resets;
+  for (const std::uint64_t i : step_samples) {
+    const std::size_t b = static_cast<std::size_t>(i / per_block);
+    resets.push_back(b);
+    resets.push_back(b + 1);
+  }
+  std::sort(resets.begin(), resets.end());
+  const double tb_min = h;
+  const double tb_max = std::max(tb_max_s, 2.0 * h);
+  // Start: white (and quantization, and GMs shorter than two blocks, which are white at this
+  // scale: AVAR ~ sb tb^2 / tau) from the ADEV fit; longer GMs kept (at least one).
+  BlockModel s0;
+  double white_psd = start.n * start.n + 3.0 * start.q * start.q / h;
+  for (std::size_t i = 0; i < start.n_gm; ++i) {
+    const GmParam g = start.gm[i];
+    if (g.tb_s < 2.0 * h) {
+      white_psd += g.sb * g.tb_s * g.tb_s;
+    } else if (s0.n_gm < kMaxGmTerms) {
+      s0.gm[s0.n_gm++] = GmParam{g.sb, std::clamp(g.tb_s, tb_min, tb_max)};
+    }
+  }
+  const double var_m = sample_variance(m);
+  s0.white_var = std::max(white_psd / h, 1e-3 * var_m);
+  if (s0.n_gm == 0) {  // a GM holding half the variance, tb in the middle of its range
+    const double tb = std::sqrt(tb_min * tb_max);
+    s0.gm[0] = GmParam{std::max(var_m, 1e-30) / tb, tb};
+    s0.n_gm = 1;
+  }
+  if (!(var_m > 0.0)) {
+    return out;
+  }
+  out.block_s = h;
+  out.blocks = m.size();
+  // H0 from the ADEV start and from a GM at the longest allowed time.
+  BlockModel s0b = s0;
+  s0b.gm[s0b.n_gm - 1].tb_s = 0.5 * tb_max;
+  for (const BlockModel& st : {s0, s0b}) {
+    const LikelihoodFit f = fit_block_model(m, h, st, false, tb_min, tb_max, resets);
+    if (f.ok && (!out.h0.ok || f.loglik > out.h0.loglik)) {
+      out.h0 = f;
+    }
+  }
+  if (!out.h0.ok) {
+    return out;
+  }
+  // H1 from H0's optimum with K from the ADEV fit, and with a walk holding all / a tenth of
+  // the record's variance (K^2 T / 6 ~ var for a walk over T).
+  const double t_rec = nb * h;
+  std::vector<double> k_starts = {std::sqrt(6.0 * var_m / t_rec), std::sqrt(0.6 * var_m / t_rec)};
+  if (start.k > 0.0) {
+    k_starts.push_back(start.k);
+  }
+  out.h1 = out.h0;  // K -> 0 reproduces H0
+  for (const double k : k_starts) {
+    BlockModel st = out.h0.model;
+    st.k = k;
+    const LikelihoodFit f = fit_block_model(m, h, st, true, tb_min, tb_max, resets);
+    if (f.ok && f.loglik > out.h1.loglik) {
+      out.h1 = f;
+    }
+  }
+  out.lr = std::max(0.0, 2.0 * (out.h1.loglik - out.h0.loglik));
+  out.ok = true;
+  return out;
+}
+
+}  // namespace imu::analyze
