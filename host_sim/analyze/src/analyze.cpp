@@ -1,5 +1,6 @@
 // The analysis pipeline (see analyze.hpp for the method).
 #include "imu/analyze/analyze.hpp"
+#include "imu/analyze/long_memory.hpp"
 
 #include <algorithm>
 #include <array>
@@ -475,28 +476,6 @@ std::vector<double> minus_sine(const std::vector<double>& y, double ts, const Si
   return out;
 }
 
-// y minus its least-squares line.
-std::vector<double> detrend(const std::vector<double>& y, double ts) {
-  const double n = static_cast<double>(y.size());
-  const double tm = 0.5 * (n - 1.0) * ts;
-  double sy = 0.0;
-  double sty = 0.0;
-  double stt = 0.0;
-  for (std::size_t i = 0; i < y.size(); ++i) {
-    const double t = static_cast<double>(i) * ts - tm;
-    sy += y[i];
-    sty += t * y[i];
-    stt += t * t;
-  }
-  const double slope = stt > 0.0 ? sty / stt : 0.0;
-  const double mean = sy / n;
-  std::vector<double> out(y.size());
-  for (std::size_t i = 0; i < y.size(); ++i) {
-    out[i] = y[i] - mean - slope * (static_cast<double>(i) * ts - tm);
-  }
-  return out;
-}
-
 // ---------------------------------------------------------------- error statistics
 
 void fill_errors(const Points& pts, const ModelParams& m, const Options& o, double ts,
@@ -768,6 +747,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   ModelParams cur_p = cur.params;
   double cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
   const double cost_thr = o.cost_factor * chi2_quantile(1.0 - o.alpha, 1.0);
+  const double lr_thr = chi2_quantile(1.0 - o.alpha, 1.0);  // record likelihood: no inflation
   bool have_sine = false;
   SineFit sine{};
   std::vector<double> y_fit = y;  // y minus the accepted sinusoid
@@ -861,28 +841,21 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       }
     }
     // Ramp or rate random walk: one realisation of a random walk can look like a ramp on the
-    // ADEV. A deterministic ramp leaves nothing at long taus once the least-squares line is
-    // removed from the record; a random walk still needs its K there. So when the ramp wins,
-    // the RRW is tested again on the detrended record and preferred if still significant.
+    // ADEV. A deterministic ramp leaves no walk once the least-squares line is removed from the
+    // record; a random walk still wanders. So when the ramp wins, the record's likelihood test
+    // (long_memory.hpp) runs on the detrended record and the RRW is preferred if it passes.
     if (best != nullptr && best->type == "ramp") {
       const Cand* rrw = nullptr;
       for (const auto& c : cands) {
         rrw = c.type == "rate_random_walk" ? &c : rrw;
       }
       if (rrw != nullptr && cur_cost - rrw->cost > cost_thr) {
-        const std::vector<double> yd = detrend(y_fit, ts);
-        const AdevSet ds = adev_of(to_counts(yd, lsb, sat), ts, lsb);
-        const Points dp = in_range(points_for_model(ds, cur_p), tau_max);
-        const FitResult f0 = fit_terms(dp, terms, ts, tau_max, tb_max);
-        const FitResult f1 = fit_terms(dp, terms | kFitRrw, ts, tau_max, tb_max);
-        if (f0.status == FitStatus::kOk && f1.status == FitStatus::kOk) {
-          const double drop = residual(dp, f0.params, o, ts, tau_max).cost -
-                              residual(dp, f1.params, o, ts, tau_max).cost;
-          if (drop > cost_thr) {
-            out.notes.push_back("ramp rejected for rate_random_walk: after removing the line the "
-                                "RRW still lowers the cost by " + fmt("%.1f", drop));
-            best = rrw;
-          }
+        const RrwLikelihoodTest lt = test_rrw(y_fit, ts, cur_p, tb_max, true, step_at);
+        if (lt.ok && lt.lr > lr_thr) {
+          out.notes.push_back("ramp rejected for rate_random_walk: after removing the line the "
+                              "record still holds a walk (2 ln LR = " + fmt("%.1f", lt.lr) +
+                              " > " + fmt("%.2f", lr_thr) + ")");
+          best = rrw;
         }
       }
     }
@@ -917,30 +890,62 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     fit_pts = in_range(points_for_model(fit_set, cur_p), tau_max);
   }
 
+  // ---- rate random walk by the record's likelihood (when the ADEV up to T/10 did not need it).
+  // The ADEV of a GM peaking near T/10 is the same curve as an RRW's there; the record itself is
+  // not: a walk keeps wandering, a GM with tb <= tb_max reverts many times (long_memory.hpp).
+  // H0 = the current model's GMs (tb <= tb_max), H1 = H0 + K (on the detrended record if a ramp
+  // was found).
+  if ((terms & kFitRrw) == 0U) {
+    const RrwLikelihoodTest lt =
+        test_rrw(y_fit, ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+    if (lt.ok && lt.lr > lr_thr) {
+      const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max);
+      if (f.status == FitStatus::kOk && f.params.k > 0.0) {
+        Effect e;
+        e.type = "rate_random_walk";
+        e.statistic = lt.lr;
+        e.threshold = lr_thr;
+        out.effects.push_back(e);
+        out.notes.push_back(
+            "rate_random_walk from the record's likelihood: 2 ln LR = " + fmt("%.1f", lt.lr) +
+            " > " + fmt("%.2f", lr_thr) + " (" + std::to_string(lt.blocks) + " block means of " +
+            fmt("%.3g", lt.block_s) + " s; GM alone, tb <= " + fmt("%.0f", tb_max) +
+            " s, vs GM + K = " + fmt("%.3g", lt.h1.model.k) + ")");
+        terms |= kFitRrw;
+        cur_p = f.params;
+        cur_p.sin_a = sine.amplitude;
+        cur_p.sin_f0_hz = sine.f_hz;
+        cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
+      }
+    } else if (lt.ok) {
+      out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
+                          fmt("%.1f", lt.lr) + " <= " + fmt("%.2f", lr_thr));
+    }
+  }
+
   // ---- after: joint refit with the accepted terms (EDF from the current model), checks.
   // No ADEV term accepted: the first-order model explains the ADEV, and "after" is "before"
   // (checked on the cleaned record when steps or outliers were removed).
   if (terms == base_terms && !have_sine) {
     cur_p = out.model_before;
   } else {
-    // The fit's weights are its own (IRLS on AVAR); the model kept is the one with the lowest
-    // sum(z^2) on the checked taus among fits with the GM time bounded at a few ranges.
+    // The joint fit (its own IRLS weights on AVAR), kept if it lowers sum(z^2) on the checked
+    // taus. The GM stays bounded as in the search (peak and one octave inside [Ts, T/10]), also
+    // next to a rate random walk or ramp: an unbounded GM there takes over K's rise (K fell to
+    // half its true value, or to 0, on some synthetic seeds). Every effect found stays in the
+    // model: the NNLS may zero a term whose evidence (e.g. the likelihood test) it does not see.
     fit_pts = in_range(points_for_model(fit_set, cur_p), tau_max);
-    for (const double tb : {tb_max, tau_max / kGmPeakTauFactor, tau_max, 0.0}) {
-      if ((terms & (kFitRrw | kFitRamp)) == 0U && !(tb > 0.0 && tb <= tb_max)) {
-        continue;  // without a long-tau term the GM must keep its peak inside the range
-      }
-      const FitResult f = fit_terms(fit_pts, terms, ts, tau_max, tb);
-      if (f.status != FitStatus::kOk) {
-        continue;
-      }
+    const FitResult f = fit_terms(fit_pts, terms, ts, tau_max, tb_max);
+    if (f.status == FitStatus::kOk) {
       ModelParams p = f.params;
       p.sin_a = cur_p.sin_a;
       p.sin_f0_hz = cur_p.sin_f0_hz;
+      const bool keeps_terms = ((terms & kFitQuantization) == 0U || p.q > 0.0) &&
+                               ((terms & kFitRrw) == 0U || p.k > 0.0) &&
+                               ((terms & kFitRamp) == 0U || p.r > 0.0);
       const double c = residual(eval, p, o, ts, tau_max).cost;
-      if (c < cur_cost) {
+      if (keeps_terms && c < cur_cost) {
         cur_p = p;
-        cur_cost = c;
       }
     }
   }
