@@ -19,14 +19,16 @@
 //     (a) the current model leaves a significant run (>= min_run consecutive taus with |z| >
 //     z_run, or one |z| above the Bonferroni level), and (b) the drop of the cost sum(z^2)
 //     exceeds cost_factor * chi2_{1-alpha}(1) (cost_factor accounts for the correlation of
-//     neighbouring overlapping estimates). A ramp must also leave no RRW need once the
-//     least-squares line is removed (else the RRW is taken). The
+//     neighbouring overlapping estimates). A ramp must also leave no walk in the detrended
+//     record by the likelihood test of long_memory.hpp (else the RRW is taken). The
 //     sinusoid's frequency comes from the bump (f ~ 0.371 / tau_peak) refined by a periodogram
 //     and a golden-section search of the DTFT of block means, its amplitude from the
-//     least-squares fit at that frequency.
-//  5. "after": the joint fit of the base family plus the accepted terms over [Ts, T/10], its
-//     filter NIS mean and covariance check on the cleaned record ("before" again when no ADEV
-//     term was accepted).
+//     least-squares fit at that frequency. Without K at the end of the search, the record's
+//     likelihood test (GMs with the same bound vs GMs + K, 2 ln LR > chi2_{1-alpha}(1)) may
+//     still add it: the ADEV up to T/10 cannot tell a GM peaking near T/10 from a walk.
+//  5. "after": the joint fit of the base family plus the accepted terms over [Ts, T/10] (GM
+//     bounded as above, every effect found kept), its filter NIS mean and covariance check on
+//     the cleaned record ("before" again when no ADEV term was accepted).
 // Errors: RMS and max of |ADEV_model / ADEV_data - 1| over every tau in [Ts, T/10] and over
 // [Ts, 100 s]; "before" against the raw record's ADEV, "after" against the cleaned record's
 // ADEV (the same taus; they are the same numbers when no step or outlier was found).
