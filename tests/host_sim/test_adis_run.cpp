@@ -38,6 +38,18 @@ TEST(SimAdis, RunAtMaxRateOverLoopback) {
   EXPECT_EQ(simtest::json_number_in(json, node, "samples"), 1e6);
   EXPECT_EQ(simtest::json_number_in(json, node, "missing"), 0.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "lost"), 0.0);
+  // The recorded acc_z holds steps and a drift the node's first-order filter lacks: its CUSUM
+  // fires (the other channels' too, on the node's default models), and the report says so in
+  // words next to the raw flags.
+  const double flags = simtest::json_number_in(json, "residual monitors (last MonitorRecord)",
+                                               "flags");
+  const std::string report = simtest::read_text(dir.file("run") + "/report.txt");
+  EXPECT_GT(flags, 0.5);
+  const std::size_t note = report.find("note: residual monitors: the innovation CUSUM alarm (");
+  ASSERT_NE(note, std::string::npos)
+      << report.substr(report.size() > 2000 ? report.size() - 2000 : 0);
+  const std::string line = report.substr(note, report.find('\n', note) - note);
+  EXPECT_NE(line.find("acc_z"), std::string::npos) << line;
 
   const double t1 = now_s();
   r = simtest::run({"adev", mat, "--channel", "acc_z", "--json", dir.file("adev.json")});

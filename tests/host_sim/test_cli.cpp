@@ -171,6 +171,11 @@ TEST(SimCli, RunOverLoopbackLosesNothingAndMatchesAdev) {
   EXPECT_EQ(simtest::json_number_in(json, node, "missing"), 0.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "lost"), 0.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "crc_errors"), 0.0);
+  // Raw monitor flags in the report come with a note saying what they mean, and only then.
+  const double flags = simtest::json_number_in(json, "residual monitors (last MonitorRecord)",
+                                               "flags");
+  const std::string report = simtest::read_text(out + "/report.txt");
+  EXPECT_EQ(report.find("note: residual monitors: ") != std::string::npos, flags > 0.5) << flags;
   for (const char* f : {"report.txt", "fig1_adev_data.csv", "fig1_adev_model.csv",
                         "fig1_adev_sim.csv", "fig2_std.csv", "fig2_traj_sim.csv",
                         "fig2_traj_data.csv", "fig1_adev.gp", "fig2_covariance.gp"}) {

@@ -659,6 +659,30 @@ int cmd_run(int argc, char** argv) {
   ri.timing_s = {{"read MAT-file + quantize", t_load},
                  {"send all samples (" + rate + ")", t_sent},
                  {"until final telemetry", t_total}};
+  if (tel.have_monitor && tel.monitor.flags != 0) {
+    // Say what the raw flags mean: a user reading "flags 5" should not have to open codec.hpp.
+    std::string chans;
+    for (std::size_t c = 0; c < kNumChannels; ++c) {
+      if ((tel.monitor.cusum_mask & (1U << c)) != 0U) {
+        chans += (chans.empty() ? "" : ", ") + std::string(kChannelNames[c]);
+      }
+    }
+    std::string what;
+    if ((tel.monitor.flags & 1U) != 0U) {
+      what += "the innovation CUSUM alarm (" + (chans.empty() ? std::string("-") : chans) + ")";
+    }
+    if ((tel.monitor.flags & 2U) != 0U) {
+      what += std::string(what.empty() ? "" : ", ") + "a failed whiteness check";
+    }
+    if ((tel.monitor.flags & 4U) != 0U) {
+      what += std::string(what.empty() ? "" : "; ") + "the alarm line is set";
+    }
+    ri.notes.push_back(
+        "residual monitors: " + what + ". The node's bias filter is the seed's first-order "
+        "model (white + one GM); its innovations drift when the data hold an effect that model "
+        "lacks (a rate random walk, a step, a ramp). `imu-sim analyze FILE.mat --channel " +
+        chan_name + "` names it.");
+  }
   if (sd.ch[chan].off_grid > 0) {
     ri.notes.push_back(std::to_string(sd.ch[chan].off_grid) +
                        " samples are not integer multiples of the LSB (quantised to it)");
