@@ -129,8 +129,8 @@ TEST(LongMemory, InvalidModelIsMinusInfinity) {
 namespace {
 
 // The test on simulated records with a known answer: another first-order model (gyro-like,
-// N = 5e-4, B = 2e-4, Tp = 60 s, 3000 s at 100 Hz), with and without a rate random walk. tb_max as analyze() sets it: GM peak and one octave of its
-// falling side inside [Ts, T/10].
+// N = 5e-4, B = 2e-4, Tp = 60 s, 3000 s at 100 Hz), with and without a rate random walk.
+// tb_max as analyze() sets it: GM peak and one octave of its falling side inside [Ts, T/10].
 struct LrtCase {
   ia::RrwLikelihoodTest t;
   double k_true;

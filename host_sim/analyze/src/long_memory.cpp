@@ -87,7 +87,8 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
       for (std::size_t i = 0; i <= n; ++i) {
         idx[i] = i;
       }
-      std::sort(idx.begin(), idx.end(), [&](std::size_t a, std::size_t b) { return fs[a] < fs[b]; });
+      std::sort(idx.begin(), idx.end(),
+                [&](std::size_t a, std::size_t b) { return fs[a] < fs[b]; });
       const std::size_t best = idx[0];
       const std::size_t worst = idx[n];
       const std::size_t second = idx[n - 1];
