@@ -188,8 +188,10 @@ struct Packing {
   }
 
   [[nodiscard]] std::vector<double> pack(const BlockModel& m) const {
-    std::vector<double> v(size());
-    v[0] = std::log(m.white_var);
+    // Built from a one-element list, so GCC (aarch64, -O3) sees v[0] exists (it warned of a
+    // null dereference for a vector sized by size()).
+    std::vector<double> v{std::log(m.white_var)};
+    v.resize(size());
     for (std::size_t i = 0; i < n_gm; ++i) {
       v[1 + 2 * i] = std::log(m.gm[i].sb);
       double frac = ln_tb_span > 0.0 ? (std::log(m.gm[i].tb_s) - ln_tb_min) / ln_tb_span : 0.5;
