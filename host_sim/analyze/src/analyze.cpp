@@ -275,6 +275,15 @@ double robust_scale(const std::vector<double>& v) {
 
 // ---------------------------------------------------------------- sinusoid estimation
 
+double mean_of(const std::vector<double>& v) {
+  double s = 0.0;
+  for (double x : v) {
+    s += x;
+  }
+  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
+}
+
+
 void fft(std::vector<std::complex<double>>& a) {
   const std::size_t n = a.size();
   for (std::size_t i = 1, j = 0; i < n; ++i) {
@@ -391,17 +400,8 @@ SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c) {
   if (nd < 64) {
     return none;
   }
-  std::vector<double> x(nd);
-  double mean = 0.0;
-  for (std::size_t j = 0; j < nd; ++j) {
-    double s = 0.0;
-    for (std::size_t i = 0; i < dec; ++i) {
-      s += y[j * dec + i];
-    }
-    x[j] = s / static_cast<double>(dec);
-    mean += x[j];
-  }
-  mean /= static_cast<double>(nd);
+  std::vector<double> x = block_means(y, dec);
+  const double mean = mean_of(x);
   for (std::size_t j = 0; j < nd; ++j) {
     const double w = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(j) /
                                           static_cast<double>(nd - 1));
@@ -496,14 +496,6 @@ void fill_errors(const Points& pts, const ModelParams& m, const Options& o, doub
   e.seed_rms_rel = seed.check.rms_rel;
   e.seed_max_rel = seed.check.max_rel;
   e.seed_tau_max_s = std::min(o.seed_tau_max_s, e.tau_max_s);
-}
-
-double mean_of(const std::vector<double>& v) {
-  double s = 0.0;
-  for (double x : v) {
-    s += x;
-  }
-  return v.empty() ? 0.0 : s / static_cast<double>(v.size());
 }
 
 }  // namespace
