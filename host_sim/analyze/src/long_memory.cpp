@@ -220,14 +220,20 @@ std::vector<double> block_means(const std::vector<double>& y, std::size_t per_bl
   return out;
 }
 
-double block_loglik(const std::vector<double>& means, double block_s, const BlockModel& m,
-                    double w0_var, const std::vector<std::size_t>& resets) {
+namespace {
+
+// block_loglik with the sample variance of the means given (fit_block_model evaluates thousands of
+// models on one record: the variance is one pass over it, computed once there).
+double loglik_impl(const std::vector<double>& means, double means_var, double block_s,
+                   const BlockModel& m, double w0_var, const std::vector<std::size_t>& resets) {
   constexpr double kInvalid = -std::numeric_limits<double>::infinity();
   if (!(m.white_var > 0.0) || !(block_s > 0.0) || means.empty() || m.n_gm > kMaxGmTerms ||
       !(m.k >= 0.0)) {
     return kInvalid;
   }
   const bool diffuse = w0_var < 0.0;
+  // Diffuse start: a variance far above anything in the data (the limit is reached to ~1e-8).
+  const double big = 1e8 * (means_var + m.white_var);
   std::array<Component, kMaxStates> c{};
   const std::size_t d = m.n_gm + 1;
   double r = m.white_var;
@@ -237,8 +243,6 @@ double block_loglik(const std::vector<double>& means, double block_s, const Bloc
     }
     c[i] = gm_component(m.gm[i].sb, m.gm[i].tb_s, block_s);
   }
-  // Diffuse start: a variance far above anything in the data (the limit is reached to ~1e-8).
-  const double big = 1e8 * (sample_variance(means) + m.white_var);
   c[m.n_gm] = walk_component(m.k, block_s, diffuse ? big : w0_var);
   for (std::size_t i = 0; i < d; ++i) {
     r += c[i].ru;
@@ -295,6 +299,13 @@ double block_loglik(const std::vector<double>& means, double block_s, const Bloc
   return ll;
 }
 
+}  // namespace
+
+double block_loglik(const std::vector<double>& means, double block_s, const BlockModel& m,
+                    double w0_var, const std::vector<std::size_t>& resets) {
+  return loglik_impl(means, sample_variance(means), block_s, m, w0_var, resets);
+}
+
 LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
                               const BlockModel& start, bool fit_k, double tb_min_s,
                               double tb_max_s, const std::vector<std::size_t>& resets) {
@@ -314,8 +325,9 @@ LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
       return out;
     }
   }
+  const double means_var = sample_variance(means);
   const auto cost = [&](const std::vector<double>& v) {
-    const double ll = block_loglik(means, block_s, pk.unpack(v), -1.0, resets);
+    const double ll = loglik_impl(means, means_var, block_s, pk.unpack(v), -1.0, resets);
     return std::isfinite(ll) ? -ll : 1e300;
   };
   int evals = 0;
