@@ -182,7 +182,7 @@ TEST(BiasKf, ThreeStateFloatFilterIsConsistentOnSimulatedData) {
     const double z = sim.next();
     const auto sd = kd.step(z, true);
     (void)kf.step(static_cast<float>(z), true);
-    nis_sum += sd.nis;
+    nis_sum += sd.nis();
     const double db = std::fabs(static_cast<double>(kf.bias()) - kd.bias()) /
                       std::sqrt(kd.bias_variance());
     max_db_sigma = db > max_db_sigma ? db : max_db_sigma;

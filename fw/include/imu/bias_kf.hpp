@@ -44,7 +44,11 @@ struct KfStep {
   bool updated = false;  ///< the measurement was used
   T innovation = T(0);   ///< e = z - known - H x (prior), 0 when not updated
   T innovation_var = T(0);  ///< S
-  T nis = T(0);             ///< e^2 / S
+  /// e^2 / S, computed on request: the target's filters do not read it, so step() does not pay
+  /// the division.
+  [[nodiscard]] T nis() const {
+    return innovation_var > T(0) ? innovation * innovation / innovation_var : T(0);
+  }
 };
 
 struct KfStats {
@@ -113,7 +117,6 @@ class ScalarBiasKf {
         out.updated = true;
         out.innovation = e;
         out.innovation_var = s;
-        out.nis = e * e / s;
       }
     }
     if (p_ < T(0)) {
@@ -212,7 +215,6 @@ class KalmanFilter {
         out.updated = true;
         out.innovation = e;
         out.innovation_var = s;
-        out.nis = e * e / s;
       }
     }
     symmetrize(p_);

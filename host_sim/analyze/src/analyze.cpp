@@ -172,7 +172,7 @@ void run_kf(const DiscreteModel<6>& d, const std::vector<double>& y, double know
     const bool use = skip == nullptr || (*skip)[i] == 0;
     const KfStep<double> st = kf->step(y[i], use);
     if (st.updated) {
-      nis += st.nis;
+      nis += st.nis();
       ++updates;
       out.nu[i] = st.innovation / std::sqrt(st.innovation_var);
       out.pred[i] = y[i] - st.innovation;
