@@ -81,7 +81,9 @@ constexpr A01 kTable2[7][3] = {
 // Table 3 (alpha = 1): b0 + b1 ln m, d = 1 .. 3.
 constexpr A01 kTable3[3] = {{6.0, 4.0}, {15.23, 12.0}, {47.8, 40.0}};
 
-// Normal quantile: Acklam's rational approximation refined by one Halley step on erfc.
+}  // namespace
+
+// Acklam's rational approximation refined by one Halley step on erfc.
 double normal_quantile(double p) {
   static constexpr double a[6] = {-3.969683028665376e+01, 2.209460984245205e+02,
                                   -2.759285104469687e+02, 1.383577518672690e+02,
@@ -115,6 +117,8 @@ double normal_quantile(double p) {
   const double u = err * kSqrt2Pi * std::exp(x * x / 2.0);
   return x - u / (1.0 + x * u / 2.0);
 }
+
+namespace {
 
 double wilson_hilferty(double p, double dof) {
   const double z = normal_quantile(p);

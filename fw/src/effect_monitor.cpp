@@ -3,24 +3,13 @@
 
 #include <cmath>
 
+#include "imu/edf.hpp"
+
 namespace imu {
 
 double two_sided_normal_threshold(double p) {
-  if (!(p > 0.0 && p < 1.0)) {
-    return 0.0;
-  }
-  // P(|N| > z) = erfc(z / sqrt 2), decreasing in z; erfc(40/sqrt2) underflows below 1e-300.
-  double lo = 0.0;
-  double hi = 40.0;
-  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    if (std::erfc(mid / std::sqrt(2.0)) > p) {
-      lo = mid;
-    } else {
-      hi = mid;
-    }
-  }
-  return 0.5 * (lo + hi);
+  // P(|N| > z) = p  <=>  z = -quantile(p / 2).
+  return p > 0.0 && p < 1.0 ? -normal_quantile(0.5 * p) : 0.0;
 }
 
 EffectStatus OutlierGate::configure(double threshold) {

@@ -27,6 +27,10 @@ inline constexpr double kOneSigmaConfidence = 0.683;
 [[nodiscard]] double edf_greenhall(int alpha, int d, double m, double stride_factor,
                                    double n_terms);
 
+/// Quantile of the standard normal distribution (0 < p < 1): Acklam's approximation refined by
+/// one Halley step (relative error ~1e-15).
+[[nodiscard]] double normal_quantile(double p);
+
 /// Quantile of the chi-square distribution with `dof` degrees of freedom (dof > 0, 0 < p < 1):
 /// Newton iteration on the regularized incomplete gamma function for dof <= 20000, the
 /// Wilson-Hilferty approximation above (relative error of the

@@ -40,7 +40,7 @@ enum class EffectStatus : std::uint8_t {
   kBadConfig,  ///< a parameter is out of range (non-finite, <= 0, or over a capacity)
 };
 
-/// z > 0 with P(|N(0,1)| > z) = p, for 0 < p < 1 (bisection on erfc, |error| < 1e-9).
+/// z > 0 with P(|N(0,1)| > z) = p, for 0 < p < 1 (imu::normal_quantile of p / 2).
 /// Returns 0 for p outside (0, 1).
 [[nodiscard]] double two_sided_normal_threshold(double p);
 
