@@ -37,13 +37,14 @@ struct Solution {
   bool ok = false;
 };
 
+// Each term's AVAR at unit parameter (the fit is linear in N^2, Q^2, Sb, K^2, R^2).
 void basis(double tau, double tb1, double tb2, double (&f)[kP]) {
-  f[kSlotWhite] = 1.0 / tau;
-  f[kSlotQuant] = 3.0 / (tau * tau);
+  f[kSlotWhite] = avar_white(1.0, tau);
+  f[kSlotQuant] = avar_quantization(1.0, tau);
   f[kSlotGm1] = tb1 > 0.0 ? avar_gauss_markov(1.0, tb1, tau) : 0.0;
   f[kSlotGm2] = tb2 > 0.0 ? avar_gauss_markov(1.0, tb2, tau) : 0.0;
-  f[kSlotRrw] = tau / 3.0;
-  f[kSlotRamp] = tau * tau / 2.0;
+  f[kSlotRrw] = avar_rrw(1.0, tau);
+  f[kSlotRamp] = avar_ramp(1.0, tau);
 }
 
 // Lawson-Hanson NNLS on the normal equations G x = h (G symmetric PSD, already scaled to unit
@@ -194,6 +195,8 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
   for (std::size_t a = 0; a < kP; ++a) {
     s.theta[a] = cols[a] ? x[a] / d[a] : 0.0;
   }
+  // The basis is evaluated again rather than kept from the first loop: keeping it would add
+  // kMaxFitPoints x kP doubles (6 kB) of stack, and the fit runs on small targets.
   double cost = 0.0;
   for (std::size_t i = 0; i < pb.n; ++i) {
     double f[kP];
