@@ -121,6 +121,24 @@ TEST(ResidualMonitor, CusumFindsAStepAndItsTime) {
   EXPECT_NEAR(static_cast<double>(c.step_index()), 2000.0, 20.0);
 }
 
+TEST(ResidualMonitor, CusumReconfiguredCountsFromZero) {
+  // A step right at the start of a reconfigured monitor: its time is update 0 of the new
+  // configuration, not a count left over from before.
+  imu::Cusum c;
+  ASSERT_EQ(c.configure(), imu::MonitorStatus::kOk);
+  for (int i = 0; i < 100; ++i) {
+    c.push(0.0F);
+  }
+  ASSERT_EQ(c.configure(), imu::MonitorStatus::kOk);
+  for (int i = 0; i < 20 && !c.alarm(); ++i) {
+    c.push(3.0F);
+  }
+  ASSERT_TRUE(c.alarm());
+  EXPECT_EQ(c.direction(), 1);
+  EXPECT_EQ(c.step_index(), 0U);
+  EXPECT_EQ(c.updates(), 5U);  // g+ grows by 3 - 0.5 per update and passes h = 10 at the 5th
+}
+
 TEST(ResidualMonitor, FilterOnSeedDataWithABiasStepRaisesTheCusum) {
   // The seed model simulated, a 0.02 m/s^2 step added at sample 300000 (static all along):
   // the monitors stay quiet before (mostly) and the CUSUM fires soon after.

@@ -194,8 +194,8 @@ class Cusum {
     }
     k_ = slack;
     h_ = threshold;
+    n_ = 0;  // before reset(), which starts the step search at the current count
     reset();
-    n_ = 0;
     return MonitorStatus::kOk;
   }
   /// Re-arm after an alarm (keeps the update counter running).
