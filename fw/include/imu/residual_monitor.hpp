@@ -228,7 +228,6 @@ class Cusum {
       alarm_ = true;
       direction_ = gp_ > h_ ? 1 : -1;
       step_index_ = gp_ > h_ ? start_p_ : start_m_;
-      ++alarms_;
     }
     return alarm_;
   }
@@ -239,9 +238,6 @@ class Cusum {
   /// number step_index() (valid while alarm()).
   [[nodiscard]] std::uint64_t step_index() const { return step_index_; }
   [[nodiscard]] std::uint64_t updates() const { return n_; }
-  [[nodiscard]] std::uint32_t alarms() const { return alarms_; }
-  [[nodiscard]] float g_pos() const { return gp_; }
-  [[nodiscard]] float g_neg() const { return gm_; }
 
  private:
   float k_ = 0.5F;
@@ -254,7 +250,6 @@ class Cusum {
   std::uint64_t step_index_ = 0;
   bool alarm_ = false;
   int direction_ = 0;
-  std::uint32_t alarms_ = 0;
 };
 
 /// The three monitors of one channel, fed from the filter's step result.
