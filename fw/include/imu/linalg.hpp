@@ -28,7 +28,6 @@ struct Mat {
   T& operator()(std::size_t r, std::size_t c) { return a[r][c]; }
   const T& operator()(std::size_t r, std::size_t c) const { return a[r][c]; }
 
-  static Mat zeros() { return Mat{}; }
   static Mat identity() {
     static_assert(R == C, "identity() needs a square matrix");
     Mat m{};
@@ -84,18 +83,6 @@ struct Mat {
       best = s > best ? s : best;
     }
     return best;
-  }
-
-  /// Element type conversion (e.g. a double model to the float filter on target).
-  template <typename U>
-  [[nodiscard]] Mat<U, R, C> cast() const {
-    Mat<U, R, C> m{};
-    for (std::size_t i = 0; i < R; ++i) {
-      for (std::size_t j = 0; j < C; ++j) {
-        m.a[i][j] = static_cast<U>(a[i][j]);
-      }
-    }
-    return m;
   }
 };
 

@@ -72,7 +72,6 @@ class ModelSimulator {
   double next();
   /// Current state x_k (the one the next call of next() observes), n_states entries.
   [[nodiscard]] const double* state() const { return x_; }
-  [[nodiscard]] std::size_t n_states() const { return model_.n_states; }
 
  private:
   DiscreteModel<kMaxStates> model_{};

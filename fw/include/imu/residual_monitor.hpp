@@ -145,7 +145,6 @@ class WhitenessMonitor {
   [[nodiscard]] bool lag_flag(std::size_t lag) const {
     return lag >= 1 && lag <= kLags ? lag_flag_[lag - 1] : false;
   }
-  [[nodiscard]] float band() const { return band_; }
   [[nodiscard]] float box_pierce() const { return q_; }
   [[nodiscard]] float box_pierce_bound() const { return q_bound_; }
   /// Box-Pierce statistic of the last complete block above its bound.
