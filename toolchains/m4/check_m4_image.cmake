@@ -5,7 +5,6 @@
 file(READ ${MAP} map)
 # A symbol or an input section named after a heap function: ".text._malloc_r", "(malloc)",
 # " _sbrk". Identifier boundaries on both sides so that e.g. "freer" or "mallinfo" do not match.
-set(id "[A-Za-z0-9_]")
 string(REGEX MATCHALL "(^|[^A-Za-z0-9_])(_?malloc|_?free|_sbrk|_malloc_r|_free_r|_sbrk_r|_calloc_r|_realloc_r|calloc|realloc)([^A-Za-z0-9_]|$)"
        hits "${map}")
 if(hits)

@@ -34,24 +34,11 @@ class Line {
     }
     return *this;
   }
-  Line& i64(std::int64_t v) {
-    if (v < 0) {
-      put('-');
-      // Two's complement magnitude, correct for INT64_MIN as well.
-      return u64(~static_cast<std::uint64_t>(v) + 1u);
-    }
-    return u64(static_cast<std::uint64_t>(v));
-  }
-  Line& hex64(std::uint64_t v) {
+  /// All hex digits of an unsigned integer (8 for 32 bits, 16 for 64).
+  template <typename U>
+  Line& hex(U v) {
     static constexpr char kHex[] = "0123456789abcdef";
-    for (int shift = 60; shift >= 0; shift -= 4) {
-      put(kHex[(v >> static_cast<unsigned>(shift)) & 0xFu]);
-    }
-    return *this;
-  }
-  Line& hex32(std::uint32_t v) {
-    static constexpr char kHex[] = "0123456789abcdef";
-    for (int shift = 28; shift >= 0; shift -= 4) {
+    for (int shift = static_cast<int>(8 * sizeof(U)) - 4; shift >= 0; shift -= 4) {
       put(kHex[(v >> static_cast<unsigned>(shift)) & 0xFu]);
     }
     return *this;
@@ -61,17 +48,16 @@ class Line {
     std::uint32_t bits = 0;
     static_assert(sizeof bits == sizeof v, "IEEE-754 binary32");
     std::memcpy(&bits, &v, sizeof v);
-    return hex32(bits);
+    return hex(bits);
   }
   /// The IEEE-754 bits of `v` in hex (exact; the reader converts back with memcpy).
   Line& f64(double v) {
     std::uint64_t bits = 0;
     static_assert(sizeof bits == sizeof v, "IEEE-754 binary64");
     std::memcpy(&bits, &v, sizeof v);
-    return hex64(bits);
+    return hex(bits);
   }
   const char* c_str() const { return buf_; }
-  std::size_t size() const { return n_; }
   bool truncated() const { return truncated_; }
   void clear() {
     n_ = 0;
