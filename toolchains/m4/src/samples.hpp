@@ -33,11 +33,11 @@ class SampleSource {
       : rng_(0x9E3779B9u * (channel + 1u)),
         bias_counts_(1000 * (static_cast<std::int32_t>(channel) - 2)) {}
 
-  /// Next sample in counts. Stays far inside int32 for any practical length: the walk grows
-  /// like 18.5 sqrt(n) counts.
   /// Constant part of the bias and the random walk so far, in counts (the truth a filter tracks).
   constexpr std::int32_t bias_counts() const { return bias_counts_ + walk_counts_; }
 
+  /// Next sample in counts. Stays far inside int32 for any practical length: the walk grows
+  /// like 18.5 sqrt(n) counts.
   constexpr std::int32_t next() {
     const std::int32_t white = (rng_.uniform16() + rng_.uniform16() + rng_.uniform16() +
                                 rng_.uniform16()) / 2;
