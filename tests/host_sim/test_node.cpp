@@ -33,16 +33,9 @@ class CaptureSink final : public imu::hal::FrameSink {
   /// Decode every captured frame into events (clears the capture).
   std::vector<imu::hal::RxEvent> events() {
     std::vector<imu::hal::RxEvent> out;
-    imu::hal::RxEvent e{};
     for (const CanFrame& f : frames) {
-      while (rx.push(f, imu::hal::wire_size(f), 0) == imu::hal::FrameVerdict::kBusy) {
-        while (rx.pop(e)) {
-          out.push_back(e);
-        }
-      }
-      while (rx.pop(e)) {
-        out.push_back(e);
-      }
+      (void)rx.push_drain(f, imu::hal::wire_size(f), 0,
+                          [&out](const imu::hal::RxEvent& e) { out.push_back(e); });
     }
     frames.clear();
     return out;

@@ -127,17 +127,9 @@ class Link {
         }
         return;
       }
-      hal::RxEvent e{};
       for (std::size_t i = 0; i < n; ++i) {
-        while (tel_.rx.push(batch_[i].frame, batch_[i].nbytes, batch_[i].rx_time_ns) ==
-               hal::FrameVerdict::kBusy) {
-          while (tel_.rx.pop(e)) {
-            tel_.on_event(e);
-          }
-        }
-        while (tel_.rx.pop(e)) {
-          tel_.on_event(e);
-        }
+        (void)tel_.rx.push_drain(batch_[i].frame, batch_[i].nbytes, batch_[i].rx_time_ns,
+                                 [this](const hal::RxEvent& e) { tel_.on_event(e); });
       }
     }
   }

@@ -64,28 +64,14 @@ void Node::on_frame(const hal::CanFrame& f, std::size_t nbytes, std::uint64_t rx
   if (!configured_) {
     return;
   }
-  hal::RxEvent e{};
-  // kBusy only if events were left in the receiver: drain them, then the frame goes in.
-  while (rx_.push(f, nbytes, rx_time_ns) == hal::FrameVerdict::kBusy) {
-    while (rx_.pop(e)) {
-      on_event(e);
-    }
-  }
-  while (rx_.pop(e)) {
-    on_event(e);
-  }
+  (void)rx_.push_drain(f, nbytes, rx_time_ns, [this](const hal::RxEvent& e) { on_event(e); });
 }
 
 void Node::on_idle() {
   if (!configured_) {
     return;
   }
-  hal::RxEvent e{};
-  if (rx_.flush()) {
-    while (rx_.pop(e)) {
-      on_event(e);
-    }
-  }
+  (void)rx_.flush_drain([this](const hal::RxEvent& e) { on_event(e); });
   apply_missing();
   if (dirty_) {
     send_full();

@@ -119,6 +119,40 @@ class Receiver {
   /// (nothing done) if the event queue lacks room: pop() first. O(W).
   [[nodiscard]] bool flush();
 
+  /// push() one frame and hand every event it releases to on_event(const RxEvent&). On kBusy
+  /// (events were left in the queue) they are handed out first and the frame goes in then.
+  /// Returns the frame's verdict. The one pump every consumer uses (node, imu-sim, RxPump).
+  template <class OnEvent>
+  FrameVerdict push_drain(const CanFrame& f, std::size_t nbytes, std::uint64_t rx_time_ns,
+                          OnEvent&& on_event) {
+    FrameVerdict v = push(f, nbytes, rx_time_ns);
+    while (v == FrameVerdict::kBusy) {
+      drain(on_event);
+      v = push(f, nbytes, rx_time_ns);
+    }
+    drain(on_event);
+    return v;
+  }
+
+  /// flush() and hand out what it releases (events left in the queue go first). Returns
+  /// flush()'s result.
+  template <class OnEvent>
+  bool flush_drain(OnEvent&& on_event) {
+    drain(on_event);
+    const bool flushed = flush();
+    drain(on_event);
+    return flushed;
+  }
+
+  /// Hand every queued event to on_event, oldest first.
+  template <class OnEvent>
+  void drain(OnEvent&& on_event) {
+    RxEvent e{};
+    while (pop(e)) {
+      on_event(e);
+    }
+  }
+
   /// Samples held in the reorder window waiting for an earlier one.
   [[nodiscard]] std::size_t held() const;
   [[nodiscard]] std::size_t events_pending() const { return q_count_; }

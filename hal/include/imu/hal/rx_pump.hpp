@@ -23,26 +23,12 @@ class RxPump {
                                   OnEvent&& on_event) {
     std::size_t n = 0;
     const IoStatus s = src.receive(batch_, B, n, timeout_ms);
-    RxEvent e{};
     if (s == IoStatus::kTimeout) {
-      if (rx.flush()) {
-        while (rx.pop(e)) {
-          on_event(e);
-        }
-      }
+      (void)rx.flush_drain(on_event);
       return s;
     }
     for (std::size_t i = 0; i < n; ++i) {
-      // kBusy only if the caller left events in rx: drain them, then the frame goes in.
-      while (rx.push(batch_[i].frame, batch_[i].nbytes, batch_[i].rx_time_ns) ==
-             FrameVerdict::kBusy) {
-        while (rx.pop(e)) {
-          on_event(e);
-        }
-      }
-      while (rx.pop(e)) {
-        on_event(e);
-      }
+      (void)rx.push_drain(batch_[i].frame, batch_[i].nbytes, batch_[i].rx_time_ns, on_event);
     }
     return s;
   }
