@@ -639,7 +639,7 @@ int cmd_run(int argc, char** argv) {
         "bias filter (last BiasRecord, channel " + chan_name + ")",
         {{"bias", static_cast<double>(tel.bias.bias[chan])},
          {"std", std::sqrt(static_cast<double>(tel.bias.var[chan]))},
-         {"static_flag", static_cast<double>(tel.bias.flags & 1U)}}});
+         {"static_flag", static_cast<double>(tel.bias.flags & hal::kBiasStatic)}}});
   }
   if (tel.have_monitor) {
     ri.stats.push_back(StatGroup{"residual monitors (last MonitorRecord)",
@@ -660,13 +660,13 @@ int cmd_run(int argc, char** argv) {
       }
     }
     std::string what;
-    if ((tel.monitor.flags & 1U) != 0U) {
+    if ((tel.monitor.flags & hal::kMonitorCusum) != 0U) {
       what += "the innovation CUSUM alarm (" + (chans.empty() ? std::string("-") : chans) + ")";
     }
-    if ((tel.monitor.flags & 2U) != 0U) {
+    if ((tel.monitor.flags & hal::kMonitorWhiteness) != 0U) {
       what += std::string(what.empty() ? "" : ", ") + "a failed whiteness check";
     }
-    if ((tel.monitor.flags & 4U) != 0U) {
+    if ((tel.monitor.flags & hal::kMonitorAlarmLine) != 0U) {
       what += std::string(what.empty() ? "" : "; ") + "the alarm line is set";
     }
     ri.notes.push_back(

@@ -281,7 +281,7 @@ void Node::send_status() {
     b.bias[c] = kf_[c].bias();
     b.var[c] = kf_[c].variance();
   }
-  b.flags = static_cast<std::uint8_t>(static_ ? 1U : 0U);
+  b.flags = static_ ? hal::kBiasStatic : std::uint8_t{0};
   hal::encode(b, cfg_node_.layout, transfer_id_++, fr);
   send_frames(fr);
 
@@ -311,8 +311,9 @@ void Node::send_status() {
     }
   }
   m.whiteness = white_ratio;
-  m.flags = static_cast<std::uint16_t>((cusum_any ? 1U : 0U) | (white_any ? 2U : 0U) |
-                                       (alarm_ ? 4U : 0U));
+  m.flags = static_cast<std::uint16_t>((cusum_any ? hal::kMonitorCusum : 0U) |
+                                       (white_any ? hal::kMonitorWhiteness : 0U) |
+                                       (alarm_ ? hal::kMonitorAlarmLine : 0U));
   hal::encode(m, cfg_node_.layout, transfer_id_++, fr);
   send_frames(fr);
   ++stats_.status_sets;

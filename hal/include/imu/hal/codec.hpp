@@ -121,12 +121,19 @@ struct AdevRecord {
   std::uint32_t n_terms;         ///< saturates at 2^32-1
 };
 
+/// BiasRecord::flags bits.
+inline constexpr std::uint8_t kBiasStatic = 1U << 0;  ///< "static" input active (filter updating)
+/// MonitorRecord::flags bits.
+inline constexpr std::uint16_t kMonitorCusum = 1U << 0;      ///< a channel's CUSUM in alarm
+inline constexpr std::uint16_t kMonitorWhiteness = 1U << 1;  ///< a whiteness check failed
+inline constexpr std::uint16_t kMonitorAlarmLine = 1U << 2;  ///< the alarm output is set
+
 /// Bias estimate and its variance for all channels, as of sample `seq`. 60 bytes.
 struct BiasRecord {
   std::uint32_t seq;
   float bias[kChannels];         ///< channel units
   float var[kChannels];          ///< channel units squared
-  std::uint8_t flags;            ///< bit 0: "static" input active (filter updating)
+  std::uint8_t flags;            ///< kBiasStatic
 };
 
 /// Residual-monitor state as of sample `seq`. 20 bytes.
@@ -134,7 +141,7 @@ struct MonitorRecord {
   std::uint32_t seq;
   float nis_mean;                ///< running mean of the normalised innovation squared
   float whiteness;               ///< whiteness statistic (e.g. normalised autocorrelation)
-  std::uint16_t flags;           ///< bit 0 CUSUM alarm, bit 1 whiteness failed, bit 2 alarm line set
+  std::uint16_t flags;           ///< kMonitorCusum | kMonitorWhiteness | kMonitorAlarmLine
   std::uint8_t cusum_mask;       ///< bit c: CUSUM alarm on channel c
 };
 
