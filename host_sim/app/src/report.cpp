@@ -70,7 +70,7 @@ struct CovResult {
   std::vector<double> traj_sim, traj_data;  // windows x n_int, row-major
 };
 
-std::vector<double> column_robust_std(std::vector<double>& traj, std::size_t windows,
+std::vector<double> column_robust_std(const std::vector<double>& traj, std::size_t windows,
                                       std::size_t n_int) {
   std::vector<double> out(n_int, 0.0);
   std::vector<double> col(windows);
@@ -294,12 +294,8 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
       integrate_window(z.data(), cov.n_avg, cov.n_int, ts_s, &cov.traj_sim[w * cov.n_int]);
     }
   }
-  {
-    std::vector<double> tmp = cov.traj_data;
-    cov.emp_data = column_robust_std(tmp, cov.data_windows, cov.n_int);
-    tmp = cov.traj_sim;
-    cov.emp_sim = column_robust_std(tmp, cov.sim_windows, cov.n_int);
-  }
+  cov.emp_data = column_robust_std(cov.traj_data, cov.data_windows, cov.n_int);
+  cov.emp_sim = column_robust_std(cov.traj_sim, cov.sim_windows, cov.n_int);
   const double t_sim = now_s() - t_sim0;
 
   // ---- Text ------------------------------------------------------------------------------
