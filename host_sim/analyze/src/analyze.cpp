@@ -565,13 +565,13 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   }
   const double lsb = out.lsb;
   std::size_t sat = 0;
-  const std::vector<std::int32_t> counts_raw = to_counts(y_in, lsb, sat);
+  std::vector<std::int32_t> counts = to_counts(y_in, lsb, sat);  // of y below, kept current
   if (sat > 0) {
     error = "analyze: " + std::to_string(sat) + " samples do not fit in int32 counts at LSB " +
             fmt("%g", lsb);
     return false;
   }
-  const AdevSet raw = adev_of(counts_raw, ts, lsb);
+  const AdevSet raw = adev_of(counts, ts, lsb);
 
   // ---- before: the seed's first-order model over [Ts, 100 s]
   const double seed_max = std::min(o.seed_tau_max_s, tau_max);
@@ -601,6 +601,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   // ---- time domain: outliers on the before filter's innovations
   std::vector<double> y = y_in;
   std::vector<std::uint8_t> outlier(y.size(), 0);
+  bool outliers_replaced = false;
   {
     const double scale = robust_scale(fb.nu);
     const double thr = two_sided_normal_threshold(o.alpha / n_d);
@@ -611,6 +612,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         if (gate.push(fb.nu[i] / scale)) {
           outlier[i] = 1;
           y[i] = fb.pred[i];
+          outliers_replaced = true;
           if (times.size() < 100) {
             times.push_back(static_cast<double>(i) * ts);
           }
@@ -628,14 +630,19 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     }
   }
 
+  // The counts and ADEV of the current y: the raw ones until a sample changes (each is a pass
+  // over the record, done only when y changed).
+  AdevSet adev_y = raw;
+  if (outliers_replaced) {
+    counts = to_counts(y, lsb, sat);
+    adev_y = adev_of(counts, ts, lsb);
+  }
+
   // ---- time domain: bias steps (two-window detector at several scales)
   std::vector<std::uint64_t> step_at;
   for (int step_no = 0; step_no < o.max_steps; ++step_no) {
-    const std::vector<std::int32_t> c = to_counts(y, lsb, sat);
-    auto est = std::make_unique<Adev>(ts, lsb);
-    est->push_block(c.data(), c.size());
-    AdevPoint pts[Adev::kMaxPoints];
-    const std::size_t np = est->snapshot(pts, Adev::kMaxPoints, 0);
+    const Points& pts = adev_y.by_alpha[2];
+    const std::size_t np = pts.size();
     struct Scale {
       std::uint32_t block;
       double avar_counts2;
@@ -667,7 +674,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     if (!ok) {
       break;
     }
-    for (const std::int32_t v : c) {
+    for (const std::int32_t v : counts) {
       for (auto& d : det) {
         d.push(v);
       }
@@ -713,11 +720,12 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     for (std::size_t i = best.sample_index; i < y.size(); ++i) {
       y[i] -= e.size;
     }
+    counts = to_counts(y, lsb, sat);
+    adev_y = adev_of(counts, ts, lsb);
   }
 
   // ---- ADEV residual over [Ts, T/10] of the cleaned record, greedy term selection
-  const std::vector<std::int32_t> counts_clean = to_counts(y, lsb, sat);
-  const AdevSet clean = adev_of(counts_clean, ts, lsb);
+  const AdevSet& clean = adev_y;
   const std::uint32_t base_terms = kFitWhite | kFitGm1;
   // Over [Ts, T/10] the GM must show its ADEV peak (1.89 Tb) and one octave of its falling side
   // inside the range: a GM whose peak lies at or beyond the end is, on these taus, the same curve
