@@ -751,7 +751,13 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   bool have_sine = false;
   SineFit sine{};
   std::vector<double> y_fit = y;  // y minus the accepted sinusoid
-  std::map<std::size_t, SineFit> sine_cache;
+  // Per bump (by its tau index): the sinusoid estimate and the ADEV of y without it. The same
+  // bump comes back round after round; each entry costs passes over the record.
+  struct SineCand {
+    SineFit fit;
+    AdevSet adev;
+  };
+  std::map<std::size_t, SineCand> sine_cache;
 
   for (int round = 0; round < 6; ++round) {
     const Residual res = residual(eval, cur_p, o, ts, tau_max);
@@ -770,8 +776,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       std::uint32_t terms;
       ModelParams p;
       double cost;
-      bool sine;
-      SineFit s;
+      const SineCand* sine;  // the sinusoid candidate's estimate and ADEV, else null
     };
     std::vector<Cand> cands;
     const auto try_term = [&](const char* type, std::uint32_t t) {
@@ -787,7 +792,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         p.sin_a = sine.amplitude;
         p.sin_f0_hz = sine.f_hz;
       }
-      cands.push_back(Cand{type, terms | t, p, residual(eval, p, o, ts, tau_max).cost, false, {}});
+      cands.push_back(Cand{type, terms | t, p, residual(eval, p, o, ts, tau_max).cost, nullptr});
     };
     try_term("quantization", kFitQuantization);
     try_term("rate_random_walk", kFitRrw);
@@ -798,8 +803,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     // reported in the notes and in model_after, not as an effect.
     try_term("second_gm", kFitGm2);
     if (!have_sine) {
-      // The three strongest bumps (by sum of z) are candidates; estimates are cached by the
-      // bump's tau, since the same bump comes back in the next round.
+      // The three strongest bumps (by sum of z) are candidates.
       std::sort(bumps.begin(), bumps.end(),
                 [](const AdevRun& a, const AdevRun& b) { return a.sum_z < b.sum_z; });
       if (bumps.size() > 3) {
@@ -814,16 +818,21 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         if (f_c >= 0.5 / ts || f_c * t_rec < 20.0) {
           continue;  // not a resolvable sinusoid (above Nyquist or < 20 periods)
         }
-        if (sine_cache.count(imin) == 0) {
-          sine_cache[imin] = estimate_sinusoid(y, ts, f_c);
+        auto it = sine_cache.find(imin);
+        if (it == sine_cache.end()) {
+          SineCand sc;
+          sc.fit = estimate_sinusoid(y, ts, f_c);
+          if (sc.fit.ok) {
+            sc.adev = adev_of(to_counts(minus_sine(y, ts, sc.fit), lsb, sat), ts, lsb);
+          }
+          it = sine_cache.emplace(imin, std::move(sc)).first;
         }
-        const SineFit s = sine_cache[imin];
-        if (!s.ok) {
+        const SineCand& sc = it->second;
+        if (!sc.fit.ok) {
           continue;
         }
-        const std::vector<double> yd = minus_sine(y, ts, s);
-        const AdevSet ds = adev_of(to_counts(yd, lsb, sat), ts, lsb);
-        const Points dp = in_range(points_for_model(ds, cur_p), tau_max);
+        const SineFit& s = sc.fit;
+        const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
         const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max);
         if (f.status != FitStatus::kOk) {
           continue;
@@ -831,7 +840,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         ModelParams p = f.params;
         p.sin_a = s.amplitude;
         p.sin_f0_hz = s.f_hz;
-        cands.push_back(Cand{"sinusoid", terms, p, residual(eval, p, o, ts, tau_max).cost, true, s});
+        cands.push_back(Cand{"sinusoid", terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
       }
     }
     const Cand* best = nullptr;
@@ -881,11 +890,11 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     terms = best->terms;
     cur_p = best->p;
     cur_cost = best->cost;
-    if (best->sine) {
+    if (best->sine != nullptr) {
       have_sine = true;
-      sine = best->s;
+      sine = best->sine->fit;
       y_fit = minus_sine(y, ts, sine);
-      fit_set = adev_of(to_counts(y_fit, lsb, sat), ts, lsb);
+      fit_set = best->sine->adev;
     }
     fit_pts = in_range(points_for_model(fit_set, cur_p), tau_max);
   }
