@@ -131,12 +131,7 @@ namespace {
 // The test on simulated records with a known answer: another first-order model (gyro-like,
 // N = 5e-4, B = 2e-4, Tp = 60 s, 3000 s at 100 Hz), with and without a rate random walk.
 // tb_max as analyze() sets it: GM peak and one octave of its falling side inside [Ts, T/10].
-struct LrtCase {
-  ia::RrwLikelihoodTest t;
-  double k_true;
-};
-
-LrtCase run_lrt(double k, std::uint64_t seed) {
+ia::RrwLikelihoodTest run_lrt(double k, std::uint64_t seed) {
   ia::SynthSpec s;
   s.n = 5e-4;
   s.b = 2e-4;
@@ -153,7 +148,7 @@ LrtCase run_lrt(double k, std::uint64_t seed) {
   start.n_gm = 1;
   start.gm[0] = imu::GmParam{gm.sb, gm.tb_s};
   const double tb_max = 0.1 * 3000.0 / (2.0 * imu::kGmPeakTauFactor);
-  return LrtCase{ia::test_rrw(y, 0.01, start, tb_max, false), k};
+  return ia::test_rrw(y, 0.01, start, tb_max, false);
 }
 
 const double kLrThreshold = 6.635;  // chi2(1) at 0.99
@@ -161,13 +156,13 @@ const double kLrThreshold = 6.635;  // chi2(1) at 0.99
 TEST(LongMemory, NoWalkNoEvidence) {
   int false_alarms = 0;
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    const LrtCase c = run_lrt(0.0, seed);
-    ASSERT_TRUE(c.t.ok);
-    false_alarms += c.t.lr > kLrThreshold ? 1 : 0;
-    EXPECT_GE(c.t.h1.loglik, c.t.h0.loglik - 1e-9);  // H1 contains H0
+    const ia::RrwLikelihoodTest c = run_lrt(0.0, seed);
+    ASSERT_TRUE(c.ok);
+    false_alarms += c.lr > kLrThreshold ? 1 : 0;
+    EXPECT_GE(c.h1.loglik, c.h0.loglik - 1e-9);  // H1 contains H0
     // The white part of a block mean: N^2 / h.
-    const double wv = 5e-4 * 5e-4 / c.t.block_s;
-    EXPECT_NEAR(c.t.h0.model.white_var, wv, 0.1 * wv) << "seed " << seed;
+    const double wv = 5e-4 * 5e-4 / c.block_s;
+    EXPECT_NEAR(c.h0.model.white_var, wv, 0.1 * wv) << "seed " << seed;
   }
   EXPECT_LE(false_alarms, 1);  // 1 % level: 0.1 expected in 10
 }
@@ -178,10 +173,10 @@ TEST(LongMemory, WalkFoundAndSized) {
   int found = 0;
   std::vector<double> k;
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
-    const LrtCase c = run_lrt(k_true, seed);
-    ASSERT_TRUE(c.t.ok);
-    found += c.t.lr > kLrThreshold ? 1 : 0;
-    k.push_back(c.t.h1.model.k);
+    const ia::RrwLikelihoodTest c = run_lrt(k_true, seed);
+    ASSERT_TRUE(c.ok);
+    found += c.lr > kLrThreshold ? 1 : 0;
+    k.push_back(c.h1.model.k);
   }
   EXPECT_GE(found, 9);
   std::sort(k.begin(), k.end());

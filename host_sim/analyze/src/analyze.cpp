@@ -522,8 +522,7 @@ double derive_lsb(const std::vector<double>& y, std::string& note) {
       return dmin;
     }
   }
-  std::vector<double> c(y);
-  const double sd = robust_std(c.data(), c.size());
+  const double sd = robust_scale(y);
   const double lsb = sd > 0.0 ? sd / 4096.0 : 1e-9;
   note = "LSB chosen: no common step in the data; robust std / 4096 = " + fmt("%.6g", lsb) +
          " (quantization to it is far below the noise)";

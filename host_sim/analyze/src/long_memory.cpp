@@ -69,8 +69,7 @@ double sample_variance(const std::vector<double>& v) {
 
 // Nelder-Mead minimisation of f from x0 with initial steps `step` (one restart from the best).
 std::vector<double> nelder_mead(const std::function<double(const std::vector<double>&)>& f,
-                                std::vector<double> x0, double step, int max_evals,
-                                int& evals) {
+                                std::vector<double> x0, double step, int max_iterations) {
   const std::size_t n = x0.size();
   for (int pass = 0; pass < 2; ++pass) {
     std::vector<std::vector<double>> xs(n + 1, x0);
@@ -80,10 +79,9 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
     }
     for (std::size_t i = 0; i <= n; ++i) {
       fs[i] = f(xs[i]);
-      ++evals;
     }
     std::vector<std::size_t> idx(n + 1);
-    for (int it = 0; it < max_evals; ++it) {
+    for (int it = 0; it < max_iterations; ++it) {
       for (std::size_t i = 0; i <= n; ++i) {
         idx[i] = i;
       }
@@ -118,12 +116,10 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
       };
       const std::vector<double> xr = along(-1.0);
       const double fr = f(xr);
-      ++evals;
       if (fr < fs[best]) {
         const std::vector<double> xe = along(-2.0);
         const double fe = f(xe);
-        ++evals;
-        if (fe < fr) {
+          if (fe < fr) {
           xs[worst] = xe;
           fs[worst] = fe;
         } else {
@@ -137,8 +133,7 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
         const bool outside = fr < fs[worst];
         const std::vector<double> xc = along(outside ? -0.5 : 0.5);
         const double fc = f(xc);
-        ++evals;
-        if (fc < (outside ? fr : fs[worst])) {
+          if (fc < (outside ? fr : fs[worst])) {
           xs[worst] = xc;
           fs[worst] = fc;
         } else {  // shrink towards the best
@@ -148,8 +143,7 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
                 xs[i][j] = xs[best][j] + 0.5 * (xs[i][j] - xs[best][j]);
               }
               fs[i] = f(xs[i]);
-              ++evals;
-            }
+                    }
           }
         }
       }
@@ -330,11 +324,9 @@ LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
     const double ll = loglik_impl(means, means_var, block_s, pk.unpack(v), -1.0, resets);
     return std::isfinite(ll) ? -ll : 1e300;
   };
-  int evals = 0;
-  const std::vector<double> best = nelder_mead(cost, pk.pack(start), 1.0, 3000, evals);
+  const std::vector<double> best = nelder_mead(cost, pk.pack(start), 1.0, 3000);
   out.model = pk.unpack(best);
   out.loglik = block_loglik(means, block_s, out.model, -1.0, resets);
-  out.evaluations = evals;
   out.ok = std::isfinite(out.loglik);
   return out;
 }

@@ -57,7 +57,6 @@ struct LikelihoodFit {
   bool ok = false;
   BlockModel model{};
   double loglik = 0.0;
-  int evaluations = 0;
 };
 
 /// Maximise block_loglik over white_var, each GM's (sb, tb) with tb in [tb_min_s, tb_max_s], and
