@@ -321,7 +321,6 @@ struct Matrix {
   std::uint32_t data_type = 0;
   std::size_t data_bytes = 0;
   const std::uint8_t* data = nullptr;  // only after a full parse
-  std::size_t data_present = 0;        // bytes of the real part inside the view
 };
 }  // namespace detail
 
@@ -420,7 +419,6 @@ Parse parse_matrix(const std::uint8_t* p, std::size_t n, bool big_endian, bool p
   m.data_type = s.type;
   m.data_bytes = s.bytes;
   m.data = p + s.data_off;
-  m.data_present = std::min(s.bytes, n - std::min(n, s.data_off));
   return Parse::ok;
 }
 

@@ -25,10 +25,16 @@ constexpr std::size_t kMaxName = 63;
 // Data bytes per variable: half the 32-bit element size, so headers and stored-block overhead fit.
 constexpr std::uint64_t kMaxElement = std::numeric_limits<std::uint32_t>::max() / 2U;
 
-void put_u32(std::vector<std::uint8_t>& b, std::uint32_t v) {
+// Little-endian 32-bit value at b[at .. at + 3].
+void set_u32(std::vector<std::uint8_t>& b, std::size_t at, std::uint32_t v) {
   for (unsigned i = 0; i < 4U; ++i) {
-    b.push_back(static_cast<std::uint8_t>((v >> (8U * i)) & 0xFFU));
+    b[at + i] = static_cast<std::uint8_t>((v >> (8U * i)) & 0xFFU);
   }
+}
+
+void put_u32(std::vector<std::uint8_t>& b, std::uint32_t v) {
+  b.resize(b.size() + 4U);
+  set_u32(b, b.size() - 4U, v);
 }
 
 void pad8(std::vector<std::uint8_t>& b) {
@@ -43,9 +49,7 @@ void put_sub(std::vector<std::uint8_t>& b, std::uint32_t type, const std::uint8_
   if (n <= 4U && n > 0U) {
     put_u32(b, (static_cast<std::uint32_t>(n) << 16U) | type);
     b.insert(b.end(), data, data + n);
-    while (b.size() % 8U != 0U) {
-      b.push_back(0);
-    }
+    pad8(b);
     return;
   }
   put_u32(b, type);
@@ -74,10 +78,7 @@ std::vector<std::uint8_t> matrix_element(std::uint32_t cls, std::string_view nam
   put_u32(b, static_cast<std::uint32_t>(cols));
   put_sub(b, kMiInt8, reinterpret_cast<const std::uint8_t*>(name.data()), name.size());  // NOLINT
   put_sub(b, data_type, data, data_bytes);
-  const auto n = static_cast<std::uint32_t>(b.size() - 8U);
-  for (unsigned i = 0; i < 4U; ++i) {
-    b[4U + i] = static_cast<std::uint8_t>((n >> (8U * i)) & 0xFFU);
-  }
+  set_u32(b, 4U, static_cast<std::uint32_t>(b.size() - 8U));
   return b;
 }
 

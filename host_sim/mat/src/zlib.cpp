@@ -8,6 +8,29 @@
 namespace imu::mat {
 namespace {
 
+// The n low bits of code in reverse order (Huffman codes are stored MSB first, read LSB first).
+std::uint32_t reverse_bits(std::uint32_t code, unsigned n) {
+  std::uint32_t r = 0;
+  for (unsigned i = 0; i < n; ++i) {
+    r |= ((code >> i) & 1U) << (n - 1U - i);
+  }
+  return r;
+}
+
+// zlib header: CM = 8, CINFO = 7 (32 KiB window); FLEVEL = 0, no dictionary (0x7801 % 31 == 0).
+void append_zlib_header(std::vector<std::uint8_t>& z) {
+  z.push_back(0x78U);
+  z.push_back(0x01U);
+}
+
+// zlib trailer: Adler-32 of the uncompressed data, big-endian.
+void append_adler32(std::vector<std::uint8_t>& z, const std::uint8_t* data, std::size_t size) {
+  const std::uint32_t a = adler32(data, size);
+  for (int shift = 24; shift >= 0; shift -= 8) {
+    z.push_back(static_cast<std::uint8_t>((a >> static_cast<unsigned>(shift)) & 0xFFU));
+  }
+}
+
 constexpr unsigned kMaxBits = 15U;   // longest deflate code
 constexpr unsigned kFastBits = 10U;  // first-level table index width
 constexpr std::size_t kFastSize = std::size_t{1} << kFastBits;
@@ -84,10 +107,7 @@ struct Huffman {
     if (len > kFastBits) {
       continue;
     }
-    unsigned rev = 0;
-    for (unsigned b = 0; b < len; ++b) {
-      rev |= ((c >> b) & 1U) << (len - 1U - b);
-    }
+    const std::uint32_t rev = reverse_bits(c, len);
     const auto entry = static_cast<std::uint16_t>((s << 4U) | len);
     for (std::size_t i = rev; i < kFastSize; i += std::size_t{1} << len) {
       h.fast[i] = entry;
@@ -562,8 +582,7 @@ std::vector<std::uint8_t> zlib_store(const std::uint8_t* data, std::size_t size)
   constexpr std::size_t kMaxStored = 65535U;
   std::vector<std::uint8_t> z;
   z.reserve(size + 6U + 5U * (size / kMaxStored + 1U));
-  z.push_back(0x78U);  // CM = 8, CINFO = 7 (32 KiB window)
-  z.push_back(0x01U);  // FLEVEL = 0, no dictionary, (0x7801 % 31 == 0)
+  append_zlib_header(z);
   std::size_t done = 0;
   do {
     const std::size_t n = std::min(kMaxStored, size - done);
@@ -578,10 +597,7 @@ std::vector<std::uint8_t> zlib_store(const std::uint8_t* data, std::size_t size)
     z.insert(z.end(), data + done, data + done + n);
     done += n;
   } while (done < size);
-  const std::uint32_t a = adler32(data, size);
-  for (int shift = 24; shift >= 0; shift -= 8) {
-    z.push_back(static_cast<std::uint8_t>((a >> static_cast<unsigned>(shift)) & 0xFFU));
-  }
+  append_adler32(z, data, size);
   return z;
 }
 
@@ -613,14 +629,6 @@ class BitSink {
   std::uint64_t buf_ = 0;
   unsigned cnt_ = 0;
 };
-
-std::uint32_t reverse_bits(std::uint32_t code, unsigned n) {
-  std::uint32_t r = 0;
-  for (unsigned i = 0; i < n; ++i) {
-    r |= ((code >> i) & 1U) << (n - 1U - i);
-  }
-  return r;
-}
 
 // Fixed literal/length code of symbol s (RFC 1951 3.2.6), written MSB first.
 void put_fixed_litlen(BitSink& bs, unsigned s) {
@@ -660,8 +668,7 @@ std::vector<std::uint8_t> zlib_compress_fixed(const std::uint8_t* data, std::siz
   constexpr std::uint32_t kNone = 0xFFFFFFFFU;
   std::vector<std::uint8_t> z;
   z.reserve(size / 4U + 64U);
-  z.push_back(0x78U);
-  z.push_back(0x01U);
+  append_zlib_header(z);
   BitSink bs(z);
   bs.put(1U, 1);  // BFINAL
   bs.put(1U, 2);  // BTYPE = 01, fixed Huffman
@@ -725,10 +732,7 @@ std::vector<std::uint8_t> zlib_compress_fixed(const std::uint8_t* data, std::siz
   }
   put_fixed_litlen(bs, 256U);  // end of block
   bs.flush();
-  const std::uint32_t a = adler32(data, size);
-  for (int shift = 24; shift >= 0; shift -= 8) {
-    z.push_back(static_cast<std::uint8_t>((a >> static_cast<unsigned>(shift)) & 0xFFU));
-  }
+  append_adler32(z, data, size);
   return z;
 }
 
