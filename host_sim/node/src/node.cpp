@@ -30,7 +30,6 @@ NodeStatus Node::configure(const NodeConfig& cfg, hal::FrameSink& tx, hal::Digit
   static_in_ = static_in;
   alarm_out_ = alarm_out;
   rx_.reset();
-  adev_.reset();
   stats_ = NodeStats{};
   have_cfg_ = false;
   cfg_ = hal::ConfigRecord{};
@@ -123,7 +122,7 @@ void Node::on_config(const hal::ConfigRecord& c) {
     lsb_[c_i] = c.lsb[c_i];
     adev_.channel(c_i).configure(ts_s, c.lsb[c_i]);
     const ChannelModel& m = cfg_node_.model[c_i];
-    FirstOrderGm& gm = gm_[c_i];
+    FirstOrderGm gm{};
     if (first_order_gm_from_asd(m.n, m.b, m.tp_s, c.rate_hz, gm) != ModelStatus::kOk ||
         kf_[c_i].configure(gm, 0.0) != KfStatus::kOk) {
       ++stats_.bad_config;  // cannot happen for parameters checked in configure()
@@ -143,9 +142,11 @@ void Node::on_sample(const hal::SampleRecord& s) {
   }
   last_seq_ = s.seq;
   adev_.push(s.counts);
+  for (std::size_t c = 0; c < kChannels; ++c) {
+    active_[c] = active_[c] || s.counts[c] != 0;
+  }
   if (init_count_ < cfg_node_.init_samples) {
     for (std::size_t c = 0; c < kChannels; ++c) {
-      active_[c] = active_[c] || s.counts[c] != 0;
       init_sum_[c] += static_cast<double>(s.counts[c]) * lsb_[c];
     }
     ++init_count_;
@@ -157,7 +158,6 @@ void Node::on_sample(const hal::SampleRecord& s) {
     }
   } else {
     for (std::size_t c = 0; c < kChannels; ++c) {
-      active_[c] = active_[c] || s.counts[c] != 0;
       if (!active_[c]) {
         continue;  // never carried data (e.g. a one-channel recording): no filter, no alarm
       }

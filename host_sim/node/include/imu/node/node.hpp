@@ -22,7 +22,7 @@
 // is never exactly zero, a channel absent from a recording is. The static input is read once per
 // status period, not per sample (one GPIO ioctl per period).
 //
-// Memory: sizeof(Node) is the whole state (46.7 kB on x86-64, mostly six OnlineAdev<8,22>); no
+// Memory: sizeof(Node) is the whole state (46.0 kB on x86-64, mostly six OnlineAdev<8,22>); no
 // heap, no exceptions, no OS calls: the library is compiled with fw/src/fw_prelude.hpp. Not
 // re-entrant on one instance. Cost per sample: 6 ADEV pushes (amortised ~12 multiply-adds each)
 // + 6 scalar filter steps + monitors; a full ADEV telemetry set is 6 snapshots (O(96 * 8)) and
@@ -157,7 +157,6 @@ class Node {
   NodeAdev adev_;
   ScalarBiasKf<float> kf_[kChannels];
   ResidualMonitors<4> mon_[kChannels];
-  FirstOrderGm gm_[kChannels] = {};
   float known_[kChannels] = {};
   bool active_[kChannels] = {};  // a non-zero count was seen since the stream started
   double init_sum_[kChannels] = {};
