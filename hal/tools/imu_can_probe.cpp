@@ -71,8 +71,8 @@ int send_all(imu::hal::CanSocket& bus, long n, imu::hal::Layout layout, double r
   cfg.cfg_id = 1;
   cfg.rate_hz = 100.0;
   for (std::size_t c = 0; c < 3; ++c) {
-    cfg.lsb[c] = 0.00333 * 9.80665;                       // 3.33 mg
-    cfg.lsb[c + 3] = 0.05 * 3.14159265358979323846 / 180.0;  // 0.05 deg/s
+    cfg.lsb[c] = imu::hal::kAdisAccLsb_mps2;       // 3.33 mg
+    cfg.lsb[c + 3] = imu::hal::kAdisGyroLsb_rps;  // 0.05 deg/s
   }
   imu::hal::encode(cfg, layout, 0, out);
   std::size_t failures = 0;

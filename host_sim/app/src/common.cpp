@@ -27,7 +27,9 @@ bool channel_index(const std::string& name, std::size_t& out) {
 
 const char* channel_unit(std::size_t c) { return c < 3 ? "m/s^2" : "rad/s"; }
 
-double default_lsb(std::size_t c) { return c < 3 ? 1e-6 : 1e-7; }
+double default_lsb(std::size_t c) {
+  return c < 3 ? imu::hal::kFineAccLsb_mps2 : imu::hal::kFineGyroLsb_rps;
+}
 
 bool Args::parse(int argc, char** argv, int first, const std::vector<OptSpec>& specs,
                  std::size_t max_positional, std::string& err) {

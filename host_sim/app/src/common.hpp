@@ -10,9 +10,11 @@
 #include <string>
 #include <vector>
 
+#include "imu/hal/codec.hpp"
+
 namespace imu::sim {
 
-inline constexpr std::size_t kNumChannels = 6;
+inline constexpr std::size_t kNumChannels = imu::hal::kChannels;
 /// MAT-file variable of each protocol channel (hal SampleRecord::counts order).
 extern const char* const kChannelNames[kNumChannels];
 
