@@ -173,7 +173,6 @@ class Receiver {
     bool active;
     std::uint8_t transfer_id;
     std::uint8_t next_frag;
-    std::uint64_t rx_time_ns;
     std::uint8_t buf[kMaxFragments * kClassicPayload];
   };
 
@@ -231,18 +230,10 @@ void Receiver<W>::reset() {
 template <std::size_t W>
 FrameVerdict Receiver<W>::push_bytes(const std::uint8_t* bytes, std::size_t nbytes,
                                      std::uint64_t rx_time_ns) {
+  // At most one frame image is read; push() counts any size but 16 or 72 as bad_mtu.
   CanFrame f{};
-  if (nbytes > kCanFdMtu) {
-    if (queue_free() < kMaxEventsPerPush) {
-      ++stats_.busy;
-      return FrameVerdict::kBusy;
-    }
-    ++stats_.frames;
-    ++stats_.bad_mtu;
-    return FrameVerdict::kBadMtu;
-  }
   auto* dst = reinterpret_cast<std::uint8_t*>(&f);  // NOLINT: CanFrame is the raw frame image
-  for (std::size_t i = 0; i < nbytes; ++i) {
+  for (std::size_t i = 0; i < nbytes && i < kCanFdMtu; ++i) {
     dst[i] = bytes[i];
   }
   return push(f, nbytes, rx_time_ns);
@@ -328,7 +319,6 @@ FrameVerdict Receiver<W>::on_classic(RecordKind k, const CanFrame& f, std::uint6
     p.buf[static_cast<std::size_t>(frag) * kClassicPayload + i] = f.data[1 + i];
   }
   p.next_frag = static_cast<std::uint8_t>(frag + 1);
-  p.rx_time_ns = rx_time_ns;
   if (p.next_frag < n_frags) {
     return FrameVerdict::kFragment;
   }
