@@ -91,30 +91,50 @@ struct SimAdevResult {
   std::uint64_t saturated = 0;  ///< samples that did not fit in int32 counts (clamped)
 };
 
-/// The model's ADEV by simulation: n_samples of `model` (seed `seed`) quantized with `lsb`
-/// (imu::quantize) and pushed into `adev` (which the caller has configured with the model's Ts
-/// and the same lsb; read it with adev.snapshot()). Cost O(n_samples n^2). No heap.
+/// The model's ADEV by simulation: the next n_samples of a configured simulator, quantized
+/// with `lsb` (imu::quantize) and pushed into `adev` (configured by the caller with the model's
+/// Ts and the same lsb; read it with adev.snapshot()) in batches of OnlineAdev::kBatch. The
+/// simulator keeps its state, so a caller can go on drawing from it. Cost O(n_samples n^2);
+/// stack: one batch of counts (1 kB). No heap.
 template <std::size_t kMaxStates, std::size_t M, std::size_t L>
-[[nodiscard]] SimAdevResult simulate_adev(const DiscreteModel<kMaxStates>& model,
-                                          std::uint64_t seed, std::uint64_t n_samples,
-                                          double lsb, OnlineAdev<M, L>& adev) {
+[[nodiscard]] SimAdevResult simulate_adev(ModelSimulator<kMaxStates>& sim,
+                                          std::uint64_t n_samples, double lsb,
+                                          OnlineAdev<M, L>& adev) {
   SimAdevResult r;
-  ModelSimulator<kMaxStates> sim;
-  r.status = sim.configure(model, seed);
-  if (r.status != ModelStatus::kOk) {
-    return r;
-  }
   if (!(lsb > 0.0)) {
     r.status = ModelStatus::kBadParameter;
     return r;
   }
-  for (std::uint64_t i = 0; i < n_samples; ++i) {
-    const QuantizeResult q = quantize(sim.next(), lsb);
-    r.saturated += q.saturated ? 1U : 0U;
-    adev.push(q.counts);
+  constexpr std::size_t kBatch = OnlineAdev<M, L>::kBatch;
+  std::int32_t buf[kBatch];
+  for (std::uint64_t done = 0; done < n_samples;) {
+    const std::uint64_t left = n_samples - done;
+    const std::size_t b = left < kBatch ? static_cast<std::size_t>(left) : kBatch;
+    for (std::size_t i = 0; i < b; ++i) {
+      const QuantizeResult q = quantize(sim.next(), lsb);
+      r.saturated += q.saturated ? 1U : 0U;
+      buf[i] = q.counts;
+    }
+    adev.push_block(buf, b);
+    done += b;
   }
   r.samples = n_samples;
   return r;
+}
+
+/// The same from a model and a seed (a new simulator).
+template <std::size_t kMaxStates, std::size_t M, std::size_t L>
+[[nodiscard]] SimAdevResult simulate_adev(const DiscreteModel<kMaxStates>& model,
+                                          std::uint64_t seed, std::uint64_t n_samples,
+                                          double lsb, OnlineAdev<M, L>& adev) {
+  ModelSimulator<kMaxStates> sim;
+  const ModelStatus st = sim.configure(model, seed);
+  if (st != ModelStatus::kOk) {
+    SimAdevResult r;
+    r.status = st;
+    return r;
+  }
+  return simulate_adev(sim, n_samples, lsb, adev);
 }
 
 }  // namespace imu

@@ -243,18 +243,7 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   }
   const double sim_lsb = std::max(std::sqrt(dm.r_filter()) * 1e-4, 1e-12);
   OnlineAdev<8, 22> sim_adev(ts_s, sim_lsb);
-  {
-    std::vector<std::int32_t> buf(4096);
-    std::size_t left = data.size();
-    while (left > 0) {
-      const std::size_t b = std::min(left, buf.size());
-      for (std::size_t i = 0; i < b; ++i) {
-        buf[i] = quantize(sim.next(), sim_lsb).counts;
-      }
-      sim_adev.push_block(buf.data(), b);
-      left -= b;
-    }
-  }
+  (void)simulate_adev(sim, data.size(), sim_lsb, sim_adev);  // lsb > 0 by construction
   AdevPoint sim_pts[OnlineAdev<8, 22>::kMaxPoints];
   const std::vector<AdevRow> sim_rows =
       rows_from_points(sim_pts, sim_adev.snapshot(sim_pts, OnlineAdev<8, 22>::kMaxPoints));
