@@ -126,22 +126,21 @@ class OnlineAdev {
   /// are added in another order). Faster: phases are formed in batches of kBatch samples and each
   /// level's terms are summed over the batch in registers, from phases taken relative to the
   /// batch's oldest point, which are exact in double (|relative phase| < 2^53, see push_batch).
+  /// Stack: kBatch doubles here plus 2M + kBatch doubles in push_batch (4.2 kB for M = 8).
   void push_block(const std::int32_t* counts, std::size_t n) {
-    std::uint64_t xs[kBatch];
-    double xd[kBatch];
+    double xd[kBatch];  // phases relative to base; the absolute phase is base + xd (exact)
     while (n > 0) {
       const std::size_t b = n < kBatch ? n : kBatch;
       const std::uint64_t base = x_;  // every level's batch array is relative to this phase
+      std::int64_t rel = 0;  // |rel| <= kBatch * 2^31 = 2^39: exact as a double
       for (std::size_t j = 0; j < b; ++j) {
-        x_ += static_cast<std::uint64_t>(static_cast<std::int64_t>(counts[j]));
-        xs[j] = x_;
+        rel += counts[j];
+        xd[j] = static_cast<double>(rel);
       }
-      for (std::size_t j = 0; j < b; ++j) {
-        xd[j] = exact_relative(xs[j], base);
-      }
-      const std::uint64_t first = n_ + 1;  // sample (= point) index of xs[0]
+      x_ = base + static_cast<std::uint64_t>(rel);
+      const std::uint64_t first = n_ + 1;  // sample (= point) index of xd[0]
       n_ += b;
-      push_batch(level0_, first, xs, xd, base, 1, b);
+      push_batch(level0_, first, xd, base, 1, b);
       for (std::size_t k = 1; k <= L; ++k) {
         // Level-k points are the phases at indices that are multiples of 2^k.
         const std::uint64_t q0 = (first + (std::uint64_t{1} << k) - 1) >> k;
@@ -150,7 +149,7 @@ class OnlineAdev {
           break;  // no multiple of 2^k in the batch, hence none of 2^(k+1) either
         }
         const std::size_t off = static_cast<std::size_t>((q0 << k) - first);
-        push_batch(upper_[k - 1], q0, xs + off, xd + off, base, std::size_t{1} << k,
+        push_batch(upper_[k - 1], q0, xd + off, base, std::size_t{1} << k,
                    static_cast<std::size_t>(q1 - q0 + 1));
       }
       counts += b;
@@ -250,6 +249,10 @@ class OnlineAdev {
   // x - base as a double, exact for |x - base| < 2^51: adding the bit pattern of 1.5 * 2^52
   // to the integer gives the double 1.5 * 2^52 + (x - base), from which 1.5 * 2^52 is subtracted
   // exactly. Branch-free integer add and one subtraction, so the loops over it vectorise.
+  // Inverse of exact_relative: base + rel, exact (rel is an integer below 2^52 in magnitude).
+  static std::uint64_t absolute_phase(double rel, std::uint64_t base) {
+    return base + static_cast<std::uint64_t>(static_cast<std::int64_t>(rel));
+  }
   static double exact_relative(std::uint64_t x, std::uint64_t base) {
     constexpr std::uint64_t kMagicBits = 0x4338000000000000ULL;  // 1.5 * 2^52
     constexpr double kMagic = 6755399441055744.0;
@@ -259,19 +262,19 @@ class OnlineAdev {
     return d - kMagic;
   }
 
-  // Push cnt consecutive points of one level, the first with point index p0; xs are the points
-  // (every `stride`-th entry), xd the same points relative to `base` as exact doubles. In steady
+  // Push cnt consecutive points of one level, the first with point index p0; xd are the points
+  // (every `stride`-th entry) relative to `base` as exact doubles (absolute_phase() gives the
+  // point itself, for the ring and the start-up path). In steady
   // state (ring full) the terms are summed in registers over a local array of the ring history
   // and the new points, all relative to `base`: they span at most (2M + cnt) 2^k samples of at
   // most 2^31 counts, below 2^51 for the levels that take this path (cnt >= 8 means
   // 2^k <= kBatch / 8), so every double and every second difference formed from them is exact.
   template <std::size_t kTaus, std::size_t kMLo>
-  static void push_batch(Level<kTaus, kMLo>& lv, std::uint64_t p0, const std::uint64_t* xs,
-                         const double* xd, std::uint64_t base, std::size_t stride,
-                         std::size_t cnt) {
+  static void push_batch(Level<kTaus, kMLo>& lv, std::uint64_t p0, const double* xd,
+                         std::uint64_t base, std::size_t stride, std::size_t cnt) {
     if (lv.seg_points < kRing || cnt < 8) {
       for (std::size_t j = 0; j < cnt; ++j) {
-        push_point(lv, p0 + j, xs[j * stride]);
+        push_point(lv, p0 + j, absolute_phase(xd[j * stride], base));
       }
       return;
     }
@@ -320,7 +323,7 @@ class OnlineAdev {
     }
     const std::size_t keep = cnt < kRing ? cnt : kRing;
     for (std::size_t q = cnt - keep; q < cnt; ++q) {
-      lv.ring[(p0 + q) % kRing] = xs[q * stride];
+      lv.ring[(p0 + q) % kRing] = absolute_phase(xd[q * stride], base);
     }
     lv.seg_points += cnt;
   }
