@@ -19,7 +19,7 @@
 // accumulate: test_bias_kf measures float vs double over 1e6 samples.
 //
 // Cost per sample: scalar 1 predict = 4 flops, update +~12 flops, 1 division; n-state predict
-// 2 n^3 + n^2, update ~4 n^2 + n^3 (Joseph with a rank-one K H) flops. No heap, not re-entrant
+// 2 n^3 + n^2, update ~4 n^3 + 4 n^2 flops (Joseph form as two full n x n products). No heap, not re-entrant
 // on one instance. sizeof(ScalarBiasKf<float>) is the whole state (see the benchmark).
 #ifndef IMU_BIAS_KF_HPP
 #define IMU_BIAS_KF_HPP
