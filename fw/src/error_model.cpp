@@ -1,5 +1,5 @@
 // Error model: seed conversion, term AVARs, model building and Van Loan discretisation.
-// The templates are defined here and instantiated for kMaxStates = 1, 2, 4, 6 (the sizes the
+// The templates are defined here and instantiated for kMaxStates = 1, 2, 4, 6, 16 (the sizes the
 // project uses); add a line at the bottom for another size.
 #include "imu/error_model.hpp"
 
@@ -11,6 +11,17 @@ namespace {
 bool positive_finite(double v) { return std::isfinite(v) && v > 0.0; }
 bool nonneg_finite(double v) { return std::isfinite(v) && v >= 0.0; }
 constexpr double kPi = 3.14159265358979323846;
+
+// One first-order GM state (the term's bookkeeping in params is the caller's).
+template <std::size_t kMaxStates>
+void put_gm_state(ContinuousModel<kMaxStates>& m, double sb, double tb_s) {
+  const std::size_t i = m.n_states;
+  m.f(i, i) = -1.0 / tb_s;
+  m.qc(i, i) = sb;
+  m.p0(i, i) = sb * tb_s / 2.0;
+  m.h(0, i) = 1.0;
+  ++m.n_states;
+}
 
 }  // namespace
 
@@ -78,6 +89,37 @@ double avar_sinusoid(double a, double f0_hz, double tau_s) {
   return a * a * s * s * s * s / (x * x);
 }
 
+std::size_t flicker_bank(double b, double tau_lo_s, double tau_hi_s,
+                         GmParam (&out)[kMaxFlickerGm]) {
+  if (!positive_finite(b) || !positive_finite(tau_lo_s) || !std::isfinite(tau_hi_s) ||
+      !(tau_hi_s > tau_lo_s)) {
+    return 0;
+  }
+  const double scale = 2.0 * std::log(kFlickerTbRatio) * b * b / kPi;
+  double tb = tau_lo_s / kFlickerFirstTbDivisor;
+  std::size_t n = 0;
+  while (n < kMaxFlickerGm) {
+    out[n++] = GmParam{scale / tb, tb};
+    if (tb >= tau_hi_s) {
+      return n;
+    }
+    tb *= kFlickerTbRatio;
+  }
+  return 0;  // the range needs more than kMaxFlickerGm members
+}
+
+double avar_flicker_ideal(double b) { return 2.0 * std::log(2.0) / kPi * b * b; }
+
+double avar_flicker_bank(double b, double tau_lo_s, double tau_hi_s, double tau_s) {
+  GmParam bank[kMaxFlickerGm];
+  const std::size_t n = flicker_bank(b, tau_lo_s, tau_hi_s, bank);
+  double v = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    v += avar_gauss_markov(bank[i].sb, bank[i].tb_s, tau_s);
+  }
+  return v;
+}
+
 double model_avar(const ModelParams& p, double tau_s) {
   double v = 0.0;
   if (p.n > 0.0) {
@@ -99,6 +141,12 @@ double model_avar(const ModelParams& p, double tau_s) {
   }
   if (p.sin_a > 0.0 && p.sin_f0_hz > 0.0) {
     v += avar_sinusoid(p.sin_a, p.sin_f0_hz, tau_s);
+  }
+  if (p.sin2_a > 0.0 && p.sin2_f0_hz > 0.0) {
+    v += avar_sinusoid(p.sin2_a, p.sin2_f0_hz, tau_s);
+  }
+  if (p.bi > 0.0) {
+    v += avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau_s);
   }
   return v;
 }
@@ -131,14 +179,29 @@ ModelStatus ContinuousModel<kMaxStates>::add_gauss_markov(double sb, double tb_s
   if (n_states + 1 > kMaxStates || params.n_gm >= kMaxGmTerms) {
     return ModelStatus::kCapacity;
   }
-  const std::size_t i = n_states;
-  f(i, i) = -1.0 / tb_s;
-  qc(i, i) = sb;
-  p0(i, i) = sb * tb_s / 2.0;
-  h(0, i) = 1.0;
+  put_gm_state(*this, sb, tb_s);
   params.gm[params.n_gm] = GmParam{sb, tb_s};
   ++params.n_gm;
-  ++n_states;
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_flicker(double b, double tau_lo_s,
+                                                     double tau_hi_s) {
+  GmParam bank[kMaxFlickerGm];
+  const std::size_t n = flicker_bank(b, tau_lo_s, tau_hi_s, bank);
+  if (n == 0) {
+    return ModelStatus::kBadParameter;
+  }
+  if (n_states + n > kMaxStates || params.bi > 0.0) {
+    return ModelStatus::kCapacity;
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    put_gm_state(*this, bank[i].sb, bank[i].tb_s);
+  }
+  params.bi = b;
+  params.bi_tau_lo_s = tau_lo_s;
+  params.bi_tau_hi_s = tau_hi_s;
   return ModelStatus::kOk;
 }
 
@@ -187,7 +250,7 @@ ModelStatus ContinuousModel<kMaxStates>::add_sinusoid(double a, double f0_hz) {
   if (!positive_finite(a) || !positive_finite(f0_hz)) {
     return ModelStatus::kBadParameter;
   }
-  if (n_states + 2 > kMaxStates || params.sin_a > 0.0) {
+  if (n_states + 2 > kMaxStates || params.sin2_a > 0.0) {
     return ModelStatus::kCapacity;
   }
   const std::size_t i = n_states;
@@ -197,8 +260,13 @@ ModelStatus ContinuousModel<kMaxStates>::add_sinusoid(double a, double f0_hz) {
   p0(i, i) = a * a / 2.0;
   p0(i + 1, i + 1) = a * a / 2.0;
   h(0, i) = 1.0;
-  params.sin_a = a;
-  params.sin_f0_hz = f0_hz;
+  if (params.sin_a > 0.0) {
+    params.sin2_a = a;
+    params.sin2_f0_hz = f0_hz;
+  } else {
+    params.sin_a = a;
+    params.sin_f0_hz = f0_hz;
+  }
   n_states += 2;
   return ModelStatus::kOk;
 }
@@ -220,6 +288,9 @@ ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out) 
       st = m.add_gauss_markov(p.gm[i].sb, p.gm[i].tb_s);
     }
   }
+  if (st == ModelStatus::kOk && p.bi > 0.0) {
+    st = m.add_flicker(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s);
+  }
   if (st == ModelStatus::kOk && p.k > 0.0) {
     st = m.add_rrw(p.k);
   }
@@ -228,6 +299,9 @@ ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out) 
   }
   if (st == ModelStatus::kOk && p.sin_a > 0.0) {
     st = m.add_sinusoid(p.sin_a, p.sin_f0_hz);
+  }
+  if (st == ModelStatus::kOk && p.sin2_a > 0.0) {
+    st = m.add_sinusoid(p.sin2_a, p.sin2_f0_hz);
   }
   if (st == ModelStatus::kOk) {
     out = m;
@@ -293,6 +367,7 @@ IMU_INSTANTIATE_MODEL(1)
 IMU_INSTANTIATE_MODEL(2)
 IMU_INSTANTIATE_MODEL(4)
 IMU_INSTANTIATE_MODEL(6)
+IMU_INSTANTIATE_MODEL(16)
 // NOLINTEND(cppcoreguidelines-macro-usage)
 #undef IMU_INSTANTIATE_MODEL
 

@@ -8,13 +8,14 @@
 namespace imu {
 namespace {
 
-constexpr std::size_t kP = 6;  // parameter slots: white, quantization, gm1, gm2, rrw, ramp
+constexpr std::size_t kP = 7;  // slots: white, quantization, gm1, gm2, rrw, ramp, flicker
 constexpr std::size_t kSlotWhite = 0;
 constexpr std::size_t kSlotQuant = 1;
 constexpr std::size_t kSlotGm1 = 2;
 constexpr std::size_t kSlotGm2 = 3;
 constexpr std::size_t kSlotRrw = 4;
 constexpr std::size_t kSlotRamp = 5;
+constexpr std::size_t kSlotFlicker = 6;
 constexpr std::size_t kGridPoints = 24;
 constexpr int kGoldenIterations = 40;
 constexpr int kCoordinateRounds = 3;
@@ -25,6 +26,9 @@ struct Problem {
   double avar[kMaxFitPoints] = {};
   double edf[kMaxFitPoints] = {};
   double w[kMaxFitPoints] = {};
+  double flicker[kMaxFitPoints] = {};  // flicker bank AVAR at B = 1 (independent of Tb)
+  double flicker_lo_s = 0.0;
+  double flicker_hi_s = 0.0;
   bool used[kP] = {};
   std::uint32_t evaluations = 0;
 };
@@ -37,14 +41,16 @@ struct Solution {
   bool ok = false;
 };
 
-// Each term's AVAR at unit parameter (the fit is linear in N^2, Q^2, Sb, K^2, R^2).
-void basis(double tau, double tb1, double tb2, double (&f)[kP]) {
+// Each term's AVAR at unit parameter (the fit is linear in N^2, Q^2, Sb, K^2, R^2, B^2);
+// flicker: the bank's AVAR at B = 1, computed once per point.
+void basis(double tau, double tb1, double tb2, double flicker, double (&f)[kP]) {
   f[kSlotWhite] = avar_white(1.0, tau);
   f[kSlotQuant] = avar_quantization(1.0, tau);
   f[kSlotGm1] = tb1 > 0.0 ? avar_gauss_markov(1.0, tb1, tau) : 0.0;
   f[kSlotGm2] = tb2 > 0.0 ? avar_gauss_markov(1.0, tb2, tau) : 0.0;
   f[kSlotRrw] = avar_rrw(1.0, tau);
   f[kSlotRamp] = avar_ramp(1.0, tau);
+  f[kSlotFlicker] = flicker;
 }
 
 // Lawson-Hanson NNLS on the normal equations G x = h (G symmetric PSD, already scaled to unit
@@ -153,7 +159,7 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
   double h[kP] = {};
   for (std::size_t i = 0; i < pb.n; ++i) {
     double f[kP];
-    basis(pb.tau[i], tb1, tb2, f);
+    basis(pb.tau[i], tb1, tb2, pb.flicker[i], f);
     const double w = pb.w[i];
     for (std::size_t a = 0; a < kP; ++a) {
       if (!pb.used[a]) {
@@ -196,11 +202,11 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
     s.theta[a] = cols[a] ? x[a] / d[a] : 0.0;
   }
   // The basis is evaluated again rather than kept from the first loop: keeping it would add
-  // kMaxFitPoints x kP doubles (6 kB) of stack, and the fit runs on small targets.
+  // kMaxFitPoints x kP doubles (7 kB) of stack, and the fit runs on small targets.
   double cost = 0.0;
   for (std::size_t i = 0; i < pb.n; ++i) {
     double f[kP];
-    basis(pb.tau[i], tb1, tb2, f);
+    basis(pb.tau[i], tb1, tb2, pb.flicker[i], f);
     double m = 0.0;
     for (std::size_t a = 0; a < kP; ++a) {
       m += s.theta[a] * f[a];
@@ -296,8 +302,13 @@ Solution search(Problem& pb, double tb_lo, double tb_hi) {
   return best;
 }
 
-ModelParams to_params(const Solution& s) {
+ModelParams to_params(const Problem& pb, const Solution& s) {
   ModelParams p;
+  if (s.theta[kSlotFlicker] > 0.0) {
+    p.bi = std::sqrt(s.theta[kSlotFlicker]);
+    p.bi_tau_lo_s = pb.flicker_lo_s;
+    p.bi_tau_hi_s = pb.flicker_hi_s;
+  }
   p.n = std::sqrt(s.theta[kSlotWhite]);
   p.q = std::sqrt(s.theta[kSlotQuant]);
   p.k = std::sqrt(s.theta[kSlotRrw]);
@@ -324,7 +335,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   const bool range_ok = std::isfinite(o.tau_min_s) && std::isfinite(o.tau_max_s) &&
                         o.tau_min_s > 0.0 && o.tau_max_s > o.tau_min_s;
   const std::uint32_t known = kFitWhite | kFitQuantization | kFitGm1 | kFitGm2 | kFitRrw |
-                              kFitRamp;
+                              kFitRamp | kFitFlicker;
   if (!range_ok || (o.terms & known) == 0 || (o.terms & ~known) != 0 ||
       ((o.terms & kFitGm2) != 0 && (o.terms & kFitGm1) == 0) || o.weight_iterations < 0 ||
       o.weight_iterations > 10 || (points == nullptr && n > 0) || !(o.edf_cap >= 0.0)) {
@@ -344,6 +355,16 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   pb.used[kSlotGm2] = (o.terms & kFitGm2) != 0;
   pb.used[kSlotRrw] = (o.terms & kFitRrw) != 0;
   pb.used[kSlotRamp] = (o.terms & kFitRamp) != 0;
+  pb.used[kSlotFlicker] = (o.terms & kFitFlicker) != 0;
+  pb.flicker_lo_s = o.flicker_tau_lo_s > 0.0 ? o.flicker_tau_lo_s : o.tau_min_s;
+  pb.flicker_hi_s = o.flicker_tau_hi_s > 0.0 ? o.flicker_tau_hi_s : o.tau_max_s;
+  if (pb.used[kSlotFlicker]) {
+    GmParam bank[kMaxFlickerGm];
+    if (flicker_bank(1.0, pb.flicker_lo_s, pb.flicker_hi_s, bank) == 0) {
+      res.status = FitStatus::kBadOptions;
+      return res;
+    }
+  }
   std::size_t n_params = 0;
   for (const bool u : pb.used) {
     n_params += u ? 1U : 0U;
@@ -365,6 +386,9 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
     const double edf = o.edf_cap > 0.0 && p.edf > o.edf_cap ? o.edf_cap : p.edf;
     pb.edf[pb.n] = edf;
     pb.w[pb.n] = edf / (2.0 * p.avar * p.avar);
+    pb.flicker[pb.n] = pb.used[kSlotFlicker]
+                           ? avar_flicker_bank(1.0, pb.flicker_lo_s, pb.flicker_hi_s, p.tau_s)
+                           : 0.0;
     ++pb.n;
   }
   res.n_points = pb.n;
@@ -374,7 +398,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   }
   Solution best = search(pb, tb_lo, tb_hi);
   for (int it = 0; it < o.weight_iterations && best.ok; ++it) {
-    const ModelParams prev = to_params(best);
+    const ModelParams prev = to_params(pb, best);
     for (std::size_t i = 0; i < pb.n; ++i) {
       const double m = model_avar(prev, pb.tau[i]);
       const double v = m > 0.0 ? m : pb.avar[i];
@@ -387,7 +411,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
     res.status = FitStatus::kSingular;
     return res;
   }
-  res.params = to_params(best);
+  res.params = to_params(pb, best);
   res.cost = best.cost;
   for (std::size_t i = 0; i < res.params.n_gm; ++i) {
     const double tb = res.params.gm[i].tb_s;

@@ -197,3 +197,57 @@ TEST(ErrorModel, BuildModelRoundTripsParams) {
 }
 
 }  // namespace
+
+// Bias instability: the flicker bank's ADEV against the exact flicker floor sqrt(2 ln 2 / pi) B
+// (IEEE Std 952; computed here from the constant, not from the bank), and its state cost.
+TEST(ErrorModel, FlickerBankFollowsTheFlickerFloor) {
+  const double b = 2e-3;
+  const double floor_adev = std::sqrt(2.0 * std::log(2.0) / 3.14159265358979323846) * b;
+  EXPECT_NEAR(floor_adev / b, 0.664, 5e-4);  // MODELS.md's 0.664
+  EXPECT_NEAR(std::sqrt(imu::avar_flicker_ideal(b)), floor_adev, 1e-15);
+  // Three decades [1, 1000] s: 5 GMs; the documented band -4.6 % / +0.8 % (measured -4.6 / +0.8).
+  imu::GmParam bank[imu::kMaxFlickerGm];
+  EXPECT_EQ(imu::flicker_bank(b, 1.0, 1000.0, bank), 5U);
+  double lo = 1.0;
+  double hi = -1.0;
+  for (int i = 0; i <= 60; ++i) {
+    const double tau = std::pow(10.0, 3.0 * i / 60.0);
+    const double rel = std::sqrt(imu::avar_flicker_bank(b, 1.0, 1000.0, tau)) / floor_adev - 1.0;
+    lo = std::min(lo, rel);
+    hi = std::max(hi, rel);
+  }
+  EXPECT_GT(lo, -0.047);
+  EXPECT_LT(hi, 0.009);
+  // Four decades (the analysis's range): 6 GMs, the same band.
+  EXPECT_EQ(imu::flicker_bank(b, 0.1, 1000.0, bank), 6U);
+  // More decades than kMaxFlickerGm members allow, or a bad range: refused.
+  EXPECT_EQ(imu::flicker_bank(b, 1e-6, 1e6, bank), 0U);
+  EXPECT_EQ(imu::flicker_bank(b, 10.0, 1.0, bank), 0U);
+  EXPECT_EQ(imu::flicker_bank(0.0, 1.0, 10.0, bank), 0U);
+}
+
+TEST(ErrorModel, FlickerBankIsOneStatePerMemberAndDiscretises) {
+  imu::ModelParams p;
+  p.n = 3.3e-3;
+  p.bi = 1e-3;
+  p.bi_tau_lo_s = 0.1;
+  p.bi_tau_hi_s = 1000.0;
+  imu::ContinuousModel<16> c;
+  ASSERT_EQ(imu::build_model(p, c), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.n_states, 6U);
+  EXPECT_DOUBLE_EQ(c.params.bi, p.bi);
+  imu::DiscreteModel<16> d;
+  ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
+  // Each member is a GM: phi = exp(-Ts/Tb) and steady variance Sb Tb / 2 (closed forms).
+  imu::GmParam bank[imu::kMaxFlickerGm];
+  ASSERT_EQ(imu::flicker_bank(p.bi, 0.1, 1000.0, bank), 6U);
+  for (std::size_t i = 0; i < 6; ++i) {
+    const double phi = std::exp(-0.01 / bank[i].tb_s);
+    EXPECT_NEAR(d.phi(i, i), phi, 1e-12);
+    const double qd = (1.0 - phi * phi) * bank[i].sb * bank[i].tb_s / 2.0;
+    EXPECT_NEAR(d.qd(i, i), qd, 1e-9 * qd);
+  }
+  // Too many states for the capacity: refused, model unchanged.
+  imu::ContinuousModel<4> small;
+  EXPECT_EQ(imu::build_model(p, small), imu::ModelStatus::kCapacity);
+}

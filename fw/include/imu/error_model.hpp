@@ -16,7 +16,11 @@
 //   rate random walk K: 1 state, r' = w, PSD(w) = K^2, prior variance 0 (starts at 0),
 //   ramp R: 2 states (d, s): d' = s, s' = 0, H picks d; prior var(s) = R^2 so that
 //           E[AVAR] = R^2 tau^2 / 2,
-//   sinusoid A sin(2 pi f0 t + random phase): 2-state undamped oscillator, prior A^2/2 per state.
+//   sinusoid A sin(2 pi f0 t + random phase): 2-state undamped oscillator, prior A^2/2 per state
+//           (a second one, e.g. a harmonic, with sin2_a / sin2_f0_hz),
+//   bias instability B (flicker, IEEE Std 952: two-sided PSD (B^2 / 2 pi) / f, ADEV floor
+//           0.664 B): realised over [bi_tau_lo_s, bi_tau_hi_s] by a bank of first-order GMs
+//           (flicker_bank(): one per decade of Tb, drive PSDs in fixed ratio), one state each.
 // Analytic AVAR: sum of the MODELS.md formulas (model_avar). For the sampled model the white,
 // quantization and ramp formulas are exact at tau = m Ts; the GM, RRW and sinusoid formulas are
 // the continuous-time ones (their sampled values differ by O(Ts/tau), < 1e-3 relative for
@@ -74,6 +78,21 @@ struct FirstOrderGm {
 
 inline constexpr std::size_t kMaxGmTerms = 2;
 
+/// Bias instability (flicker) as a sum of first-order GMs with correlation times spaced by a
+/// fixed ratio (the classic sum-of-Lorentzians approximation of a 1/f spectrum: Keshner, "1/f
+/// noise", Proc. IEEE 70(3), 1982, sec. V; Kasdin, Proc. IEEE 83(5), 1995). A GM of drive PSD Sb
+/// and time Tb has the PSD Sb Tb^2 / (1 + (2 pi f Tb)^2); with Tb_i spaced by the ratio r and
+/// Sb_i = 2 ln(r) B^2 / (pi Tb_i) the sum approaches (B^2 / 2 pi) / f between 1/(2 pi Tb_max)
+/// and 1/(2 pi Tb_min). Bank: Tb_0 = tau_lo / 6, Tb_{i+1} = 10 Tb_i until Tb >= tau_hi. Its
+/// ADEV is within -4.6 % / +0.8 % of the exact flicker floor sqrt(2 ln 2 / pi) B = 0.664 B on
+/// [tau_lo, tau_hi] for a 3-decade range (5 states; test_error_model checks it on a grid),
+/// and it falls off outside (white-like above, GM-like below): one state per decade + 2.
+inline constexpr std::size_t kMaxFlickerGm = 8;
+inline constexpr double kFlickerTbRatio = 10.0;
+inline constexpr double kFlickerFirstTbDivisor = 6.0;
+/// ADEV of ideal flicker: sqrt(2 ln 2 / pi) B = 0.6643 B (IEEE Std 952 annex C).
+inline constexpr double kFlickerAdevFactor = 0.66428;
+
 struct GmParam {
   double sb;    ///< drive PSD [unit^2 / s]
   double tb_s;  ///< correlation time [s]
@@ -89,7 +108,17 @@ struct ModelParams {
   double r = 0.0;          ///< ramp R [unit/s], AVAR R^2 tau^2/2
   double sin_a = 0.0;      ///< sinusoid amplitude A [unit]
   double sin_f0_hz = 0.0;  ///< sinusoid frequency f0 [Hz]
+  double sin2_a = 0.0;      ///< a second sinusoid (e.g. a harmonic of the first) [unit]
+  double sin2_f0_hz = 0.0;  ///< its frequency [Hz]
+  double bi = 0.0;          ///< bias instability B [unit] (flicker), AVAR ~ (0.664 B)^2
+  double bi_tau_lo_s = 0.0;  ///< tau range over which the flicker bank realises B
+  double bi_tau_hi_s = 0.0;
 };
+
+/// The flicker bank for B over [tau_lo_s, tau_hi_s] (see kMaxFlickerGm). Returns the number of
+/// GMs written to out (0: a bad argument, or a range wider than kMaxFlickerGm decades allow).
+[[nodiscard]] std::size_t flicker_bank(double b, double tau_lo_s, double tau_hi_s,
+                                       GmParam (&out)[kMaxFlickerGm]);
 
 // AVAR of each term at tau_s > 0 (MODELS.md table).
 [[nodiscard]] double avar_white(double n, double tau_s);
@@ -99,11 +128,19 @@ struct ModelParams {
 [[nodiscard]] double avar_rrw(double k, double tau_s);
 [[nodiscard]] double avar_ramp(double r, double tau_s);
 [[nodiscard]] double avar_sinusoid(double a, double f0_hz, double tau_s);
+/// Ideal flicker floor (2 ln 2 / pi) B^2 (for reference; the model uses the bank's own AVAR).
+[[nodiscard]] double avar_flicker_ideal(double b);
+/// AVAR of flicker_bank(b, tau_lo_s, tau_hi_s) at tau_s (0 for a bad range).
+[[nodiscard]] double avar_flicker_bank(double b, double tau_lo_s, double tau_hi_s, double tau_s);
 /// Sum of the terms present in p.
 [[nodiscard]] double model_avar(const ModelParams& p, double tau_s);
 
 /// Continuous model with at most kMaxStates states. Terms are appended; a term that does not fit
 /// or has a bad parameter returns an error and leaves the model unchanged.
+/// States of the largest model the host tools and the node build: 2 GMs, a 7-member flicker
+/// bank, RRW, ramp (2) and two sinusoids (4) = 16.
+inline constexpr std::size_t kModelMaxStates = 16;
+
 template <std::size_t kMaxStates = 6>
 struct ContinuousModel {
   static_assert(kMaxStates >= 1 && kMaxStates <= 16, "kMaxStates must be 1..16");
@@ -125,13 +162,16 @@ struct ContinuousModel {
   /// prior_var: variance of the random-walk state at t = 0 (0: starts at zero).
   [[nodiscard]] ModelStatus add_rrw(double k, double prior_var = 0.0);
   [[nodiscard]] ModelStatus add_ramp(double r);
+  /// A sinusoid (at most two per model).
   [[nodiscard]] ModelStatus add_sinusoid(double a, double f0_hz);
+  /// Bias instability B realised by flicker_bank over [tau_lo_s, tau_hi_s].
+  [[nodiscard]] ModelStatus add_flicker(double b, double tau_lo_s, double tau_hi_s);
 
   [[nodiscard]] double avar(double tau_s) const { return model_avar(params, tau_s); }
 };
 
-/// Build a continuous model from parameters: terms in the order white, quantization, GMs, RRW,
-/// ramp, sinusoid; zero parameters are skipped.
+/// Build a continuous model from parameters: terms in the order white, quantization, GMs,
+/// flicker bank, RRW, ramp, sinusoids; zero parameters are skipped.
 template <std::size_t kMaxStates>
 [[nodiscard]] ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out);
 

@@ -2,8 +2,8 @@
 // least-squares fit", CSM eqns. 63-64), fixed memory, runs on the target.
 //
 // For fixed correlation times the model AVAR is linear in theta = (N^2, Q^2, Sb_1, Sb_2, K^2,
-// R^2) with basis functions 1/tau, 3/tau^2, g(tau; Tb_i), tau/3, tau^2/2 (g: MODELS.md GM
-// formula with Sb = 1). For each trial Tb the weighted least-squares problem
+// R^2, B^2) with basis functions 1/tau, 3/tau^2, g(tau; Tb_i), tau/3, tau^2/2 (g: MODELS.md GM
+// formula with Sb = 1) and the flicker bank's AVAR at B = 1 (its times are fixed by its range). For each trial Tb the weighted least-squares problem
 //     min sum_i w_i (sum_j theta_j f_j(tau_i) - avar_i)^2,  theta >= 0
 // is solved by active-set NNLS (Lawson & Hanson) on the column-scaled normal equations. The
 // correlation time is searched on a log grid (kGridPoints from tb_min_s to tb_max_s) and refined
@@ -40,6 +40,7 @@ enum FitTerm : std::uint32_t {
   kFitGm2 = 1U << 3,  ///< requires kFitGm1
   kFitRrw = 1U << 4,
   kFitRamp = 1U << 5,
+  kFitFlicker = 1U << 6,  ///< bias instability B (flicker bank over the flicker_tau range)
 };
 
 /// Largest number of ADEV points used (OnlineAdev<8, 22> reports at most 96).
@@ -57,6 +58,10 @@ struct FitOptions {
   /// model that cannot follow the data everywhere, the short taus (EDF ~1e6) then decide the
   /// fit alone. A cap (e.g. 1000) makes the fit closer to a relative least-squares fit.
   double edf_cap = 0.0;
+  /// The tau range the bias-instability (flicker) bank covers (error_model.hpp flicker_bank);
+  /// 0: tau_min_s / tau_max_s.
+  double flicker_tau_lo_s = 0.0;
+  double flicker_tau_hi_s = 0.0;
 };
 
 enum class FitStatus : std::uint8_t {
