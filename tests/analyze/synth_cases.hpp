@@ -22,6 +22,15 @@ inline constexpr double kStepSize = 0.03;
 inline constexpr std::size_t kOutliers = 50;  // outliers: 10 x the white std per sample (0.033)
 inline constexpr double kOutlierSize = 0.33;
 
+// Issue 11 cases (the seed's model plus one effect; sizes of our own, not the shared data's):
+inline constexpr double kBi = 2e-3;  // bias instability B: flicker floor 0.664 B = 1.33e-3, flat
+                                     // from ~20 s (where white N/sqrt(tau) meets it) to T/10
+inline constexpr double kGmSigma = 1.46e-3;      // the seed GM's std sqrt(Pss)
+inline constexpr double kStep3Size = 3.0 * kGmSigma;  // a step of 3 GM sigmas,
+inline constexpr double kStep3Time = 16000.0;          // late in a 20,000 s record
+inline constexpr std::size_t kStep3Samples = 2000000;
+inline constexpr double kDriftWalk = 2e-6;  // "unknown": AVAR q^2 tau^3 / 20 meets the model near 200 s
+
 // "_alt" cases: another first-order model (N = 5e-4, B = 2e-4, Tp = 60 s, 3e5 samples), so the
 // thresholds are not tied to the seed's model.
 inline constexpr double kAltSinA = 2e-3;
@@ -50,6 +59,17 @@ inline SynthSpec make_case(const std::string& name, std::uint64_t seed) {
   } else if (name == "outliers") {
     s.n_outliers = kOutliers;
     s.outlier_size = kOutlierSize;
+  } else if (name == "bias_instability") {
+    s.flicker_b = kBi;
+  } else if (name == "bias_step_3sigma") {
+    s.samples = kStep3Samples;
+    s.step_time_s = kStep3Time;
+    s.step_size = kStep3Size;
+  } else if (name == "control_nan") {
+    s.nan_gaps = 5;  // five logger dropouts of 10 s
+    s.nan_gap_len = 1000;
+  } else if (name == "drift_walk") {
+    s.drift_walk = kDriftWalk;
   }
   if (name.size() > 4 && name.compare(name.size() - 4, 4, "_alt") == 0) {
     // Another first-order model: gyro-like, short GM, shorter record (generalisation checks).

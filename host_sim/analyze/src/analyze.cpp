@@ -1,6 +1,7 @@
 // The analysis pipeline (see analyze.hpp for the method).
 #include "imu/analyze/analyze.hpp"
 #include "imu/analyze/long_memory.hpp"
+#include "fft.hpp"
 
 #include <algorithm>
 #include <array>
@@ -8,6 +9,7 @@
 #include <cmath>
 #include <complex>
 #include <ctime>
+#include <limits>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -23,6 +25,9 @@ namespace imu::analyze {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+// Block means for the auxiliary likelihood comparisons (steps, the long-tau family, a ramp's
+// bend): half the RRW test's 2048, a quarter of its cost (the step profile is O(blocks^2)).
+constexpr std::size_t kAuxBlocks = 1024;
 using Adev = OnlineAdev<8, 22>;
 using Points = std::vector<AdevPoint>;
 
@@ -34,11 +39,14 @@ std::string fmt(const char* f, double v) {
 
 // ---------------------------------------------------------------- ADEV helpers
 
-std::vector<std::int32_t> to_counts(const std::vector<double>& y, double lsb, std::size_t& sat) {
+// Counts of y - offset (the offset keeps a record with a large mean, e.g. gravity, inside int32
+// at a fine LSB; the ADEV does not see a constant).
+std::vector<std::int32_t> to_counts(const std::vector<double>& y, double offset, double lsb,
+                                    std::size_t& sat) {
   std::vector<std::int32_t> c(y.size());
   sat = 0;
   for (std::size_t i = 0; i < y.size(); ++i) {
-    const QuantizeResult q = quantize(y[i], lsb);
+    const QuantizeResult q = quantize(y[i] - offset, lsb);
     c[i] = q.counts;
     sat += q.saturated ? 1U : 0U;
   }
@@ -50,9 +58,29 @@ struct AdevSet {
   std::array<Points, 5> by_alpha;
 };
 
-AdevSet adev_of(const std::vector<std::int32_t>& counts, double ts, double lsb) {
+// gap (may be empty): 1 marks a sample that is missing (non-finite in the record); the ADEV
+// skips it with mark_missing, the other samples go in runs through push_block.
+AdevSet adev_of(const std::vector<std::int32_t>& counts, const std::vector<std::uint8_t>& gap,
+                double ts, double lsb) {
   auto est = std::make_unique<Adev>(ts, lsb);
-  est->push_block(counts.data(), counts.size());
+  if (gap.empty()) {
+    est->push_block(counts.data(), counts.size());
+  } else {
+    std::size_t i = 0;
+    while (i < counts.size()) {
+      std::size_t j = i;
+      const bool missing = gap[i] != 0;
+      while (j < counts.size() && (gap[j] != 0) == missing) {
+        ++j;
+      }
+      if (missing) {
+        est->mark_missing(j - i);
+      } else {
+        est->push_block(counts.data() + i, j - i);
+      }
+      i = j;
+    }
+  }
   AdevSet s;
   for (std::size_t i = 0; i < s.by_alpha.size(); ++i) {
     AdevPoint pts[Adev::kMaxPoints];
@@ -131,6 +159,24 @@ Residual residual(const Points& pts, const ModelParams& m, const Options& o, dou
   return r;
 }
 
+// The range of the bias-instability bank: from a thirtieth of the tau where the data's ADEV is
+// lowest (bias instability is that floor; below it the white noise dominates) but no shorter
+// than 10 tau_min or 1e-2 tau_max (two decades, four GMs), up to tau_max. A bank reaching further down competes with
+// the GM of the sensor's own filter (the ADIS16405's, ~0.1 s), which it then imitates.
+double flicker_tau_lo(double tau_min, double tau_max, const Points& pts) {
+  double t_min_adev = 0.0;
+  double a_min = 0.0;
+  for (const auto& pt : pts) {
+    if (pt.tau_s >= tau_min && pt.tau_s <= tau_max && pt.adev > 0.0 &&
+        (!(a_min > 0.0) || pt.adev < a_min)) {
+      a_min = pt.adev;
+      t_min_adev = pt.tau_s;
+    }
+  }
+  const double lo = std::max({10.0 * tau_min, 1e-2 * tau_max, t_min_adev / 30.0});
+  return std::min(lo, 0.1 * tau_max);
+}
+
 // tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max).
 FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
                     double tb_max_s = 0.0) {
@@ -139,6 +185,8 @@ FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, doub
   fo.tau_min_s = tau_min;
   fo.tau_max_s = tau_max;
   fo.tb_max_s = tb_max_s;
+  fo.flicker_tau_hi_s = tau_max;
+  fo.flicker_tau_lo_s = flicker_tau_lo(tau_min, tau_max, pts);
   return fit(pts.data(), pts.size(), fo);
 }
 
@@ -154,71 +202,243 @@ struct FilterRun {
   std::vector<double> pred;  // predicted measurement per sample
 };
 
-bool discretize_params(const ModelParams& p, double ts, DiscreteModel<6>& d) {
-  ContinuousModel<6> c;
+constexpr std::size_t kStates = kModelMaxStates;
+using Model = DiscreteModel<kStates>;
+
+bool discretize_params(const ModelParams& p, double ts, Model& d) {
+  ContinuousModel<kStates> c;
   return build_model(p, c) == ModelStatus::kOk && discretize(c, ts, d) == ModelStatus::kOk;
 }
 
-template <std::size_t N>
-void run_kf(const DiscreteModel<6>& d, const std::vector<double>& y, double known,
-            const std::vector<std::uint8_t>* skip, FilterRun& out) {
-  auto kf = std::make_unique<KalmanFilter<double, N>>();
-  if (kf->configure(d, known) != KfStatus::kOk) {
-    return;
-  }
-  double nis = 0.0;
-  std::size_t updates = 0;
-  for (std::size_t i = 0; i < y.size(); ++i) {
-    const bool use = skip == nullptr || (*skip)[i] == 0;
-    const KfStep<double> st = kf->step(y[i], use);
-    if (st.updated) {
-      nis += st.nis();
-      ++updates;
-      out.nu[i] = st.innovation / std::sqrt(st.innovation_var);
-      out.pred[i] = y[i] - st.innovation;
-    } else {
-      out.pred[i] = kf->bias() + known;
-    }
-  }
-  out.nis_mean = updates > 0 ? nis / static_cast<double>(updates) : 0.0;
-  out.ok = true;
+// The stochastic part of a model: the deterministic terms (ramp, sinusoids) have no process
+// noise, so a steady-state filter would never learn them; the analysis removes its own
+// least-squares estimates of them from the record before filtering instead.
+ModelParams stochastic_part(ModelParams p) {
+  p.r = 0.0;
+  p.sin_a = 0.0;
+  p.sin_f0_hz = 0.0;
+  p.sin2_a = 0.0;
+  p.sin2_f0_hz = 0.0;
+  return p;
 }
 
-FilterRun run_filter(const ModelParams& p, double ts, const std::vector<double>& y, double known,
-                     const std::vector<std::uint8_t>* skip) {
+// Dense n x n helpers (row-major) for the Riccati doubling below.
+using Dense = std::vector<double>;
+Dense mul(const Dense& a, const Dense& b, std::size_t n, bool transpose_b = false) {
+  Dense c(n * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t k = 0; k < n; ++k) {
+      const double aik = a[i * n + k];
+      for (std::size_t j = 0; j < n; ++j) {
+        c[i * n + j] += aik * (transpose_b ? b[j * n + k] : b[k * n + j]);
+      }
+    }
+  }
+  return c;
+}
+Dense transposed(const Dense& a, std::size_t n) {
+  Dense t(n * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      t[j * n + i] = a[i * n + j];
+    }
+  }
+  return t;
+}
+// Gauss-Jordan inverse with partial pivoting; false if singular.
+bool inverse(Dense a, std::size_t n, Dense& inv) {
+  inv.assign(n * n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    inv[i * n + i] = 1.0;
+  }
+  for (std::size_t c = 0; c < n; ++c) {
+    std::size_t piv = c;
+    for (std::size_t r = c + 1; r < n; ++r) {
+      piv = std::fabs(a[r * n + c]) > std::fabs(a[piv * n + c]) ? r : piv;
+    }
+    if (!(std::fabs(a[piv * n + c]) > 0.0)) {
+      return false;
+    }
+    for (std::size_t j = 0; j < n; ++j) {
+      std::swap(a[c * n + j], a[piv * n + j]);
+      std::swap(inv[c * n + j], inv[piv * n + j]);
+    }
+    const double d = a[c * n + c];
+    for (std::size_t j = 0; j < n; ++j) {
+      a[c * n + j] /= d;
+      inv[c * n + j] /= d;
+    }
+    for (std::size_t r = 0; r < n; ++r) {
+      const double f = a[r * n + c];
+      if (r == c || !(std::fabs(f) > 0.0)) {
+        continue;
+      }
+      for (std::size_t j = 0; j < n; ++j) {
+        a[r * n + j] -= f * a[c * n + j];
+        inv[r * n + j] -= f * inv[c * n + j];
+      }
+    }
+  }
+  return true;
+}
+
+// Steady-state predicted covariance X = Phi X Phi' - Phi X H' (R + H X H')^-1 H X Phi' + Q by
+// the structure-preserving doubling algorithm (Chu, Fan, Lin, Wang, "Structure-preserving
+// algorithms for periodic discrete-time algebraic Riccati equations", Int. J. Control 77(8),
+// 2004): A0 = Phi', G0 = H' H / R, H0 = Q; A+ = A W^-1 A, G+ = G + A W^-1 G A',
+// H+ = H + A' H W^-1 A with W = I + G H; H_k -> X quadratically.
+bool steady_state_covariance(const Model& d, std::size_t n, double r, Dense& x) {
+  Dense a(n * n);
+  Dense g(n * n);
+  Dense h(n * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      a[i * n + j] = d.phi(j, i);
+      g[i * n + j] = d.h(0, i) * d.h(0, j) / r;
+      h[i * n + j] = d.qd(i, j);
+    }
+  }
+  for (int it = 0; it < 80; ++it) {
+    Dense w = mul(g, h, n);
+    for (std::size_t i = 0; i < n; ++i) {
+      w[i * n + i] += 1.0;
+    }
+    Dense wi;
+    if (!inverse(w, n, wi)) {
+      return false;
+    }
+    const Dense at = transposed(a, n);
+    const Dense wia = mul(wi, a, n);                    // W^-1 A
+    const Dense a1 = mul(a, wia, n);                    // A W^-1 A
+    const Dense g1 = mul(mul(a, mul(wi, g, n), n), at, n);  // A W^-1 G A'
+    const Dense h1 = mul(mul(at, h, n), wia, n);        // A' H W^-1 A
+    double change = 0.0;
+    double scale = 0.0;
+    for (std::size_t i = 0; i < n * n; ++i) {
+      g[i] += g1[i];
+      h[i] += h1[i];
+      change = std::max(change, std::fabs(h1[i]));
+      scale = std::max(scale, std::fabs(h[i]));
+      a[i] = a1[i];
+    }
+    if (!std::isfinite(scale)) {
+      return false;
+    }
+    if (change <= 1e-13 * scale) {
+      x = h;
+      return true;
+    }
+  }
+  return false;
+}
+
+// The bias filter of model p over y (known signal `known`), with the steady-state gain of its
+// stochastic part (the deterministic terms must already be removed from y): x = Phi x,
+// e = y - known - H x, x += K e on the samples not skipped. Its innovations are those of the
+// time-varying Kalman filter once that has converged (a few of the slowest correlation times);
+// the steady gain costs O(n^2) per sample instead of O(n^3).
+FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<double>& y,
+                     double known, const std::vector<std::uint8_t>* skip) {
   FilterRun out;
   out.nu.assign(y.size(), 0.0);
   out.pred.assign(y.size(), known);
-  DiscreteModel<6> d;
-  if (!discretize_params(p, ts, d)) {
+  Model d;
+  if (!discretize_params(stochastic_part(p_full), ts, d)) {
     return out;
   }
-  out.states = d.n_states;
-  switch (d.n_states) {
-    case 0: {  // white (and quantization) only: the prediction is the known signal
-      const double s = d.r_filter();
-      double nis = 0.0;
-      std::size_t updates = 0;
-      for (std::size_t i = 0; i < y.size(); ++i) {
-        if (skip == nullptr || (*skip)[i] == 0) {
-          const double e = y[i] - known;
-          out.nu[i] = e / std::sqrt(s);
-          nis += e * e / s;
-          ++updates;
+  const std::size_t n = d.n_states;
+  out.states = n;
+  const double r = d.r_filter();
+  Dense x;
+  if (!(r > 0.0) || (n > 0 && !steady_state_covariance(d, n, r, x))) {
+    return out;
+  }
+  std::vector<double> k(n, 0.0);
+  double s = r;
+  for (std::size_t i = 0; i < n; ++i) {
+    double ph = 0.0;
+    for (std::size_t j = 0; j < n; ++j) {
+      ph += x[i * n + j] * d.h(0, j);
+    }
+    k[i] = ph;
+    s += d.h(0, i) * ph;
+  }
+  for (auto& v : k) {
+    v /= s;
+  }
+  std::vector<double> st(n, 0.0);
+  std::vector<double> tmp(n, 0.0);
+  double nis_sum = 0.0;
+  std::size_t updates = 0;
+  // The first samples run the time-varying filter from the model's P0 (the initial bias is
+  // unknown; a steady gain from x = 0 would see it as a burst of large innovations), then the
+  // steady gain takes over.
+  const std::size_t burn_in = std::min<std::size_t>(y.size(), 4096);
+  Dense pk(n * n, 0.0);
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = 0; b < n; ++b) {
+      pk[a * n + b] = d.p0(a, b);
+    }
+  }
+  Dense phi(n * n);
+  Dense q(n * n);
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = 0; b < n; ++b) {
+      phi[a * n + b] = d.phi(a, b);
+      q[a * n + b] = d.qd(a, b);
+    }
+  }
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    double hx = 0.0;
+    for (std::size_t a = 0; a < n; ++a) {
+      double v = 0.0;
+      for (std::size_t b = 0; b < n; ++b) {
+        v += d.phi(a, b) * st[b];
+      }
+      tmp[a] = v;
+      hx += d.h(0, a) * v;
+    }
+    st.swap(tmp);
+    out.pred[i] = known + hx;
+    const bool tv = i < burn_in;
+    double s_i = s;
+    if (tv) {  // P = Phi P Phi' + Q, gain from it
+      pk = mul(mul(phi, pk, n), phi, n, true);
+      for (std::size_t a = 0; a < n * n; ++a) {
+        pk[a] += q[a];
+      }
+      s_i = r;
+      for (std::size_t a = 0; a < n; ++a) {
+        double ph = 0.0;
+        for (std::size_t b = 0; b < n; ++b) {
+          ph += pk[a * n + b] * d.h(0, b);
+        }
+        tmp[a] = ph;  // P H'
+        s_i += d.h(0, a) * ph;
+      }
+    }
+    if (skip == nullptr || (*skip)[i] == 0) {
+      const double e = y[i] - known - hx;
+      for (std::size_t a = 0; a < n; ++a) {
+        st[a] += (tv ? tmp[a] / s_i : k[a]) * e;
+      }
+      if (tv) {  // P = P - (P H')(P H')' / s
+        for (std::size_t a = 0; a < n; ++a) {
+          for (std::size_t b = 0; b < n; ++b) {
+            pk[a * n + b] -= tmp[a] * tmp[b] / s_i;
+          }
         }
       }
-      out.nis_mean = updates > 0 ? nis / static_cast<double>(updates) : 0.0;
-      out.ok = s > 0.0;
-      break;
+      out.nu[i] = e / std::sqrt(s_i);
+      nis_sum += e * e / s_i;
+      ++updates;
+    } else {
+      // not updated; its innovation is still recorded (the outlier check reads it)
+      out.nu[i] = (y[i] - known - hx) / std::sqrt(s_i);
     }
-    case 1: run_kf<1>(d, y, known, skip, out); break;
-    case 2: run_kf<2>(d, y, known, skip, out); break;
-    case 3: run_kf<3>(d, y, known, skip, out); break;
-    case 4: run_kf<4>(d, y, known, skip, out); break;
-    case 5: run_kf<5>(d, y, known, skip, out); break;
-    case 6: run_kf<6>(d, y, known, skip, out); break;
-    default: break;
   }
+  out.nis_mean = updates > 0 ? nis_sum / static_cast<double>(updates) : 0.0;
+  out.ok = true;
   // The fw residual monitors over the normalised innovations of the updates.
   NisMonitor nis;
   WhitenessMonitor<4> white;
@@ -251,8 +471,8 @@ double covariance_ratio(const ModelParams& p, double ts, const std::vector<doubl
   }
   std::size_t windows = std::min<std::size_t>(1000, y.size() - span + 1);
   const std::size_t stride = windows > 1 ? (y.size() - span) / (windows - 1) : 1;
-  DiscreteModel<6> d;
-  if (!discretize_params(p, ts, d)) {
+  Model d;
+  if (!discretize_params(stochastic_part(p), ts, d)) {
     return 0.0;
   }
   std::vector<double> sd(n_int);
@@ -273,6 +493,18 @@ double robust_scale(const std::vector<double>& v) {
   return robust_std(c.data(), c.size());
 }
 
+// The known signal of the bias filters, as the node sets it (host_sim/node: init_samples): the
+// mean of the first 1000 samples. The record's mean would be wrong for a record that drifts:
+// its first innovations would be the whole drift (seen as outliers).
+double initial_level(const std::vector<double>& y) {
+  const std::size_t n = std::min<std::size_t>(1000, y.size());
+  double s = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    s += y[i];
+  }
+  return n > 0 ? s / static_cast<double>(n) : 0.0;
+}
+
 // ---------------------------------------------------------------- sinusoid estimation
 
 double mean_of(const std::vector<double>& v) {
@@ -283,34 +515,6 @@ double mean_of(const std::vector<double>& v) {
   return v.empty() ? 0.0 : s / static_cast<double>(v.size());
 }
 
-
-void fft(std::vector<std::complex<double>>& a) {
-  const std::size_t n = a.size();
-  for (std::size_t i = 1, j = 0; i < n; ++i) {
-    std::size_t bit = n >> 1;
-    for (; (j & bit) != 0; bit >>= 1) {
-      j ^= bit;
-    }
-    j ^= bit;
-    if (i < j) {
-      std::swap(a[i], a[j]);
-    }
-  }
-  for (std::size_t len = 2; len <= n; len <<= 1) {
-    const double ang = -2.0 * kPi / static_cast<double>(len);
-    const std::complex<double> wl(std::cos(ang), std::sin(ang));
-    for (std::size_t i = 0; i < n; i += len) {
-      std::complex<double> w(1.0, 0.0);
-      for (std::size_t j = 0; j < len / 2; ++j) {
-        const std::complex<double> u = a[i + j];
-        const std::complex<double> v = a[i + j + len / 2] * w;
-        a[i + j] = u + v;
-        a[i + j + len / 2] = u - v;
-        w *= wl;
-      }
-    }
-  }
-}
 
 // |DTFT|^2 of Hann-windowed x at frequency f (cycles per sample).
 double dtft_power(const std::vector<double>& xw, double f) {
@@ -476,6 +680,204 @@ std::vector<double> minus_sine(const std::vector<double>& y, double ts, const Si
   return out;
 }
 
+// A candidate term of the greedy ADEV search.
+struct SineCand {
+  SineFit fit;
+  AdevSet adev;
+};
+struct Cand {
+  std::string type;
+  std::uint32_t terms;
+  ModelParams p;
+  double cost;
+  const SineCand* sine;  // the sinusoid candidate's estimate and ADEV, else null
+};
+
+struct LongTauInput {
+  const std::vector<double>& y;
+  double ts;
+  double tb_max;
+  bool ramp;
+  const std::vector<std::uint64_t>& step_at;
+  const ModelParams& cur;
+  double cur_cost;
+  double cost_thr;
+};
+
+// See the call: among the long-tau candidates that pass the ADEV test, the one the record's
+// likelihood prefers (AIC); `best` unchanged when fewer than two of them pass or it is another
+// kind of term.
+const Cand* long_tau_choice(const LongTauInput& in, const std::vector<Cand>& cands,
+                            const Cand* best, std::vector<std::string>& notes) {
+  const auto passes = [&](const Cand& c) { return in.cur_cost - c.cost > in.cost_thr; };
+  const Cand* bi = nullptr;
+  const Cand* rw = nullptr;
+  const Cand* gm = nullptr;
+  for (const auto& c : cands) {
+    if (!passes(c)) {
+      continue;
+    }
+    bi = c.type == "bias_instability" ? &c : bi;
+    rw = c.type == "rate_random_walk" ? &c : rw;
+    // a second GM slow enough for the block means (the test's blocks: T / 2048)
+    const double block_s = static_cast<double>(in.y.size()) * in.ts / 2048.0;
+    if (c.type == "second_gm" && c.p.n_gm == 2 && c.p.gm[1].tb_s >= 2.0 * block_s) {
+      gm = &c;
+    }
+  }
+  const bool family = best == bi || best == rw || best == gm;
+  if (!family || (bi != nullptr) + (rw != nullptr) + (gm != nullptr) < 2) {
+    return best;
+  }
+  struct Scored {
+    const Cand* c;
+    double score;
+  };
+  std::vector<Scored> scored;
+  std::string what;
+  if (bi != nullptr) {
+    ModelParams p = bi->p;
+    p.k = 0.0;
+    const RrwLikelihoodTest t =
+        test_rrw(in.y, in.ts, p, in.tb_max, in.ramp, in.step_at, kAuxBlocks, false);
+    if (t.ok) {
+      scored.push_back({bi, t.h0.loglik - 1.0});
+    }
+  }
+  if (rw != nullptr || gm != nullptr) {
+    const RrwLikelihoodTest t =
+        test_rrw(in.y, in.ts, in.cur, in.tb_max, in.ramp, in.step_at, kAuxBlocks);
+    if (t.ok && rw != nullptr) {
+      scored.push_back({rw, t.h1.loglik - 1.0});
+    }
+  }
+  if (gm != nullptr) {
+    const RrwLikelihoodTest t =
+        test_rrw(in.y, in.ts, gm->p, in.tb_max, in.ramp, in.step_at, kAuxBlocks, false);
+    if (t.ok) {
+      scored.push_back({gm, t.h0.loglik - 2.0});
+    }
+  }
+  bool best_scored = false;
+  for (const auto& sc : scored) {
+    best_scored = best_scored || sc.c == best;
+  }
+  if (scored.size() < 2 || !best_scored) {
+    return best;  // the ADEV's choice stands where the record could not weigh it
+  }
+  const Scored* win = &scored[0];
+  for (const auto& sc : scored) {
+    what += (what.empty() ? "" : ", ") + sc.c->type + " " + fmt("%.1f", sc.score);
+    win = sc.score > win->score ? &sc : win;
+  }
+  notes.push_back("long-tau family by the record's likelihood (ln L less extra parameters): " +
+                  what + ": " + win->c->type);
+  return win->c;
+}
+
+// 2 (l(GMs + B) - l(GMs)) on the record's block means: the evidence for bias instability
+// against the base family (test: the base test already run on the same record). B starts from
+// the data's ADEV near T/100 as the flicker floor. 0 when it cannot be computed.
+double bias_instability_lr(const std::vector<double>& y, double ts, const ModelParams& base,
+                           double tb_max, const std::vector<std::uint64_t>& step_at,
+                           const AdevSet& adev, const RrwLikelihoodTest& test) {
+  const double t_rec = static_cast<double>(y.size()) * ts;
+  double b0 = 0.0;
+  for (const auto& pt : adev.by_alpha[2]) {
+    if (pt.tau_s <= t_rec / 100.0) {
+      b0 = pt.adev / kFlickerAdevFactor;
+    }
+  }
+  if (!(b0 > 0.0) || !test.ok) {
+    return 0.0;
+  }
+  ModelParams p = base;
+  p.bi = b0;
+  p.bi_tau_hi_s = 0.1 * t_rec;
+  p.bi_tau_lo_s = flicker_tau_lo(ts, p.bi_tau_hi_s, adev.by_alpha[2]);
+  const RrwLikelihoodTest t = test_rrw(y, ts, p, tb_max, false, step_at, kAuxBlocks, false);
+  return t.ok ? std::max(0.0, 2.0 * (t.h0.loglik - test.h0.loglik)) : 0.0;
+}
+
+// 2 ln LR of a quadratic trend in the record after its least-squares line is removed, against
+// the model's stationary terms (GMs, bias instability; no walk, no ramp): 0 without a ramp.
+double ramp_bend_lr(const std::vector<double>& y, double ts, const ModelParams& p, double tb_max,
+                    const std::vector<std::uint64_t>& step_at) {
+  if (!(p.r > 0.0)) {
+    return 0.0;
+  }
+  ModelParams h0 = p;
+  h0.r = 0.0;
+  h0.k = 0.0;
+  const RrwLikelihoodTest t = test_rrw(y, ts, h0, tb_max, true, step_at, kAuxBlocks, false);
+  if (!t.ok) {
+    return 0.0;
+  }
+  const double nb = static_cast<double>(t.means.size());
+  std::vector<double> u(t.means.size());
+  double mean = 0.0;
+  for (std::size_t k = 0; k < u.size(); ++k) {
+    const double x = static_cast<double>(k) - 0.5 * (nb - 1.0);
+    u[k] = x * x;
+    mean += u[k] / nb;
+  }
+  for (auto& v : u) {
+    v -= mean;
+  }
+  return regressor_lr(t, u);
+}
+
+// Keeps the outliers whose after-model innovation also passes the gate (same threshold, the
+// after innovations' robust spread); the rest are dropped with a note.
+void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip,
+                      const std::vector<std::pair<std::size_t, double>>& found, double alpha,
+                      double ts, Report& out) {
+  if (found.empty() || !fa.ok) {
+    return;
+  }
+  std::vector<double> used;
+  used.reserve(fa.nu.size());
+  for (std::size_t i = 0; i < fa.nu.size(); ++i) {
+    if (skip[i] == 0) {
+      used.push_back(fa.nu[i]);
+    }
+  }
+  const double scale = robust_std(used.data(), used.size());
+  const double thr =
+      two_sided_normal_threshold(alpha / static_cast<double>(fa.nu.size()));
+  std::vector<double> times;
+  std::uint64_t count = 0;
+  double max_abs = 0.0;
+  for (const auto& f : found) {
+    const double z = scale > 0.0 ? std::fabs(fa.nu[f.first]) / scale : 0.0;
+    if (z > thr) {
+      ++count;
+      max_abs = std::max(max_abs, z);
+      if (times.size() < 100) {
+        times.push_back(static_cast<double>(f.first) * ts);
+      }
+    }
+  }
+  for (auto it = out.effects.begin(); it != out.effects.end(); ++it) {
+    if (it->type != "outliers") {
+      continue;
+    }
+    if (count < it->count) {
+      out.notes.push_back(std::to_string(it->count - count) + " of " + std::to_string(it->count) +
+                          " outliers of the before-model's innovations are not outliers of the "
+                          "after-model's (|nu| <= " + fmt("%.2f", thr) + " robust sigma)");
+    }
+    if (count == 0) {
+      out.effects.erase(it);
+    } else {
+      it->count = count;
+      it->times_s = times;
+      it->statistic = max_abs;
+    }
+    break;
+  }
+}
+
 // ---------------------------------------------------------------- error statistics
 
 void fill_errors(const Points& pts, const ModelParams& m, const Options& o, double ts,
@@ -498,34 +900,520 @@ void fill_errors(const Points& pts, const ModelParams& m, const Options& o, doub
   e.seed_tau_max_s = std::min(o.seed_tau_max_s, e.tau_max_s);
 }
 
+// ---------------------------------------------------------------- the after-model
+
+// Least-squares slope of y against time [unit/s].
+double ls_slope(const std::vector<double>& y, double ts) {
+  const double n = static_cast<double>(y.size());
+  double sty = 0.0;
+  double stt = 0.0;
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    const double t = static_cast<double>(i) - 0.5 * (n - 1.0);
+    sty += t * y[i];
+    stt += t * t;
+  }
+  return stt > 0.0 ? sty / stt / ts : 0.0;
+}
+
+void remove_line(std::vector<double>& y, double ts) {
+  const double slope = ls_slope(y, ts) * ts;  // per sample
+  const double mid = 0.5 * (static_cast<double>(y.size()) - 1.0);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    y[i] -= slope * (static_cast<double>(i) - mid);
+  }
+}
+
+struct AfterContext {
+  const Options& o;
+  double ts;
+  double tau_max;
+  double tb_max;
+  const AdevSet& clean;    // the cleaned record's ADEV (errors are measured against it)
+  const AdevSet& fit_set;  // the same without the sinusoids found (the linear terms' fit)
+  const ErrorStats& before;
+};
+
+struct AfterChoice {
+  std::uint32_t terms = 0;
+  ModelParams p{};
+  ErrorStats e{};
+  bool ok = false;
+};
+
+bool not_worse(const ErrorStats& e, const ErrorStats& before) {
+  return e.adev_rms_rel <= before.adev_rms_rel && e.adev_max_rel <= before.adev_max_rel;
+}
+
+// a is preferred to b: not worse than before where b is worse; both not worse: the lower
+// sum(z^2) over [Ts, T/10] (the statistical fit); both worse: the lower max error.
+bool preferred(const AfterChoice& a, const AfterChoice& b, const ErrorStats& before) {
+  if (!a.ok) {
+    return false;
+  }
+  if (!b.ok) {
+    return true;
+  }
+  const bool ok_a = not_worse(a.e, before);
+  const bool ok_b = not_worse(b.e, before);
+  if (ok_a != ok_b) {
+    return ok_a;
+  }
+  return ok_a ? a.e.cost < b.e.cost : a.e.adev_max_rel < b.e.adev_max_rel;
+}
+
+// The joint fit of `terms` (sinusoids from `sines`, or none), two weightings: the 1/var weights
+// of the EDF and a cap of 100 on the EDF (close to a relative least-squares fit; the 1/var
+// weights let the very precise shortest taus decide alone when the model cannot follow the data
+// everywhere); the preferred one (below).
+AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelParams& sines,
+                      bool keep_sines) {
+  AfterChoice best;
+  const AdevSet& base = keep_sines ? c.fit_set : c.clean;
+  const Points pts = in_range(points_for_model(base, sines), c.tau_max);
+  // The GM bounded (peak and an octave inside [Ts, T/10], as in the search) or as free as the
+  // before-model's (10 x its 100 s range): a before-model whose GM sits at its bound can follow
+  // a long-tau rise that the bounded GM leaves to K alone.
+  const double wide = std::max(c.tb_max, 10.0 * std::min(c.o.seed_tau_max_s, c.tau_max));
+  // First the variants that keep every term; only if none does, those where the joint fit
+  // zeroed a term (the term then leaves the set: its effect is not reported).
+  for (const bool allow_zeroed : {false, true}) {
+    for (const double tb_max : {c.tb_max, wide}) {
+      for (const double cap : {0.0, 100.0}) {
+        FitOptions fo;
+        fo.terms = terms;
+        fo.tau_min_s = c.ts;
+        fo.tau_max_s = c.tau_max;
+        fo.tb_max_s = tb_max;
+        fo.edf_cap = cap;
+        fo.flicker_tau_hi_s = c.tau_max;
+        fo.flicker_tau_lo_s = flicker_tau_lo(c.ts, c.tau_max, pts);
+        const FitResult f = fit(pts.data(), pts.size(), fo);
+        if (f.status != FitStatus::kOk) {
+          continue;
+        }
+        const ModelParams& q = f.params;
+        std::uint32_t zeroed = 0;
+        zeroed |= (terms & kFitQuantization) != 0U && !(q.q > 0.0) ? kFitQuantization : 0U;
+        zeroed |= (terms & kFitRrw) != 0U && !(q.k > 0.0) ? kFitRrw : 0U;
+        zeroed |= (terms & kFitRamp) != 0U && !(q.r > 0.0) ? kFitRamp : 0U;
+        zeroed |= (terms & kFitFlicker) != 0U && !(q.bi > 0.0) ? kFitFlicker : 0U;
+        if (zeroed != 0U && !allow_zeroed) {
+          continue;
+        }
+        AfterChoice ch;
+        ch.terms = terms & ~zeroed;
+        ch.p = q;
+        if (keep_sines) {
+          ch.p.sin_a = sines.sin_a;
+          ch.p.sin_f0_hz = sines.sin_f0_hz;
+          ch.p.sin2_a = sines.sin2_a;
+          ch.p.sin2_f0_hz = sines.sin2_f0_hz;
+        }
+        fill_errors(points_for_model(c.clean, ch.p), ch.p, c.o, c.ts, c.tau_max, ch.e);
+        ch.ok = true;
+        if (preferred(ch, best, c.before)) {
+          best = ch;
+        }
+      }
+    }
+    if (best.ok) {
+      break;
+    }
+  }
+  return best;
+}
+
+const char* term_name(std::uint32_t t) {
+  switch (t) {
+    case kFitQuantization: return "quantization";
+    case kFitGm2: return "second_gm";
+    case kFitRrw: return "rate_random_walk";
+    case kFitRamp: return "ramp";
+    case kFitFlicker: return "bias_instability";
+    default: return "sinusoid";
+  }
+}
+
+// The after-model is accepted only if its RMS and max error over every tau up to T/10 are no
+// higher than the before-model's; otherwise terms are removed one at a time (backward
+// elimination: at each round the preferred removal), and every removal is said. kSines stands for the sinusoids
+// (removed together).
+AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const ModelParams& cur,
+                         const ModelParams& before_model, std::vector<std::string>& notes) {
+  constexpr std::uint32_t kSines = 1U << 31;
+  const std::uint32_t base = kFitWhite | kFitGm1;
+  std::uint32_t set = terms | (cur.sin_a > 0.0 ? kSines : 0U);
+  AfterChoice best = fit_after(c, terms, cur, (set & kSines) != 0U);
+  while (!(best.ok && not_worse(best.e, c.before)) && (set & ~base) != 0U) {
+    AfterChoice next;
+    std::uint32_t removed = 0;
+    for (std::uint32_t bit = 1; bit != 0U; bit <<= 1U) {
+      if ((set & bit) == 0U || (base & bit) != 0U) {
+        continue;
+      }
+      const std::uint32_t s2 = set & ~bit;
+      const AfterChoice ch = fit_after(c, s2 & ~kSines, cur, (s2 & kSines) != 0U);
+      if (!ch.ok) {
+        continue;
+      }
+      if (preferred(ch, next, c.before)) {
+        next = ch;
+        removed = bit;
+      }
+    }
+    if (!next.ok) {
+      break;
+    }
+    notes.push_back(std::string("dropped: ") + term_name(removed) +
+                    " (with it the after-model's error over [Ts, T/10] was RMS " +
+                    fmt("%.3f", best.e.adev_rms_rel) + " / max " + fmt("%.3f", best.e.adev_max_rel) +
+                    " against " + fmt("%.3f", c.before.adev_rms_rel) + " / " +
+                    fmt("%.3f", c.before.adev_max_rel) + " before: never worse than before)");
+    set &= ~removed;
+    best = next;
+  }
+  if (!best.ok || !not_worse(best.e, c.before)) {
+    // Not even the base family is as good: the before-model stays (it is not worse than itself).
+    notes.emplace_back("no after-model with the terms found is as good as the before-model at "
+                       "every measure: after = before");
+    best.p = before_model;
+    fill_errors(points_for_model(c.clean, before_model), before_model, c.o, c.ts, c.tau_max,
+                best.e);
+    best.terms = kFitWhite | kFitGm1;
+    best.ok = true;
+  }
+  return best;
+}
+
+// Effects whose term left the model (dropped above, said in the notes) are not reported; the
+// rest take their parameters from the final model.
+void drop_unmodelled_effects(const ModelParams& p, Report& out) {
+  std::vector<Effect> kept;
+  int sines = 0;
+  for (auto e : out.effects) {
+    double v = 1.0;
+    if (e.type == "quantization") {
+      v = e.q = p.q;
+    } else if (e.type == "rate_random_walk") {
+      v = e.k = p.k;
+    } else if (e.type == "ramp") {
+      v = e.r = p.r;
+    } else if (e.type == "bias_instability") {
+      v = e.b = p.bi;
+    } else if (e.type == "sinusoid") {
+      e.freq_hz = sines == 0 ? p.sin_f0_hz : p.sin2_f0_hz;
+      v = e.amplitude = sines == 0 ? p.sin_a : p.sin2_a;
+      ++sines;
+    }
+    if (v > 0.0) {
+      kept.push_back(e);
+    }
+  }
+  out.effects = kept;
+}
+
+// The residual z of the final model at every checked tau (points in increasing tau).
+std::vector<double> final_z(const AfterContext& c, const ModelParams& p, Points& pts) {
+  pts = in_range(points_for_model(c.clean, p), c.tau_max);
+  const Residual r = residual(pts, p, c.o, c.ts, c.tau_max);
+  return r.z;
+}
+
+// Runs of >= min_run consecutive taus with |z| > z_run of one sign, or one |z| above the
+// Bonferroni level over the checked taus, where the model also misses the data by more than
+// unexplained_min_rel somewhere (at the shortest taus the EDF is ~1e6: a 0.3 % misfit of the
+// sensor's filter shape is "significant" there and of no use to anyone).
+std::vector<UnexplainedRun> unexplained_runs(const AfterContext& c, const ModelParams& p) {
+  Points pts;
+  const std::vector<double> z = final_z(c, p, pts);
+  const double z_single =
+      two_sided_normal_threshold(c.o.alpha / static_cast<double>(std::max<std::size_t>(1, z.size())));
+  std::vector<UnexplainedRun> out;
+  std::size_t i = 0;
+  while (i < z.size()) {
+    const int sign = z[i] > c.o.z_run ? 1 : (z[i] < -c.o.z_run ? -1 : 0);
+    if (sign == 0) {
+      ++i;
+      continue;
+    }
+    std::size_t j = i;
+    double zmax = 0.0;
+    while (j < z.size() && z[j] * sign > c.o.z_run) {
+      zmax = std::max(zmax, std::fabs(z[j]));
+      ++j;
+    }
+    double rel = 0.0;  // the run's largest |ADEV_model / ADEV_data - 1|
+    for (std::size_t k = i; k < j; ++k) {
+      rel = std::max(rel, std::fabs(std::sqrt(model_avar(p, pts[k].tau_s) / pts[k].avar) - 1.0));
+    }
+    if ((j - i >= c.o.min_run || zmax > z_single) && rel > c.o.unexplained_min_rel) {
+      out.push_back(UnexplainedRun{pts[i].tau_s, pts[j - 1].tau_s, zmax, sign});
+    }
+    i = j;
+  }
+  return out;
+}
+
+double term_avar(const std::string& type, const ModelParams& p, double tau) {
+  if (type == "quantization") {
+    return avar_quantization(p.q, tau);
+  }
+  if (type == "rate_random_walk") {
+    return avar_rrw(p.k, tau);
+  }
+  if (type == "ramp") {
+    return avar_ramp(p.r, tau);
+  }
+  if (type == "bias_instability") {
+    return avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau);
+  }
+  return -1.0;  // not an ADEV term
+}
+
+// Before naming an ADEV term: it must dominate the model (>= half its AVAR) somewhere in
+// [Ts, T/10], and the residual must hold no significant run where it dominates; else the term
+// stays in the model (it lowers the error) but is not named: the range goes to `unexplained`.
+// ramp_bend_lr: evidence of curvature left after removing the line (the ramp's own check).
+// The model without the term of effect type `type`.
+ModelParams without(const ModelParams& p, const std::string& type) {
+  ModelParams q = p;
+  if (type == "quantization") {
+    q.q = 0.0;
+  } else if (type == "rate_random_walk") {
+    q.k = 0.0;
+  } else if (type == "ramp") {
+    q.r = 0.0;
+  } else if (type == "bias_instability") {
+    q.bi = 0.0;
+  }
+  return q;
+}
+
+void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr,
+                Report& out) {
+  Points pts;
+  const std::vector<double> z = final_z(c, p, pts);
+  std::vector<Effect> kept;
+  const double bend_thr = chi2_quantile(1.0 - c.o.alpha, 1.0);
+  for (const auto& e : out.effects) {
+    if (term_avar(e.type, p, 1.0) < 0.0) {
+      kept.push_back(e);
+      continue;
+    }
+    std::size_t dominated = 0;
+    std::size_t run = 0;
+    std::size_t worst_run = 0;
+    double tau_lo = 0.0;
+    double tau_hi = 0.0;
+    double run_lo = 0.0;
+    double dom_lo = 0.0;
+    double dom_hi = 0.0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double t = pts[i].tau_s;
+      const bool dom = term_avar(e.type, p, t) >= 0.5 * model_avar(p, t);
+      dominated += dom ? 1U : 0U;
+      dom_lo = dom && !(dom_lo > 0.0) ? t : dom_lo;
+      dom_hi = dom ? t : dom_hi;
+      if (dom && std::fabs(z[i]) > c.o.z_run) {
+        run_lo = run == 0 ? t : run_lo;
+        ++run;
+        if (run > worst_run) {
+          worst_run = run;
+          tau_lo = run_lo;
+          tau_hi = t;
+        }
+      } else {
+        run = 0;
+      }
+    }
+    std::string why;
+    if (dominated == 0) {
+      out.notes.push_back("not named: " + e.type +
+                          " (in the model, but it dominates the model ADEV at no tau)");
+      continue;
+    }
+    if (e.type == "ramp" && ramp_bend_lr > bend_thr) {
+      // A ramp is a straight line in the record: once the line is removed, no curvature may
+      // remain beyond what the model's stationary terms make (a drift that bends, e.g. a walk
+      // of the drift rate, has the ramp's ADEV slope without being one).
+      why = "after removing the line the record still bends: quadratic 2 ln LR = " +
+            fmt("%.1f", ramp_bend_lr) + " > " + fmt("%.2f", bend_thr) +
+            "; the drift is not a straight line";
+    } else if (worst_run >= c.o.min_run) {
+      why = "where it dominates the residual still runs outside the intervals, tau " +
+            fmt("%.3g", tau_lo) + "-" + fmt("%.3g", tau_hi) + " s";
+    } else {
+      kept.push_back(e);
+      continue;
+    }
+    // Not this term: what it stands in for is unexplained over the taus it dominates, by as
+    // much as the model without it misses the data there.
+    out.notes.push_back("not named: " + e.type + " (" + why +
+                        "); the taus it dominates are reported as unexplained");
+    const ModelParams q = without(p, e.type);
+    const Residual r0 = residual(pts, q, c.o, c.ts, c.tau_max);
+    double zmax = 0.0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (pts[i].tau_s >= dom_lo && pts[i].tau_s <= dom_hi) {
+        zmax = std::max(zmax, std::fabs(r0.z[i]));
+      }
+    }
+    out.unexplained.push_back(UnexplainedRun{dom_lo, dom_hi, zmax, -1});
+  }
+  out.effects = kept;
+}
+
+// Every reported effect is real: its main parameter finite and nonzero; a step not within one
+// window of either end (the detector's own windows guarantee this; checked again here).
+void drop_degenerate_effects(double ts, double n_d, Report& out) {
+  std::vector<Effect> kept;
+  for (const auto& e : out.effects) {
+    double v = 0.0;
+    if (e.type == "quantization") {
+      v = e.q;
+    } else if (e.type == "rate_random_walk") {
+      v = e.k;
+    } else if (e.type == "ramp") {
+      v = e.r;
+    } else if (e.type == "bias_instability") {
+      v = e.b;
+    } else if (e.type == "sinusoid") {
+      v = e.amplitude;
+    } else if (e.type == "bias_step") {
+      v = e.size;
+    } else if (e.type == "outliers") {
+      v = static_cast<double>(e.count);
+    }
+    bool ok = std::isfinite(v) && std::fabs(v) > 0.0;
+    if (ok && e.type == "bias_step") {
+      const double at = e.time_s / ts;
+      ok = at >= 2.0 && n_d - at >= 2.0;
+    }
+    if (ok) {
+      kept.push_back(e);
+    } else {
+      out.notes.push_back("not reported: " + e.type + " (its parameter is " + fmt("%g", v) +
+                          ": a degenerate estimate, not an effect)");
+    }
+  }
+  out.effects = kept;
+}
+
 }  // namespace
 
+namespace {
+
+// Mean of up to `count` finite samples of y walking from `from` in direction `dir` (+1 / -1).
+double local_mean(const std::vector<double>& y, std::size_t from, int dir, std::size_t count) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (std::size_t i = from; i < y.size() && n < count;
+       i = dir > 0 ? i + 1 : (i == 0 ? y.size() : i - 1)) {
+    if (std::isfinite(y[i])) {
+      sum += y[i];
+      ++n;
+    }
+  }
+  return n > 0 ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+bool fill_gaps(std::vector<double>& y, std::vector<std::uint8_t>& gap, std::uint64_t& samples,
+               std::uint64_t& runs) {
+  samples = 0;
+  runs = 0;
+  gap.assign(y.size(), 0);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    gap[i] = std::isfinite(y[i]) ? 0 : 1;
+    samples += gap[i];
+  }
+  if (samples == y.size()) {
+    return false;
+  }
+  // Each run [a, b) is filled by the straight line between the means of the finite samples on
+  // either side (as many as the run is long, at least 100): a line between two single noisy
+  // samples would put a noise-free segment off the local level, which the step detectors see.
+  std::size_t i = 0;
+  while (i < y.size()) {
+    if (gap[i] == 0) {
+      ++i;
+      continue;
+    }
+    std::size_t b = i;
+    while (b < y.size() && gap[b] != 0) {
+      ++b;
+    }
+    const std::size_t len = b - i;
+    const std::size_t w = std::max<std::size_t>(100, len);
+    const double before = i > 0 ? local_mean(y, i - 1, -1, w) : local_mean(y, b, 1, w);
+    const double after = b < y.size() ? local_mean(y, b, 1, w) : before;
+    for (std::size_t j = i; j < b; ++j) {
+      const double f = static_cast<double>(j - i + 1) / static_cast<double>(len + 1);
+      y[j] = before + f * (after - before);
+    }
+    ++runs;
+    i = b;
+  }
+  if (samples == 0) {
+    gap.clear();
+  }
+  return true;
+}
+
 double derive_lsb(const std::vector<double>& y, std::string& note) {
-  std::vector<double> s(y);
+  std::vector<double> s;
+  s.reserve(y.size());
+  double amax = 0.0;
+  for (const double v : y) {
+    if (std::isfinite(v)) {
+      s.push_back(v);
+      amax = std::max(amax, std::fabs(v));
+    }
+  }
   std::sort(s.begin(), s.end());
+  // Distinct levels: values closer than the floating-point residue of the data's magnitude
+  // (1e-9 of max |y|, far above double rounding after scaling or differencing) are one level.
+  const double resid = 1e-9 * (amax > 0.0 ? amax : 1.0);
   double dmin = 0.0;
   for (std::size_t i = 1; i < s.size(); ++i) {
     const double d = s[i] - s[i - 1];
-    if (d > 0.0 && (dmin <= 0.0 || d < dmin)) {
+    if (d > resid && (dmin <= 0.0 || d < dmin)) {
       dmin = d;
     }
   }
+  const double spread = s.empty() ? 0.0 : s.back() - s.front();
   if (dmin > 0.0) {
-    bool multiples = true;
-    for (std::size_t i = 0; i < y.size() && multiples; i += 97) {  // a sparse check suffices
-      const double c = y[i] / dmin;
-      multiples = std::fabs(c - std::round(c)) < 1e-6 && std::fabs(c) < 2e9;
+    // Every value on the lattice y0 + k dmin within 1e-3 of a step (a sparse check suffices),
+    // and the lattice's span inside int32 counts.
+    const double y0 = s.front();
+    bool multiples = spread / dmin < 2e9;
+    for (std::size_t i = 0; i < y.size() && multiples; i += 97) {
+      if (std::isfinite(y[i])) {
+        const double c = (y[i] - y0) / dmin;
+        multiples = std::fabs(c - std::round(c)) < 1e-3;
+      }
     }
     if (multiples) {
-      note = "LSB derived: smallest nonzero difference of the sorted values (" +
-             fmt("%.6g", dmin) + "); every checked value is a multiple of it";
+      note = "LSB derived: the values lie on a lattice of step " + fmt("%.6g", dmin) +
+             " (every checked value a multiple of it from the smallest, within 1e-3 step)";
       return dmin;
     }
   }
-  const double sd = robust_scale(y);
-  const double lsb = sd > 0.0 ? sd / 4096.0 : 1e-9;
-  note = "LSB chosen: no common step in the data; robust std / 4096 = " + fmt("%.6g", lsb) +
-         " (quantization to it is far below the noise)";
+  const double sd = robust_scale(s);
+  // Fine against the noise, yet the record's whole span inside int32 counts (2^30 of margin).
+  const double fine = sd > 0.0 ? sd / 4096.0 : 0.0;
+  const double span_limit = spread / 1073741824.0;
+  double lsb = std::max(fine, span_limit);
+  if (!(lsb > 0.0)) {
+    lsb = amax > 0.0 ? amax * 1e-9 : 1e-9;
+  }
+  note = std::string("LSB chosen: no common step in the data") +
+         (dmin > 0.0 ? " (the smallest difference " + fmt("%.3g", dmin) +
+                           " is not a step of every value, or would overflow int32 counts)"
+                     : "") +
+         "; " + (lsb > fine ? "the record's span / 2^30" : "robust std / 4096") + " = " +
+         fmt("%.6g", lsb) + " (quantization to it is far below the noise)";
   return lsb;
 }
 
@@ -546,31 +1434,45 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
             " samples; at least 1000 are needed";
     return false;
   }
-  for (std::size_t i = 0; i < y_in.size(); ++i) {
-    if (!std::isfinite(y_in[i])) {
-      error = "analyze: channel '" + channel + "' sample " + std::to_string(i) + " is not finite";
-      return false;
-    }
+  // Non-finite samples are gaps: the ADEV marks them missing, the filters skip them, and the
+  // time-domain steps see them filled by interpolation.
+  std::vector<double> y0 = y_in;
+  std::vector<std::uint8_t> gap;
+  if (!fill_gaps(y0, gap, out.gap_samples, out.gap_runs)) {
+    error = "analyze: channel '" + channel + "' has no finite sample";
+    return false;
+  }
+  if (out.gap_samples > 0) {
+    out.notes.push_back(std::to_string(out.gap_samples) + " non-finite samples in " +
+                        std::to_string(out.gap_runs) +
+                        " gaps: marked missing in the ADEV, skipped by the filters");
+  }
+  if (static_cast<double>(out.gap_samples) > 0.5 * static_cast<double>(y_in.size())) {
+    error = "analyze: channel '" + channel + "' is more than half gaps (" +
+            std::to_string(out.gap_samples) + " of " + std::to_string(y_in.size()) +
+            " samples are not finite)";
+    return false;
   }
   const double ts = 1.0 / o.fs_hz;
   const double n_d = static_cast<double>(y_in.size());
   const double t_rec = n_d * ts;
   const double tau_max = o.tau_max_fraction * t_rec;
+  const double offset = y0[0];
   out.lsb = o.lsb;
   if (o.lsb > 0.0) {
     out.lsb_note = "LSB given: " + fmt("%.6g", o.lsb);
   } else {
-    out.lsb = derive_lsb(y_in, out.lsb_note);
+    out.lsb = derive_lsb(y0, out.lsb_note);
   }
   const double lsb = out.lsb;
   std::size_t sat = 0;
-  std::vector<std::int32_t> counts = to_counts(y_in, lsb, sat);  // of y below, kept current
+  std::vector<std::int32_t> counts = to_counts(y0, offset, lsb, sat);  // of y below, kept current
   if (sat > 0) {
-    error = "analyze: " + std::to_string(sat) + " samples do not fit in int32 counts at LSB " +
-            fmt("%g", lsb);
+    error = "analyze: " + std::to_string(sat) + " samples differ from the first by more than "
+            "int32 counts hold at LSB " + fmt("%g", lsb);
     return false;
   }
-  const AdevSet raw = adev_of(counts, ts, lsb);
+  const AdevSet raw = adev_of(counts, gap, ts, lsb);
 
   // ---- before: the seed's first-order model over [Ts, 100 s]
   const double seed_max = std::min(o.seed_tau_max_s, tau_max);
@@ -588,18 +1490,20 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
                            "[Ts, 100 s] does not determine it)");
   }
   out.adev = raw.by_alpha[2];
-  const double known_raw = mean_of(y_in);
-  const FilterRun fb = run_filter(out.model_before, ts, y_in, known_raw, nullptr);
+  const double known_raw = initial_level(y0);
+  const FilterRun fb =
+      run_filter(out.model_before, ts, y0, known_raw, gap.empty() ? nullptr : &gap);
   fill_errors(raw_pts_b, out.model_before, o, ts, tau_max, out.error_before);
   out.error_before.nis_mean = fb.nis_mean;
   out.error_before.nis_flagged_fraction = fb.nis_flagged;
   out.error_before.whiteness_flagged_fraction = fb.whiteness_flagged;
   out.error_before.filter_states = fb.states;
-  out.error_before.cov_ratio = covariance_ratio(out.model_before, ts, y_in);
+  out.error_before.cov_ratio = covariance_ratio(out.model_before, ts, y0);
 
-  // ---- time domain: outliers on the before filter's innovations
-  std::vector<double> y = y_in;
-  std::vector<std::uint8_t> outlier(y.size(), 0);
+  // ---- time domain: outliers on the before filter's innovations (gaps are skipped like them)
+  std::vector<double> y = y0;
+  std::vector<std::uint8_t> outlier = gap.empty() ? std::vector<std::uint8_t>(y.size(), 0) : gap;
+  std::vector<std::pair<std::size_t, double>> outlier_delta;  // index, value - replacement
   bool outliers_replaced = false;
   {
     const double scale = robust_scale(fb.nu);
@@ -608,8 +1512,9 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     std::vector<double> times;
     if (scale > 0.0 && gate.configure(thr) == EffectStatus::kOk) {
       for (std::size_t i = 0; i < y.size(); ++i) {
-        if (gate.push(fb.nu[i] / scale)) {
+        if ((gap.empty() || gap[i] == 0) && gate.push(fb.nu[i] / scale)) {
           outlier[i] = 1;
+          outlier_delta.emplace_back(i, y[i] - fb.pred[i]);
           y[i] = fb.pred[i];
           outliers_replaced = true;
           if (times.size() < 100) {
@@ -633,8 +1538,8 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   // over the record, done only when y changed).
   AdevSet adev_y = raw;
   if (outliers_replaced) {
-    counts = to_counts(y, lsb, sat);
-    adev_y = adev_of(counts, ts, lsb);
+    counts = to_counts(y, offset, lsb, sat);
+    adev_y = adev_of(counts, gap, ts, lsb);
   }
 
   // ---- time domain: bias steps (two-window detector at several scales)
@@ -699,37 +1604,131 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     // the residue of the first estimate), not a new step: stop there and say so.
     bool near_previous = false;
     for (const std::uint64_t prev : step_at) {
-      const double gap = std::fabs(static_cast<double>(best.sample_index) - static_cast<double>(prev));
-      near_previous = near_previous || gap < best_window;
+      const double dist =
+          std::fabs(static_cast<double>(best.sample_index) - static_cast<double>(prev));
+      near_previous = near_previous || dist < best_window;
     }
-    if (near_previous) {
-      out.notes.push_back("step search stopped: a further excursion at t = " +
-                          fmt("%.1f", static_cast<double>(best.sample_index) * ts) +
-                          " s lies within one window of a step already found (a transient)");
+    const double at = static_cast<double>(best.sample_index);
+    if (at < best_window || n_d - at < best_window) {
+      out.notes.push_back("step search stopped: the strongest excursion, at t = " +
+                          fmt("%.1f", at * ts) + " s, lies within one window (" +
+                          fmt("%.0f", best_window * ts) +
+                          " s) of an end of the record: an edge effect, not a step");
       break;
     }
+    if (near_previous) {
+      // The other edge of a short transient (a blip, not a level change) when it undoes at least
+      // half of the step just found: that step is withdrawn. Otherwise it is the residue of
+      // the step's estimate. Either way the search ends here.
+      const double prev_size = out.effects.back().size;
+      const double this_size = best.size_counts * lsb;
+      const bool undoes = out.effects.back().type == "bias_step" && this_size * prev_size < 0.0 &&
+                          std::fabs(this_size) >= 0.5 * std::fabs(prev_size);
+      if (undoes) {
+        const auto from = static_cast<std::size_t>(step_at.back());
+        for (std::size_t i = from; i < y.size(); ++i) {
+          y[i] += prev_size;
+        }
+        out.notes.push_back("transient, not a step: the level shift at t = " +
+                            fmt("%.1f", static_cast<double>(from) * ts) + " s is undone at t = " +
+                            fmt("%.1f", at * ts) + " s, within one window");
+        step_at.pop_back();
+        out.effects.pop_back();
+        counts = to_counts(y, offset, lsb, sat);
+        adev_y = adev_of(counts, gap, ts, lsb);
+      } else {
+        out.notes.push_back("step search stopped: a further excursion at t = " +
+                            fmt("%.1f", at * ts) +
+                            " s lies within one window of a step already found (its residue)");
+      }
+      break;
+    }
+    const double size = best.size_counts * lsb;  // the difference of its two window means
     step_at.push_back(best.sample_index);
     Effect e;
     e.type = "bias_step";
     e.time_s = static_cast<double>(best.sample_index) * ts;
-    e.size = best.size_counts * lsb;
+    e.size = size;
     e.statistic = std::fabs(best.z);
     e.threshold = thr;
     out.effects.push_back(e);
     for (std::size_t i = best.sample_index; i < y.size(); ++i) {
       y[i] -= e.size;
     }
-    counts = to_counts(y, lsb, sat);
-    adev_y = adev_of(counts, ts, lsb);
+    counts = to_counts(y, offset, lsb, sat);
+    adev_y = adev_of(counts, gap, ts, lsb);
+  }
+
+  // Over [Ts, T/10] the GM must show its ADEV peak (1.89 Tb) and one octave of its falling side
+  // inside the range: a GM whose peak lies at or beyond the end is, on these taus, the same curve
+  // as a rate random walk (AVAR ~ Sb tau / 3), and the one-parameter RRW is the name for it.
+  const double tb_max = tau_max / (2.0 * kGmPeakTauFactor);
+
+  // ---- bias steps by the record's likelihood: a level shift at the best block boundary
+  // (profile over the boundaries) against H0 (white + GMs, tb <= tb_max), taken when it is
+  // significant over all the positions tried AND explains the record better than a walk would
+  // (a walk also raises the step profile; a step also raises the walk's likelihood).
+  while (static_cast<int>(step_at.size()) < o.max_steps) {
+    const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
+    if (b0.status != FitStatus::kOk) {
+      break;
+    }
+    const RrwLikelihoodTest lt = test_rrw(y, ts, b0.params, tb_max, false, step_at, kAuxBlocks);
+    const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
+    const StepLikelihood sl = profile_step(lt, margin);
+    if (!sl.ok || sl.positions == 0) {
+      break;
+    }
+    // Bonferroni over the effectively independent boundaries, counted four per slowest
+    // correlation time of H0: the statistics at boundaries closer than that are nearly the
+    // same (counting every block boundary made the test blind to a 3-sigma step; one per
+    // correlation time gave false steps on 2 of 20 controls); level: the ADEV tests' 1 %.
+    double tb_slow = lt.block_s;
+    for (std::size_t g = 0; g < lt.h0.model.n_gm; ++g) {
+      tb_slow = std::max(tb_slow, lt.h0.model.gm[g].tb_s);
+    }
+    const double eff_positions =
+        std::max(1.0, 4.0 * static_cast<double>(sl.positions) * lt.block_s / tb_slow);
+    const double thr = chi2_quantile(1.0 - o.cost_alpha / eff_positions, 1.0);
+    if (sl.lr <= thr) {
+      break;
+    }
+    // The alternatives with one parameter each: a walk (K) and bias instability (B, started from
+    // the data's ADEV at T/100 taken as its floor); the step must explain the record better.
+    const double lr_bi = bias_instability_lr(y, ts, b0.params, tb_max, step_at, adev_y, lt);
+    const double lr_alt = std::max(lt.lr, lr_bi);
+    if (sl.lr <= lr_alt) {
+      out.notes.push_back("a level shift at t = " +
+                          fmt("%.1f", static_cast<double>(sl.sample) * ts) +
+                          " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but " +
+                          (lt.lr >= lr_bi ? "a walk" : "bias instability") +
+                          " explains the record as well (" + fmt("%.1f", lr_alt) +
+                          "): not named a step");
+      break;
+    }
+    step_at.push_back(sl.sample);
+    Effect e;
+    e.type = "bias_step";
+    e.time_s = static_cast<double>(sl.sample) * ts;
+    e.size = sl.size;
+    e.statistic = sl.lr;
+    e.threshold = thr;
+    out.effects.push_back(e);
+    out.notes.push_back("bias step at t = " + fmt("%.1f", e.time_s) +
+                        " s from the record's profile likelihood (2 ln LR = " +
+                        fmt("%.1f", sl.lr) + " > " + fmt("%.1f", thr) + " over " +
+                        fmt("%.0f", eff_positions) + " independent positions, and > a walk's or bias "
+                        "instability's " + fmt("%.1f", lr_alt) + ")");
+    for (std::size_t i = sl.sample; i < y.size(); ++i) {
+      y[i] -= e.size;
+    }
+    counts = to_counts(y, offset, lsb, sat);
+    adev_y = adev_of(counts, gap, ts, lsb);
   }
 
   // ---- ADEV residual over [Ts, T/10] of the cleaned record, greedy term selection
   const AdevSet& clean = adev_y;
   const std::uint32_t base_terms = kFitWhite | kFitGm1;
-  // Over [Ts, T/10] the GM must show its ADEV peak (1.89 Tb) and one octave of its falling side
-  // inside the range: a GM whose peak lies at or beyond the end is, on these taus, the same curve
-  // as a rate random walk (AVAR ~ Sb tau / 3), and the one-parameter RRW is the name for it.
-  const double tb_max = tau_max / (2.0 * kGmPeakTauFactor);
   const FitResult base0 = fit_terms(clean.by_alpha[2], base_terms, ts, tau_max, tb_max);
   if (base0.status != FitStatus::kOk) {
     error = "analyze: the white + GM fit over [Ts, T/10] failed";
@@ -745,18 +1744,16 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   }
   ModelParams cur_p = cur.params;
   double cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
-  const double cost_thr = o.cost_factor * chi2_quantile(1.0 - o.alpha, 1.0);
+  const double cost_thr = o.cost_factor * chi2_quantile(1.0 - o.cost_alpha, 1.0);
   const double lr_thr = chi2_quantile(1.0 - o.alpha, 1.0);  // record likelihood: no inflation
   bool have_sine = false;
   SineFit sine{};
   std::vector<double> y_fit = y;  // y minus the accepted sinusoid
   // Per bump (by its tau index): the sinusoid estimate and the ADEV of y without it. The same
   // bump comes back round after round; each entry costs passes over the record.
-  struct SineCand {
-    SineFit fit;
-    AdevSet adev;
-  };
   std::map<std::size_t, SineCand> sine_cache;
+  std::map<int, SineCand> harmonic_cache;  // by harmonic number, of y minus the sinusoid
+  bool have_sine2 = false;
 
   for (int round = 0; round < 6; ++round) {
     const Residual res = residual(eval, cur_p, o, ts, tau_max);
@@ -770,16 +1767,10 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     if (res.check.n_runs == 0) {
       break;  // every residual is within the intervals: say nothing
     }
-    struct Cand {
-      std::string type;
-      std::uint32_t terms;
-      ModelParams p;
-      double cost;
-      const SineCand* sine;  // the sinusoid candidate's estimate and ADEV, else null
-    };
     std::vector<Cand> cands;
     const auto try_term = [&](const char* type, std::uint32_t t) {
-      if ((terms & t) != 0U) {
+      const std::uint32_t own = (t & ~kFitGm2) != 0U ? (t & ~kFitGm2) : t;  // the term tried
+      if ((terms & own) != 0U) {
         return;
       }
       const FitResult f = fit_terms(fit_pts, terms | t, ts, tau_max, tb_max);
@@ -787,10 +1778,10 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         return;
       }
       ModelParams p = f.params;
-      if (have_sine) {
-        p.sin_a = sine.amplitude;
-        p.sin_f0_hz = sine.f_hz;
-      }
+      p.sin_a = cur_p.sin_a;
+      p.sin_f0_hz = cur_p.sin_f0_hz;
+      p.sin2_a = cur_p.sin2_a;
+      p.sin2_f0_hz = cur_p.sin2_f0_hz;
       cands.push_back(Cand{type, terms | t, p, residual(eval, p, o, ts, tau_max).cost, nullptr});
     };
     try_term("quantization", kFitQuantization);
@@ -800,7 +1791,18 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     // ADIS16405's internal filter correlates the noise below 1 s while the bias wanders over
     // minutes). It competes with the named terms under the same test and, when accepted, is
     // reported in the notes and in model_after, not as an effect.
+    // With bias instability in the model a second slow GM would only share its power (two slow
+    // GMs imitate flicker): the second GM is then for the short taus alone (both GMs slower than
+    // two of the likelihood's blocks: not a candidate).
     try_term("second_gm", kFitGm2);
+    if ((terms & kFitFlicker) != 0U && !cands.empty() && cands.back().type == "second_gm" &&
+        cands.back().p.n_gm == 2 && cands.back().p.gm[0].tb_s >= 2.0 * t_rec / 2048.0) {
+      cands.pop_back();
+    }
+    // Bias instability comes with a second GM free for the short taus: fitted with one GM only,
+    // the GM leaves the sensor's filter (the ADIS16405's ~0.1 s) to sit on the flicker's range
+    // and the pair mimics neither.
+    try_term("bias_instability", kFitFlicker | kFitGm2);
     if (!have_sine) {
       // The three strongest bumps (by sum of z) are candidates.
       std::sort(bumps.begin(), bumps.end(),
@@ -822,7 +1824,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
           SineCand sc;
           sc.fit = estimate_sinusoid(y, ts, f_c);
           if (sc.fit.ok) {
-            sc.adev = adev_of(to_counts(minus_sine(y, ts, sc.fit), lsb, sat), ts, lsb);
+            sc.adev = adev_of(to_counts(minus_sine(y, ts, sc.fit), offset, lsb, sat), gap, ts, lsb);
           }
           it = sine_cache.emplace(imin, std::move(sc)).first;
         }
@@ -840,6 +1842,41 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         p.sin_a = s.amplitude;
         p.sin_f0_hz = s.f_hz;
         cands.push_back(Cand{"sinusoid", terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
+      }
+    } else if (!have_sine2) {
+      // Harmonics of the sinusoid found (a periodic disturbance that is not a pure tone, e.g.
+      // the ADIS16405's oscillation has a 3rd harmonic): least squares at exactly h f0.
+      for (const int h : {2, 3}) {
+        const double f_h = h * sine.f_hz;
+        if (f_h >= 0.5 / ts) {
+          continue;
+        }
+        auto it = harmonic_cache.find(h);
+        if (it == harmonic_cache.end()) {
+          SineCand sc;
+          sc.fit = sine_ls(y_fit, ts, f_h);
+          if (sc.fit.ok) {
+            sc.adev = adev_of(to_counts(minus_sine(y_fit, ts, sc.fit), offset, lsb, sat), gap, ts,
+                              lsb);
+          }
+          it = harmonic_cache.emplace(h, std::move(sc)).first;
+        }
+        const SineCand& sc = it->second;
+        if (!sc.fit.ok || !(sc.fit.amplitude > 0.0)) {
+          continue;
+        }
+        const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
+        const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max);
+        if (f.status != FitStatus::kOk) {
+          continue;
+        }
+        ModelParams p = f.params;
+        p.sin_a = sine.amplitude;
+        p.sin_f0_hz = sine.f_hz;
+        p.sin2_a = sc.fit.amplitude;
+        p.sin2_f0_hz = sc.fit.f_hz;
+        cands.push_back(Cand{"sinusoid_harmonic", terms, p, residual(eval, p, o, ts, tau_max).cost,
+                             &sc});
       }
     }
     const Cand* best = nullptr;
@@ -867,6 +1904,17 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         }
       }
     }
+    // The long-tau family: bias instability, rate random walk, or a second GM slow enough to be
+    // seen in the record's block means. Over the taus up to T/10 a flat stretch bent up at the
+    // end fits any of them (two GMs and a walk imitate flicker over a decade or two); the
+    // record decides. The candidates that pass the ADEV test are compared by their maximised
+    // block-mean likelihoods (long_memory.hpp) less their extra parameters (AIC: 1 for B or K,
+    // 2 for a GM).
+    if (best != nullptr) {
+      best = long_tau_choice(LongTauInput{y_fit, ts, tb_max, (terms & kFitRamp) != 0U, step_at,
+                                          cur_p, cur_cost, cost_thr},
+                             cands, best, out.notes);
+    }
     if (best == nullptr || cur_cost - best->cost <= cost_thr) {
       if (best != nullptr) {
         out.notes.push_back("not added: " + best->type + " (cost drop " +
@@ -881,7 +1929,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
                           "); see model_after.gm");
     } else {
       Effect e;
-      e.type = best->type;
+      e.type = best->type == "sinusoid_harmonic" ? "sinusoid" : best->type;
       e.statistic = cur_cost - best->cost;
       e.threshold = cost_thr;
       out.effects.push_back(e);
@@ -889,7 +1937,14 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     terms = best->terms;
     cur_p = best->p;
     cur_cost = best->cost;
-    if (best->sine != nullptr) {
+    if (best->sine != nullptr && best->type == "sinusoid_harmonic") {
+      have_sine2 = true;
+      y_fit = minus_sine(y_fit, ts, best->sine->fit);
+      fit_set = best->sine->adev;
+      out.notes.push_back("sinusoid at " + fmt("%.5g", cur_p.sin2_f0_hz) + " Hz: harmonic " +
+                          fmt("%.0f", cur_p.sin2_f0_hz / cur_p.sin_f0_hz) + " of " +
+                          fmt("%.5g", cur_p.sin_f0_hz) + " Hz");
+    } else if (best->sine != nullptr) {
       have_sine = true;
       sine = best->sine->fit;
       y_fit = minus_sine(y, ts, sine);
@@ -920,10 +1975,12 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
             fmt("%.3g", lt.block_s) + " s; GM alone, tb <= " + fmt("%.0f", tb_max) +
             " s, vs GM + K = " + fmt("%.3g", lt.h1.model.k) + ")");
         terms |= kFitRrw;
+        const ModelParams prev = cur_p;
         cur_p = f.params;
-        cur_p.sin_a = sine.amplitude;
-        cur_p.sin_f0_hz = sine.f_hz;
-        cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
+        cur_p.sin_a = prev.sin_a;
+        cur_p.sin_f0_hz = prev.sin_f0_hz;
+        cur_p.sin2_a = prev.sin2_a;
+        cur_p.sin2_f0_hz = prev.sin2_f0_hz;
       }
     } else if (lt.ok) {
       out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
@@ -931,50 +1988,42 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     }
   }
 
-  // ---- after: joint refit with the accepted terms (EDF from the current model), checks.
-  // No ADEV term accepted: the first-order model explains the ADEV, and "after" is "before"
-  // (checked on the cleaned record when steps or outliers were removed).
-  if (terms == base_terms && !have_sine) {
-    cur_p = out.model_before;
-  } else {
-    // The joint fit (its own IRLS weights on AVAR), kept if it lowers sum(z^2) on the checked
-    // taus. The GM stays bounded as in the search (peak and one octave inside [Ts, T/10]), also
-    // next to a rate random walk or ramp: an unbounded GM there takes over K's rise (K fell to
-    // half its true value, or to 0, on some synthetic seeds). Every effect found stays in the
-    // model: the NNLS may zero a term whose evidence (e.g. the likelihood test) it does not see.
-    fit_pts = in_range(points_for_model(fit_set, cur_p), tau_max);
-    const FitResult f = fit_terms(fit_pts, terms, ts, tau_max, tb_max);
-    if (f.status == FitStatus::kOk) {
-      ModelParams p = f.params;
-      p.sin_a = cur_p.sin_a;
-      p.sin_f0_hz = cur_p.sin_f0_hz;
-      const bool keeps_terms = ((terms & kFitQuantization) == 0U || p.q > 0.0) &&
-                               ((terms & kFitRrw) == 0U || p.k > 0.0) &&
-                               ((terms & kFitRamp) == 0U || p.r > 0.0);
-      const double c = residual(eval, p, o, ts, tau_max).cost;
-      if (keeps_terms && c < cur_cost) {
-        cur_p = p;
-      }
-    }
-  }
-  out.model_after = cur_p;
-  for (auto& e : out.effects) {
-    if (e.type == "quantization") {
-      e.q = cur_p.q;
-    } else if (e.type == "rate_random_walk") {
-      e.k = cur_p.k;
-    } else if (e.type == "ramp") {
-      e.r = cur_p.r;
-    } else if (e.type == "sinusoid") {
-      e.freq_hz = cur_p.sin_f0_hz;
-      e.amplitude = cur_p.sin_a;
-    }
-  }
+  // ---- after: never worse than before, every named effect real, the remainder said.
   out.adev_clean = clean.by_alpha[2];
-  const Points eval_after = points_for_model(clean, cur_p);
-  fill_errors(eval_after, cur_p, o, ts, tau_max, out.error_after);
-  const double known_clean = mean_of(y);
-  const FilterRun fa = run_filter(cur_p, ts, y, known_clean, &outlier);
+  const AfterContext ac{o, ts, tau_max, tb_max, clean, fit_set, out.error_before};
+  // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
+  // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
+  const AfterChoice choice = choose_after(ac, terms, cur_p, out.model_before, out.notes);
+  cur_p = choice.p;
+  out.model_after = cur_p;
+  out.error_after = choice.e;
+  drop_unmodelled_effects(cur_p, out);
+  out.unexplained = unexplained_runs(ac, cur_p);
+  name_check(ac, cur_p, ramp_bend_lr(y_fit, ts, cur_p, tb_max, step_at), out);
+  if (!out.unexplained.empty()) {
+    std::string ranges;
+    for (const auto& u : out.unexplained) {
+      ranges += (ranges.empty() ? "" : ", ") + fmt("%.3g", u.tau_min_s) + "-" +
+                fmt("%.3g", u.tau_max_s) + " s (max |z| " + fmt("%.1f", u.max_abs_z) + ")";
+    }
+    out.notes.push_back("unexplained: the final model still misses the data at tau " + ranges +
+                        "; no term of the analysis accounts for it");
+  }
+  drop_degenerate_effects(ts, n_d, out);
+  // The filter sees the record without the deterministic terms the model holds (their
+  // least-squares estimates): sinusoids, and the least-squares line for a ramp.
+  std::vector<double> y_det = cur_p.sin_a > 0.0 ? y_fit : y;
+  if (cur_p.r > 0.0) {
+    remove_line(y_det, ts);
+  }
+  // The outliers were found on the before-model's innovations; each must also be one on the
+  // after-model's (a model that misses the data makes large innovations that are not outliers).
+  for (const auto& [i, d] : outlier_delta) {
+    y_det[i] += d;
+  }
+  const double known_clean = initial_level(y_det);
+  const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier);
+  confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, out);
   out.error_after.nis_mean = fa.nis_mean;
   out.error_after.nis_flagged_fraction = fa.nis_flagged;
   out.error_after.whiteness_flagged_fraction = fa.whiteness_flagged;

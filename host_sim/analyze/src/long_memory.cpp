@@ -10,7 +10,7 @@
 namespace imu::analyze {
 namespace {
 
-constexpr std::size_t kMaxStates = kMaxGmTerms + 1;
+constexpr std::size_t kMaxStates = kMaxGmTerms + kMaxFlickerGm + 1;
 
 // One independent state of the block model: x' = f x + w, block integral / h = hm x + u,
 // Var(w) = q, Var(u) = ru, Cov(w, u) = s.
@@ -162,11 +162,16 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
 struct Packing {
   std::size_t n_gm = 0;
   bool fit_k = false;
+  bool fit_bi = false;
   double k_fixed = 0.0;
+  double bi_lo_s = 0.0;
+  double bi_hi_s = 0.0;
   double ln_tb_min = 0.0;
   double ln_tb_span = 0.0;
 
-  [[nodiscard]] std::size_t size() const { return 1 + 2 * n_gm + (fit_k ? 1 : 0); }
+  [[nodiscard]] std::size_t size() const {
+    return 1 + 2 * n_gm + (fit_k ? 1 : 0) + (fit_bi ? 1 : 0);
+  }
 
   [[nodiscard]] BlockModel unpack(const std::vector<double>& v) const {
     BlockModel m;
@@ -178,6 +183,11 @@ struct Packing {
       m.gm[i].tb_s = std::exp(ln_tb_min + ln_tb_span / (1.0 + std::exp(-u)));
     }
     m.k = fit_k ? std::exp(v[1 + 2 * n_gm]) : k_fixed;
+    if (fit_bi) {
+      m.bi = std::exp(v[size() - 1]);
+      m.bi_tau_lo_s = bi_lo_s;
+      m.bi_tau_hi_s = bi_hi_s;
+    }
     return m;
   }
 
@@ -194,6 +204,9 @@ struct Packing {
     }
     if (fit_k) {
       v[1 + 2 * n_gm] = std::log(m.k);
+    }
+    if (fit_bi) {
+      v[size() - 1] = std::log(m.bi);
     }
     return v;
   }
@@ -218,26 +231,47 @@ namespace {
 
 // block_loglik with the sample variance of the means given (fit_block_model evaluates thousands of
 // models on one record: the variance is one pass over it, computed once there).
+// whitened (optional): nu_k / sqrt(s_k) per block, 0 where the term is left out.
 double loglik_impl(const std::vector<double>& means, double means_var, double block_s,
-                   const BlockModel& m, double w0_var, const std::vector<std::size_t>& resets) {
+                   const BlockModel& m, double w0_var, const std::vector<std::size_t>& resets,
+                   std::vector<double>* whitened = nullptr) {
   constexpr double kInvalid = -std::numeric_limits<double>::infinity();
   if (!(m.white_var > 0.0) || !(block_s > 0.0) || means.empty() || m.n_gm > kMaxGmTerms ||
-      !(m.k >= 0.0)) {
+      !(m.k >= 0.0) || !(m.bi >= 0.0)) {
     return kInvalid;
+  }
+  if (whitened != nullptr) {
+    whitened->assign(means.size(), 0.0);
   }
   const bool diffuse = w0_var < 0.0;
   // Diffuse start: a variance far above anything in the data (the limit is reached to ~1e-8).
   const double big = 1e8 * (means_var + m.white_var);
   std::array<Component, kMaxStates> c{};
-  const std::size_t d = m.n_gm + 1;
   double r = m.white_var;
+  std::size_t n_gm = 0;  // GM components (the model's and the flicker bank's long members)
   for (std::size_t i = 0; i < m.n_gm; ++i) {
     if (!(m.gm[i].sb > 0.0) || !(m.gm[i].tb_s > 0.0)) {
       return kInvalid;
     }
-    c[i] = gm_component(m.gm[i].sb, m.gm[i].tb_s, block_s);
+    c[n_gm++] = gm_component(m.gm[i].sb, m.gm[i].tb_s, block_s);
   }
-  c[m.n_gm] = walk_component(m.k, block_s, diffuse ? big : w0_var);
+  if (m.bi > 0.0) {
+    GmParam bank[kMaxFlickerGm];
+    const std::size_t nb = flicker_bank(m.bi, m.bi_tau_lo_s, m.bi_tau_hi_s, bank);
+    if (nb == 0) {
+      return kInvalid;
+    }
+    for (std::size_t i = 0; i < nb; ++i) {
+      if (bank[i].tb_s < 0.5 * block_s) {  // white at this scale: AVAR ~ sb tb^2 / tau
+        r += bank[i].sb * bank[i].tb_s * bank[i].tb_s / block_s;
+      } else {
+        c[n_gm++] = gm_component(bank[i].sb, bank[i].tb_s, block_s);
+      }
+    }
+  }
+  const std::size_t iw = n_gm;  // the walk's state
+  const std::size_t d = n_gm + 1;
+  c[iw] = walk_component(m.k, block_s, diffuse ? big : w0_var);
   for (std::size_t i = 0; i < d; ++i) {
     r += c[i].ru;
   }
@@ -246,7 +280,7 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
   for (std::size_t i = 0; i < d; ++i) {
     p[i][i] = c[i].p0;
   }
-  x[m.n_gm] = diffuse ? means[0] : 0.0;
+  x[iw] = diffuse ? means[0] : 0.0;
   double ll = 0.0;
   std::size_t next_reset = 0;
   for (std::size_t k = 0; k < means.size(); ++k) {
@@ -256,7 +290,7 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
       ++next_reset;
     }
     if (reset && k > 0) {  // the walk's level is unknown again
-      p[m.n_gm][m.n_gm] += big;
+      p[iw][iw] += big;
     }
     std::array<double, kMaxStates> ph{};  // P hm
     double pred = 0.0;
@@ -276,6 +310,9 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
     const double nu = means[k] - pred;
     if ((!diffuse || k > 0) && !reset) {
       ll -= 0.5 * (std::log(s) + nu * nu / s);
+      if (whitened != nullptr) {
+        (*whitened)[k] = nu / std::sqrt(s);
+      }
     }
     // Predictor form with correlated noise: G = (F P hm + S) / s; x = F x + G nu;
     // P = F P F + Q - G G s.
@@ -312,6 +349,9 @@ LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
   pk.n_gm = start.n_gm;
   pk.fit_k = fit_k;
   pk.k_fixed = start.k;
+  pk.fit_bi = start.bi > 0.0;
+  pk.bi_lo_s = start.bi_tau_lo_s;
+  pk.bi_hi_s = start.bi_tau_hi_s;
   pk.ln_tb_min = std::log(tb_min_s);
   pk.ln_tb_span = std::max(0.0, std::log(tb_max_s) - pk.ln_tb_min);
   for (std::size_t i = 0; i < start.n_gm; ++i) {
@@ -334,7 +374,7 @@ LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
 RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const ModelParams& start,
                            double tb_max_s, bool detrend,
                            const std::vector<std::uint64_t>& step_samples,
-                           std::size_t target_blocks) {
+                           std::size_t target_blocks, bool with_walk) {
   RrwLikelihoodTest out;
   if (!(ts_s > 0.0) || target_blocks < 64 || y.size() < 64) {
     return out;
@@ -370,6 +410,9 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
   // Start: white (and quantization, and GMs shorter than two blocks, which are white at this
   // scale: AVAR ~ sb tb^2 / tau) from the ADEV fit; longer GMs kept (at least one).
   BlockModel s0;
+  s0.bi = start.bi;
+  s0.bi_tau_lo_s = start.bi_tau_lo_s;
+  s0.bi_tau_hi_s = start.bi_tau_hi_s;
   double white_psd = start.n * start.n + 3.0 * start.q * start.q / h;
   for (std::size_t i = 0; i < start.n_gm; ++i) {
     const GmParam g = start.gm[i];
@@ -403,6 +446,14 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
   if (!out.h0.ok) {
     return out;
   }
+  out.h1 = out.h0;  // K -> 0 reproduces H0
+  if (!with_walk) {
+    out.per_block = per_block;
+    out.means = std::move(m);
+    out.resets = std::move(resets);
+    out.ok = true;
+    return out;
+  }
   // H1 from H0's optimum with K from the ADEV fit, and with a walk holding all / a tenth of
   // the record's variance (K^2 T / 6 ~ var for a walk over T).
   const double t_rec = nb * h;
@@ -420,8 +471,94 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
     }
   }
   out.lr = std::max(0.0, 2.0 * (out.h1.loglik - out.h0.loglik));
+  out.per_block = per_block;
+  out.means = std::move(m);
+  out.resets = std::move(resets);
   out.ok = true;
   return out;
+}
+
+namespace {
+
+// GLS size and lr of a level shift at block b, given the whitened innovations a of the data.
+bool gls_step(const RrwLikelihoodTest& test, double var, const std::vector<double>& a,
+              std::size_t b, std::vector<double>& u, double& lr, double& size) {
+  std::fill(u.begin(), u.end(), 0.0);
+  std::fill(u.begin() + static_cast<std::ptrdiff_t>(b), u.end(), 1.0);
+  std::vector<double> e;
+  if (!std::isfinite(loglik_impl(u, var, test.block_s, test.h0.model, -1.0, test.resets, &e))) {
+    return false;
+  }
+  double ae = 0.0;
+  double ee = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ae += a[k] * e[k];
+    ee += e[k] * e[k];
+  }
+  if (!(ee > 0.0)) {
+    return false;
+  }
+  lr = ae * ae / ee;
+  size = ae / ee;
+  return true;
+}
+
+}  // namespace
+
+StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_blocks,
+                            std::size_t only_block) {
+  StepLikelihood out;
+  const std::vector<double>& m = test.means;
+  const std::size_t nb = m.size();
+  if (!test.ok || !test.h0.ok || nb < 2 * margin_blocks + 4) {
+    return out;
+  }
+  const double var = sample_variance(m);
+  std::vector<double> a;
+  if (!std::isfinite(loglik_impl(m, var, test.block_s, test.h0.model, -1.0, test.resets, &a))) {
+    return out;
+  }
+  std::vector<double> u(nb, 0.0);
+  const std::size_t first = std::max<std::size_t>(margin_blocks, 1);
+  for (std::size_t b = first; b + margin_blocks < nb; ++b) {
+    if (only_block != kEveryBlock && b != only_block) {
+      continue;
+    }
+    double lr = 0.0;
+    double size = 0.0;
+    if (!gls_step(test, var, a, b, u, lr, size)) {
+      continue;
+    }
+    ++out.positions;
+    if (lr > out.lr || !out.ok) {
+      out.lr = lr;
+      out.size = size;
+      out.sample = static_cast<std::uint64_t>(b) * test.per_block;
+      out.ok = true;
+    }
+  }
+  return out;
+}
+
+double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u) {
+  if (!test.ok || !test.h0.ok || u.size() != test.means.size()) {
+    return 0.0;
+  }
+  const double var = sample_variance(test.means);
+  std::vector<double> a;
+  std::vector<double> e;
+  if (!std::isfinite(
+          loglik_impl(test.means, var, test.block_s, test.h0.model, -1.0, test.resets, &a)) ||
+      !std::isfinite(loglik_impl(u, var, test.block_s, test.h0.model, -1.0, test.resets, &e))) {
+    return 0.0;
+  }
+  double ae = 0.0;
+  double ee = 0.0;
+  for (std::size_t k = 0; k < a.size(); ++k) {
+    ae += a[k] * e[k];
+    ee += e[k] * e[k];
+  }
+  return ee > 0.0 ? ae * ae / ee : 0.0;
 }
 
 }  // namespace imu::analyze

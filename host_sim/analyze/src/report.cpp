@@ -36,15 +36,34 @@ std::string quoted(const std::string& s) {
   return o + "\"";
 }
 
+std::string gm_list(const GmParam* g, std::size_t n) {
+  std::ostringstream s;
+  s << "[";
+  for (std::size_t i = 0; i < n; ++i) {
+    s << (i > 0 ? ", " : "") << "{\"sb\": " << num(g[i].sb) << ", \"tb_s\": " << num(g[i].tb_s)
+      << "}";
+  }
+  s << "]";
+  return s.str();
+}
+
+// Every term of the model with its parameters, and the state-space size it takes
+// (error_model.hpp build_model: GMs 1 state each, the flicker bank 1 per member, RRW 1, ramp 2,
+// each sinusoid 2).
 std::string model_json(const ModelParams& p) {
   std::ostringstream s;
-  s << "{\"n\": " << num(p.n) << ", \"q\": " << num(p.q) << ", \"gm\": [";
-  for (std::size_t i = 0; i < p.n_gm; ++i) {
-    s << (i > 0 ? ", " : "") << "{\"sb\": " << num(p.gm[i].sb) << ", \"tb_s\": "
-      << num(p.gm[i].tb_s) << "}";
-  }
-  s << "], \"k\": " << num(p.k) << ", \"r\": " << num(p.r) << ", \"sin_a\": " << num(p.sin_a)
-    << ", \"sin_f0_hz\": " << num(p.sin_f0_hz) << "}";
+  ContinuousModel<kModelMaxStates> c;
+  const bool built = build_model(p, c) == ModelStatus::kOk;
+  GmParam bank[kMaxFlickerGm];
+  const std::size_t nb =
+      p.bi > 0.0 ? flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank) : 0;
+  s << "{\"n\": " << num(p.n) << ", \"q\": " << num(p.q) << ", \"gm\": " << gm_list(p.gm, p.n_gm)
+    << ", \"k\": " << num(p.k) << ", \"r\": " << num(p.r) << ", \"sin_a\": " << num(p.sin_a)
+    << ", \"sin_f0_hz\": " << num(p.sin_f0_hz) << ", \"sin2_a\": " << num(p.sin2_a)
+    << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"bias_instability\": {\"B\": "
+    << num(p.bi) << ", \"tau_lo_s\": " << num(p.bi_tau_lo_s) << ", \"tau_hi_s\": "
+    << num(p.bi_tau_hi_s) << ", \"gm_bank\": " << gm_list(bank, nb)
+    << "}, \"n_states\": " << (built ? std::to_string(c.n_states) : std::string("null")) << "}";
   return s.str();
 }
 
@@ -71,6 +90,8 @@ std::string effect_json(const Effect& e) {
     s << ", \"K\": " << num(e.k);
   } else if (e.type == "ramp") {
     s << ", \"R\": " << num(e.r);
+  } else if (e.type == "bias_instability") {
+    s << ", \"B\": " << num(e.b);
   } else if (e.type == "sinusoid") {
     s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"amplitude\": " << num(e.amplitude);
   } else if (e.type == "bias_step") {
@@ -111,7 +132,14 @@ std::string to_json(const Report& r) {
   for (std::size_t i = 0; i < r.notes.size(); ++i) {
     s << (i > 0 ? ", " : "") << quoted(r.notes[i]);
   }
-  s << "],\n  \"seconds\": " << num(r.seconds) << ",\n  \"cpu_seconds\": " << num(r.cpu_seconds)
+  s << "],\n  \"unexplained\": [";
+  for (std::size_t i = 0; i < r.unexplained.size(); ++i) {
+    const UnexplainedRun& u = r.unexplained[i];
+    s << (i > 0 ? ", " : "") << "{\"tau_min_s\": " << num(u.tau_min_s) << ", \"tau_max_s\": "
+      << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z) << "}";
+  }
+  s << "],\n  \"gaps\": {\"samples\": " << r.gap_samples << ", \"runs\": " << r.gap_runs
+    << "},\n  \"seconds\": " << num(r.seconds) << ",\n  \"cpu_seconds\": " << num(r.cpu_seconds)
     << "\n}\n";
   return s.str();
 }
@@ -123,6 +151,12 @@ std::string to_text(const Report& r) {
                 r.channel.c_str(), static_cast<unsigned long long>(r.samples), r.fs_hz,
                 static_cast<double>(r.samples) / r.fs_hz, r.lsb_note.c_str());
   s << buf;
+  if (r.gap_samples > 0) {
+    std::snprintf(buf, sizeof buf, "gaps: %llu non-finite samples in %llu runs (missing)\n",
+                  static_cast<unsigned long long>(r.gap_samples),
+                  static_cast<unsigned long long>(r.gap_runs));
+    s << buf;
+  }
   const auto model_line = [&](const char* name, const ModelParams& p) {
     std::snprintf(buf, sizeof buf, "%s: N = %.4e", name, p.n);
     s << buf;
@@ -145,6 +179,15 @@ std::string to_text(const Report& r) {
     }
     if (p.sin_a > 0.0) {
       std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin_a, p.sin_f0_hz);
+      s << buf;
+    }
+    if (p.sin2_a > 0.0) {
+      std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin2_a, p.sin2_f0_hz);
+      s << buf;
+    }
+    if (p.bi > 0.0) {
+      std::snprintf(buf, sizeof buf, ", bias instability B = %.4e (flicker bank over [%.3g, %.4g] s)",
+                    p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s);
       s << buf;
     }
     s << "\n";
@@ -180,6 +223,9 @@ std::string to_text(const Report& r) {
     } else if (e.type == "bias_step") {
       std::snprintf(buf, sizeof buf, "effect bias_step: at t = %.1f s, size %.4e", e.time_s,
                     e.size);
+    } else if (e.type == "bias_instability") {
+      std::snprintf(buf, sizeof buf, "effect bias_instability: B = %.4e (ADEV floor %.4e)", e.b,
+                    kFlickerAdevFactor * e.b);
     } else {
       std::snprintf(buf, sizeof buf, "effect outliers: %llu samples",
                     static_cast<unsigned long long>(e.count));
@@ -191,6 +237,15 @@ std::string to_text(const Report& r) {
   }
   model_line("model after (joint fit over [Ts, T/10])", r.model_after);
   error_line("error after", r.error_after);
+  if (r.unexplained.empty()) {
+    s << "unexplained: nothing (the model after is inside the intervals, no significant run)\n";
+  }
+  for (const auto& u : r.unexplained) {
+    std::snprintf(buf, sizeof buf,
+                  "unexplained: tau %.3g - %.4g s, max |z| %.1f (model %s the data)\n",
+                  u.tau_min_s, u.tau_max_s, u.max_abs_z, u.sign > 0 ? "above" : "below");
+    s << buf;
+  }
   for (const auto& n : r.notes) {
     s << "note: " << n << "\n";
   }

@@ -1,14 +1,46 @@
 // Synthetic channel generator (see synth.hpp).
 #include "imu/analyze/synth.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <complex>
+#include <limits>
 
 #include "imu/error_model.hpp"
 #include "imu/noise_sim.hpp"
+#include "fft.hpp"
 
 namespace imu::analyze {
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+
+// Kasdin's 1/f (alpha = 1) sequence of m values, white variance b^2 (see SynthSpec::flicker_b):
+// the causal convolution of the white sequence with h by FFT (zero-padded to 2m: no wrap).
+std::vector<double> flicker_sequence(std::size_t m, double b, GaussianRng& rng) {
+  std::size_t n = 1;
+  while (n < 2 * m) {
+    n <<= 1;
+  }
+  std::vector<std::complex<double>> hf(n);
+  std::vector<std::complex<double>> wf(n);
+  double h = 1.0;
+  for (std::size_t k = 0; k < m; ++k) {
+    hf[k] = h;
+    h *= (static_cast<double>(k) + 0.5) / static_cast<double>(k + 1);
+    wf[k] = b * rng.normal();
+  }
+  fft(hf);
+  fft(wf);
+  for (std::size_t k = 0; k < n; ++k) {
+    wf[k] = std::conj(wf[k] * hf[k]);  // inverse by the conjugate trick
+  }
+  fft(wf);
+  std::vector<double> x(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    x[k] = wf[k].real() / static_cast<double>(n);
+  }
+  return x;
+}
 }  // namespace
 
 std::vector<double> synthesize(const SynthSpec& s) {
@@ -48,6 +80,25 @@ std::vector<double> synthesize(const SynthSpec& s) {
     }
     y[i] = v;
   }
+  if (s.flicker_b > 0.0) {
+    const auto hold = static_cast<std::size_t>(std::max(1L, std::lround(s.flicker_dt_s / ts)));
+    GaussianRng rf(s.seed ^ 0xF11C4E5ULL);
+    const std::vector<double> f = flicker_sequence(s.samples / hold + 1, s.flicker_b, rf);
+    for (std::size_t i = 0; i < s.samples; ++i) {
+      y[i] += f[i / hold];
+    }
+  }
+  if (s.drift_walk > 0.0) {
+    GaussianRng rd(s.seed ^ 0xD21F7ULL);
+    double rate = 0.0;
+    double bias = 0.0;
+    const double sd = s.drift_walk * std::sqrt(ts);
+    for (std::size_t i = 0; i < s.samples; ++i) {
+      rate += sd * rd.normal();
+      bias += rate * ts;
+      y[i] += bias;
+    }
+  }
   // Outliers: positions on a jittered grid, so they are isolated (>= 100 samples apart).
   if (s.n_outliers > 0 && s.samples >= 200 * s.n_outliers) {
     const std::size_t cell = s.samples / s.n_outliers;
@@ -55,6 +106,17 @@ std::vector<double> synthesize(const SynthSpec& s) {
       const auto off = static_cast<std::size_t>(u.uniform_open() * static_cast<double>(cell - 100));
       const double sign = u.uniform_open() < 0.5 ? -1.0 : 1.0;
       y[j * cell + 50 + off] += sign * s.outlier_size;
+    }
+  }
+  if (s.nan_gaps > 0 && s.nan_gap_len > 0 && s.samples > 2 * s.nan_gaps * s.nan_gap_len) {
+    Xoshiro256ss rg(s.seed ^ 0x6A95ULL);
+    const std::size_t cell = s.samples / s.nan_gaps;
+    for (std::size_t j = 0; j < s.nan_gaps; ++j) {
+      const auto off = static_cast<std::size_t>(rg.uniform_open() *
+                                                static_cast<double>(cell - s.nan_gap_len));
+      for (std::size_t i = 0; i < s.nan_gap_len; ++i) {
+        y[j * cell + off + i] = std::numeric_limits<double>::quiet_NaN();
+      }
     }
   }
   return y;

@@ -53,6 +53,9 @@ struct Options {
   double lsb = 0.0;           ///< physical value of one count; <= 0: derived (see lsb_note)
   double alpha = 0.01;        ///< family-wise false-alarm rate of each detector
   double cost_factor = 4.0;   ///< ADEV cost-drop inflation for correlated taus (tuned, see README)
+  double cost_alpha = 0.01;   ///< the ADEV cost-drop test's level (tuned with cost_factor)
+  /// An unexplained run must also miss the data by more than this relative ADEV error.
+  double unexplained_min_rel = 0.05;
   double z_run = 2.0;         ///< |z| above this is outside the 68 % interval by 2 sigma
   std::size_t min_run = 4;    ///< consecutive taus (one octave at 4 taus per octave)
   double seed_tau_max_s = 100.0;  ///< the seed's fit range [Ts, 100 s]
@@ -81,7 +84,9 @@ struct ErrorStats {
 };
 
 struct Effect {
-  std::string type;  ///< quantization, rate_random_walk, ramp, sinusoid, bias_step, outliers
+  /// quantization, rate_random_walk, ramp, sinusoid, bias_step, outliers, bias_instability
+  std::string type;
+  double b = 0.0;          ///< bias instability B [unit] (ADEV floor 0.664 B)
   double q = 0.0;          ///< quantization Q [unit s]
   double k = 0.0;          ///< rate random walk K [unit / sqrt(s)]
   double r = 0.0;          ///< ramp R [unit / s]
@@ -93,6 +98,13 @@ struct Effect {
   std::vector<double> times_s;  ///< outliers: times of the first 100 [s]
   double statistic = 0.0;  ///< evidence: cost drop (ADEV terms), |z| (step), max |nu| (outliers)
   double threshold = 0.0;  ///< the threshold the statistic passed
+};
+
+struct UnexplainedRun {
+  double tau_min_s = 0.0;
+  double tau_max_s = 0.0;
+  double max_abs_z = 0.0;
+  int sign = 0;  ///< +1: the model lies above the data there, -1: below
 };
 
 struct Report {
@@ -108,6 +120,11 @@ struct Report {
   ErrorStats error_before{};
   ErrorStats error_after{};
   std::vector<Effect> effects;
+  /// Tau ranges where the final model still leaves a significant run of residuals (what no
+  /// term explains, rather than a wrong name); empty when nothing remains.
+  std::vector<UnexplainedRun> unexplained;
+  std::uint64_t gap_samples = 0;  ///< non-finite samples (gaps, marked missing)
+  std::uint64_t gap_runs = 0;     ///< runs of consecutive non-finite samples
   std::vector<std::string> notes;  ///< warnings and decisions, one line each
   double seconds = 0.0;            ///< wall time of analyze()
   double cpu_seconds = 0.0;        ///< CPU time of analyze() (the machine may be shared)
@@ -119,9 +136,19 @@ struct Report {
 [[nodiscard]] bool analyze(const std::vector<double>& y, const std::string& channel,
                            const Options& options, Report& out, std::string& error);
 
-/// LSB for data without one: the smallest nonzero difference of the sorted values when every
-/// value is an integer multiple of it (within 1e-6 of a count), else robust std / 4096.
+/// LSB for data without one (non-finite values ignored): the smallest difference between
+/// distinct values (values within 1e-9 of max |y| are one value: floating-point residue of
+/// scaling or differencing) when every value lies on that lattice from the smallest (within
+/// 1e-3 step) and the span fits int32 counts; else max(robust std / 4096, span / 2^30), and the
+/// note says why.
 [[nodiscard]] double derive_lsb(const std::vector<double>& y, std::string& note);
+
+/// Non-finite samples of y are gaps: marked in gap (1), each run filled by the straight line
+/// between the means of the finite samples on either side (as many as the run is long, >= 100;
+/// one side at the ends). samples/runs count them. gap is left empty when there is none.
+/// Returns false if no sample is finite.
+[[nodiscard]] bool fill_gaps(std::vector<double>& y, std::vector<std::uint8_t>& gap,
+                             std::uint64_t& samples, std::uint64_t& runs);
 
 [[nodiscard]] std::string to_json(const Report& r);
 [[nodiscard]] std::string to_text(const Report& r);

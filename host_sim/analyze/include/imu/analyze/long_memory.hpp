@@ -38,6 +38,11 @@ struct BlockModel {
   std::size_t n_gm = 0;
   GmParam gm[kMaxGmTerms] = {};  ///< drive PSD sb [unit^2/s], correlation time tb_s [s]
   double k = 0.0;          ///< rate random walk K [unit/sqrt(s)]; 0: the walk is a constant
+  /// Bias instability B (flicker bank over [bi_tau_lo_s, bi_tau_hi_s], error_model.hpp); the
+  /// bank's members shorter than half a block are white at this scale and go to white_var.
+  double bi = 0.0;
+  double bi_tau_lo_s = 0.0;
+  double bi_tau_hi_s = 0.0;
 };
 
 /// Means of consecutive blocks of `per_block` samples (a trailing partial block is dropped).
@@ -59,8 +64,9 @@ struct LikelihoodFit {
   double loglik = 0.0;
 };
 
-/// Maximise block_loglik over white_var, each GM's (sb, tb) with tb in [tb_min_s, tb_max_s], and
-/// K if fit_k (else K stays at start.k). n_gm is start.n_gm. Nelder-Mead in log parameters.
+/// Maximise block_loglik over white_var, each GM's (sb, tb) with tb in [tb_min_s, tb_max_s],
+/// B if start.bi > 0 (its range fixed), and K if fit_k (else K stays at start.k). n_gm is
+/// start.n_gm. Nelder-Mead in log parameters.
 [[nodiscard]] LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
                                             const BlockModel& start, bool fit_k,
                                             double tb_min_s, double tb_max_s,
@@ -73,18 +79,46 @@ struct RrwLikelihoodTest {
   LikelihoodFit h0{};  ///< white + GMs
   LikelihoodFit h1{};  ///< white + GMs + K
   double lr = 0.0;     ///< 2 (l1 - l0), >= 0
+  std::size_t per_block = 0;
+  std::vector<double> means;         ///< the (de-meaned, maybe detrended) block means tested
+  std::vector<std::size_t> resets;   ///< level resets at the steps given
 };
 
+/// A bias step against the test's H0, by the record's profile likelihood: for every block
+/// boundary b at least `margin_blocks` from either end, the GLS size of a level shift at b under
+/// H0 (the whitened innovations of the data and of the unit step at b, one Kalman pass each;
+/// H0's parameters fixed) and lr(b) = (sum a e)^2 / sum e^2 = 2 (l(b) - l0), chi-square(1) at a
+/// fixed b. The best b is returned; its lr is compared by the caller with a threshold over the
+/// number of positions and with the walk's lr. Cost: O(blocks^2 * states^2), ~0.1 s.
+struct StepLikelihood {
+  bool ok = false;
+  std::uint64_t sample = 0;  ///< first sample after the step
+  double lr = 0.0;
+  double size = 0.0;         ///< [unit]
+  std::size_t positions = 0;  ///< boundaries profiled
+};
+/// 2 ln LR of a deterministic regressor u (one value per block of the test) against the test's
+/// H0, by GLS as for a step: e.g. a quadratic trend left after a line was removed. 0 if n/a.
+[[nodiscard]] double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u);
+
+/// only_block != kEveryBlock: that boundary alone (the GLS size of a step found elsewhere).
+inline constexpr std::size_t kEveryBlock = static_cast<std::size_t>(-1);
+[[nodiscard]] StepLikelihood profile_step(const RrwLikelihoodTest& test,
+                                          std::size_t margin_blocks,
+                                          std::size_t only_block = kEveryBlock);
+
 /// The test on the record y (sample period ts_s), in about target_blocks blocks. start: the
-/// ADEV fit's parameters (its GMs, at least one, and K if any), tb_max_s: the largest GM
+/// ADEV fit's parameters (its GMs, at least one, B and K if any), tb_max_s: the largest GM
 /// correlation time H0 may use (a GM beyond it is what the record calls a random walk).
 /// detrend: remove the least-squares line first (when a ramp is already in the model; a walk
 /// that happens to run one way over the record is then largely removed with it).
 /// step_samples: sample indices of bias steps found and removed (the level is reset there).
+/// with_walk = false: H0 alone (h1 = h0, lr = 0), for callers that need only its likelihood.
 [[nodiscard]] RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s,
                                          const ModelParams& start, double tb_max_s, bool detrend,
                                          const std::vector<std::uint64_t>& step_samples = {},
-                                         std::size_t target_blocks = 2048);
+                                         std::size_t target_blocks = 2048,
+                                         bool with_walk = true);
 
 }  // namespace imu::analyze
 

@@ -30,6 +30,20 @@ struct SynthSpec {
   std::size_t n_outliers = 0;
   double outlier_size = 0.0;
   double offset = 0.0;  ///< constant added (e.g. gravity)
+  /// Bias instability B (IEEE Std 952 flicker, two-sided PSD (B^2 / 2 pi) / f): Kasdin's
+  /// fractional integration of white noise (N. J. Kasdin, "Discrete simulation of colored
+  /// noise and stochastic processes and 1/f^alpha power law noise generation", Proc. IEEE
+  /// 83(5), 1995, eqn. 116 with alpha = 1: h_0 = 1, h_k = h_{k-1} (k - 1/2) / k) at period
+  /// flicker_dt_s (0: the sample period), white variance B^2 (so S(f) ~ B^2 / (2 pi f)), held
+  /// between its samples. Independent of the analysis's GM-bank realisation.
+  double flicker_b = 0.0;
+  double flicker_dt_s = 0.0;
+  /// Not a term of the analysis (for "unexplained" tests): a random walk of the drift rate,
+  /// d^2 b / dt^2 = w, PSD(w) = drift_walk^2 [unit / s^1.5]; AVAR ~ tau^3.
+  double drift_walk = 0.0;
+  /// Logger dropouts: nan_gaps runs of nan_gap_len NaN samples at random positions.
+  std::size_t nan_gaps = 0;
+  std::size_t nan_gap_len = 0;
   std::uint64_t seed = 1;
 };
 
