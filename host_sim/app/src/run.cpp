@@ -204,6 +204,16 @@ struct InprocNode {
       th.join();
     }
   }
+  InprocNode() = default;
+  InprocNode(const InprocNode&) = delete;
+  InprocNode& operator=(const InprocNode&) = delete;
+  InprocNode(InprocNode&&) = delete;
+  InprocNode& operator=(InprocNode&&) = delete;
+  /// An early return (or an exception) must not leave a joinable thread: std::terminate.
+  ~InprocNode() {
+    stop.store(true);
+    join();
+  }
 };
 
 std::string self_dir() {
@@ -243,11 +253,105 @@ void print_progress(double t0, std::uint64_t sent, std::uint64_t total,
   std::fflush(stderr);
 }
 
-}  // namespace
+/// What `run` was asked to do: the options, range-checked.
+struct RunOptions {
+  bool help = false;
+  std::string path;
+  std::string chan_name;
+  std::size_t chan = 0;
+  std::string bus;
+  bool is_loopback = false;
+  std::string rate;
+  std::string node_mode;
+  std::string layout_s;
+  hal::Layout layout = hal::Layout::kFd;
+  std::string out_dir;
+  std::string fw;
+  ReportOptions ro;
+  double timeout_s = 30.0;
+  std::uint64_t window = 0;
+  double lsb_opt = 0.0;
+  double fs_opt = 0.0;
+  bool quiet = false;
+  bool only_channel = false;
+};
 
-int cmd_run(int argc, char** argv) {
+// Work limits of the covariance check: simulated windows, and samples simulated in all.
+constexpr std::uint64_t kMaxSimWindows = 100000;
+constexpr double kMaxSimSamples = 2e8;
+
+// The enumerated options and the file (positional, or --mat as an alias).
+bool parse_run_names(const Args& a, RunOptions& o, std::string& err) {
+  if (a.has("--mat") && !a.positional().empty()) {
+    err = "FILE given twice ('" + a.positional()[0] + "' and --mat " + a.get("--mat") + ")";
+    return false;
+  }
+  o.path = a.positional().empty() ? a.get("--mat") : a.positional()[0];
+  if (o.path.empty()) {
+    err = "a MAT-file is required: imu-sim run FILE";
+    return false;
+  }
+  o.chan_name = a.get("--channel", "acc_z");
+  if (!channel_index(o.chan_name, o.chan)) {
+    err = "unknown channel '" + o.chan_name + "' (acc_x .. gyro_z); " + channels_held(o.path);
+    return false;
+  }
+  o.bus = a.get("--bus", "loopback");
+  o.is_loopback = o.bus == "loopback" || o.bus.rfind("loopback:", 0) == 0;
+  o.rate = a.get("--rate", "max");
+  o.node_mode = a.get("--node", o.is_loopback ? "inproc" : "external");
+  o.layout_s = a.get("--layout", "auto");
+  if (o.rate != "max" && o.rate != "realtime") {
+    err = "--rate must be max or realtime";
+  } else if (o.node_mode != "inproc" && o.node_mode != "spawn" && o.node_mode != "external") {
+    err = "--node must be inproc, spawn or external";
+  } else if (o.layout_s != "fd" && o.layout_s != "classic" && o.layout_s != "auto") {
+    err = "--layout must be auto, fd or classic";
+  }
+  o.layout = o.layout_s == "classic" ? hal::Layout::kClassic : hal::Layout::kFd;
+  o.out_dir = a.get("--out", "out/run");
+  o.fw = a.get("--fw", "");
+  o.quiet = a.has("--quiet");
+  o.only_channel = a.has("--only-channel");
+  return err.empty();
+}
+
+// The numeric options, each in its range before it becomes a size, a count or an integer.
+bool parse_run_numbers(const Args& a, RunOptions& o, std::string& err) {
+  ReportOptions& ro = o.ro;
+  ro.out_dir = o.out_dir;
+  ro.json_path = a.get("--json", o.out_dir + "/report.json");
+  ro.plots = !a.has("--no-plots");
+  const int given = (a.has("--N") ? 1 : 0) + (a.has("--B") ? 1 : 0) + (a.has("--Tp") ? 1 : 0);
+  if (given != 0 && given != 3) {
+    err = "give all of --N, --B, --Tp (the model under test) or none (fit)";
+    return false;
+  }
+  ro.given_model = given == 3;
+  // Credit window: on the loopback bus back-pressure already protects the node; on SocketCAN
+  // the sender must not get further ahead than the node's socket queue holds (a few hundred
+  // frames at the default buffer size).
+  const std::uint64_t window_default = o.is_loopback ? 4096 : 256;
+  std::uint64_t sim_windows = 0;
+  if (!a.number("--N", 0.0, 1e-12, 1e3, ro.n, err) || !a.number("--B", 0.0, 1e-12, 1e3, ro.b, err) ||
+      !a.number("--Tp", 0.0, 1e-6, 1e9, ro.tp_s, err) ||
+      !a.number("--K", 0.0, 0.0, 1e3, ro.k, err) ||
+      !a.number("--T-avg", 10.0, 1e-6, 1e9, ro.t_avg_s, err) ||
+      !a.number("--T-int", 20.0, 1e-6, 1e9, ro.t_int_s, err) ||
+      !a.integer("--sim-windows", 1000, 1, kMaxSimWindows, sim_windows, err) ||
+      !a.integer("--seed", 2, 0, std::uint64_t{1} << 53U, ro.seed, err) ||
+      !a.number("--timeout", 30.0, 1e-3, 86400.0, o.timeout_s, err) ||
+      !a.integer("--window", window_default, 0, 1000000, o.window, err) ||
+      (a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, o.lsb_opt, err)) ||
+      (a.has("--fs") && !a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, o.fs_opt, err))) {
+    return false;
+  }
+  ro.sim_windows = static_cast<std::size_t>(sim_windows);
+  return true;
+}
+
+bool parse_run(int argc, char** argv, RunOptions& o, std::string& err) {
   Args a;
-  std::string err;
   const std::vector<OptSpec> specs = {
       {"--mat", true},     {"--channel", true},   {"--bus", true},       {"--rate", true},
       {"--node", true},    {"--out", true},       {"--json", true},      {"--N", true},
@@ -256,97 +360,152 @@ int cmd_run(int argc, char** argv) {
       {"--sim-windows", true}, {"--seed", true},  {"--timeout", true},   {"--window", true},
       {"--lsb", true},     {"--fs", true},        {"--layout", true},    {"--only-channel", false},
   };
-  if (!a.parse(argc, argv, 2, specs, 0, err)) {
-    return fail(kCmd, err + " (see imu-sim --help)", 2);
+  if (!a.parse(argc, argv, 2, specs, 1, err)) {
+    return false;
   }
-  if (!a.has("--mat")) {
-    return fail(kCmd, "--mat FILE is required", 2);
-  }
-  const std::string path = a.get("--mat");
-  const std::string chan_name = a.get("--channel", "acc_z");
-  std::size_t chan = 0;
-  if (!channel_index(chan_name, chan)) {
-    return fail(kCmd, "unknown channel '" + chan_name + "' (acc_x acc_y acc_z gyro_x gyro_y gyro_z)", 2);
-  }
-  const std::string bus = a.get("--bus", "loopback");
-  const bool is_loopback = bus == "loopback" || bus.rfind("loopback:", 0) == 0;
-  const std::string rate = a.get("--rate", "max");
-  if (rate != "max" && rate != "realtime") {
-    return fail(kCmd, "--rate must be max or realtime", 2);
-  }
-  const std::string node_mode = a.get("--node", is_loopback ? "inproc" : "external");
-  if (node_mode != "inproc" && node_mode != "spawn" && node_mode != "external") {
-    return fail(kCmd, "--node must be inproc, spawn or external", 2);
-  }
-  std::string layout_s = a.get("--layout", "auto");
-  if (layout_s != "fd" && layout_s != "classic" && layout_s != "auto") {
-    return fail(kCmd, "--layout must be auto, fd or classic", 2);
-  }
-  hal::Layout layout = layout_s == "classic" ? hal::Layout::kClassic : hal::Layout::kFd;
-  const std::string out_dir = a.get("--out", "out/run");
-  ReportOptions ro;
-  ro.out_dir = out_dir;
-  ro.json_path = a.get("--json", out_dir + "/report.json");
-  ro.plots = !a.has("--no-plots");
-  const int given = (a.has("--N") ? 1 : 0) + (a.has("--B") ? 1 : 0) + (a.has("--Tp") ? 1 : 0);
-  if (given != 0 && given != 3) {
-    return fail(kCmd, "give all of --N, --B, --Tp (the model under test) or none (fit)", 2);
-  }
-  ro.given_model = given == 3;
-  double timeout_s = 30.0;
-  // Credit window: on the loopback bus back-pressure already protects the node; on SocketCAN
-  // the sender must not get further ahead than the node's socket queue holds (a few hundred
-  // frames at the default buffer size).
-  const double window_default = is_loopback ? 4096.0 : 256.0;
-  double window = window_default;
-  double sim_windows = 1000.0;
-  double seed = 1.0;
-  double lsb_opt = 0.0;
-  double fs_opt = 0.0;
-  if (!a.number("--N", 0.0, ro.n, err) || !a.number("--B", 0.0, ro.b, err) ||
-      !a.number("--Tp", 0.0, ro.tp_s, err) || !a.number("--K", 0.0, ro.k, err) ||
-      !a.number("--T-avg", 10.0, ro.t_avg_s, err) || !a.number("--T-int", 20.0, ro.t_int_s, err) ||
-      !a.number("--sim-windows", 1000.0, sim_windows, err) || !a.number("--seed", 2.0, seed, err) ||
-      !a.number("--timeout", 30.0, timeout_s, err) || !a.number("--window", window_default, window, err) ||
-      !a.number("--lsb", 0.0, lsb_opt, err) || !a.number("--fs", 0.0, fs_opt, err)) {
-    return fail(kCmd, err, 2);
-  }
-  if (!(ro.t_avg_s > 0.0) || !(ro.t_int_s > 0.0) || sim_windows < 1.0 || window < 0.0 ||
-      !(timeout_s > 0.0) || seed < 0.0 || lsb_opt < 0.0 || fs_opt < 0.0) {
-    return fail(kCmd, "a numeric option is out of range", 2);
-  }
-  ro.sim_windows = static_cast<std::size_t>(sim_windows);
-  ro.seed = static_cast<std::uint64_t>(seed);
-  const bool quiet = a.has("--quiet");
+  o.help = a.help();
+  return o.help || (parse_run_names(a, o, err) && parse_run_numbers(a, o, err));
+}
 
-  // ---- Data ------------------------------------------------------------------------------
-  const double t0 = now_s();
+/// Which samples are sent. A sample with a non-finite value in any channel sent is not sent (the
+/// protocol has no per-channel validity): inside [lo, hi) it is a gap the node counts missing;
+/// before the first / after the last sendable sample it is not part of the series (the node's
+/// receiver starts at the first sequence number it sees).
+struct SendPlan {
+  std::size_t lo = 0;
+  std::size_t hi = 0;
+  std::vector<std::uint8_t> skip;  ///< per sample: 1 = not sent
+  std::uint64_t sent = 0;
+};
+
+bool plan_send(const SensorData& sd, SendPlan& plan) {
+  const std::size_t n = sd.n_samples;
+  plan.skip.assign(n, 0);
+  for (const ChannelData& ch : sd.ch) {
+    for (std::size_t k = 0; ch.present && k < n; ++k) {
+      plan.skip[k] = std::isfinite(ch.values[k]) ? plan.skip[k] : std::uint8_t{1};
+    }
+  }
+  plan.lo = 0;
+  plan.hi = n;
+  while (plan.lo < plan.hi && plan.skip[plan.lo] != 0) {
+    ++plan.lo;
+  }
+  while (plan.hi > plan.lo && plan.skip[plan.hi - 1] != 0) {
+    --plan.hi;
+  }
+  plan.sent = 0;
+  for (std::size_t k = plan.lo; k < plan.hi; ++k) {
+    plan.sent += plan.skip[k] == 0 ? 1U : 0U;
+  }
+  return plan.sent > 0;
+}
+
+// The covariance check's windows and simulation in a work and memory budget: a window of at
+// most kMaxSamples, at most kMaxSimSamples samples simulated, at most kMaxSamples doubles of
+// simulated trajectories (256 MiB). A window longer than the recording is allowed (the check
+// then has simulated windows only, and says so).
+bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& err) {
+  const double n_avg = std::round(o.ro.t_avg_s * sd.fs_hz);
+  const double n_int = std::round(o.ro.t_int_s * sd.fs_hz);
+  const double win = n_avg + n_int;
+  const auto windows = static_cast<double>(o.ro.sim_windows);
+  const auto max_samples = static_cast<double>(kMaxSamples);
+  if (n_avg < 1.0 || n_int < 1.0 || win > max_samples) {
+    err = "--T-avg and --T-int (" + std::to_string(o.ro.t_avg_s) + " s, " +
+          std::to_string(o.ro.t_int_s) + " s at " + std::to_string(sd.fs_hz) +
+          " Hz) must each be at least one sample and together at most " +
+          std::to_string(kMaxSamples) + " samples";
+    return false;
+  }
+  if (windows * win > kMaxSimSamples || windows * n_int > max_samples) {
+    err = "--sim-windows x (--T-avg + --T-int) = " + std::to_string(windows * win) +
+          " samples to simulate (at most 2e8, and --sim-windows x --T-int at most " +
+          std::to_string(kMaxSamples) + " samples)";
+    return false;
+  }
+  return true;
+}
+
+// Read the file, convert every present channel to counts, plan what is sent. Exit status.
+int load_run_data(const RunOptions& o, SensorData& sd, std::vector<std::int32_t> (&counts)[kNumChannels],
+                  SendPlan& plan, std::string& err) {
   bool want[kNumChannels];
   bool required[kNumChannels];
   double lsb_over[kNumChannels];
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    want[c] = !a.has("--only-channel") || c == chan;
-    required[c] = c == chan;
-    lsb_over[c] = c == chan ? lsb_opt : 0.0;
+    want[c] = !o.only_channel || c == o.chan;
+    required[c] = c == o.chan;
+    lsb_over[c] = c == o.chan ? o.lsb_opt : 0.0;
   }
-  SensorData sd;
-  if (!load_sensor(path, want, required, lsb_over, fs_opt, sd, err)) {
-    return fail(kCmd, err);
+  if (!load_sensor(o.path, want, required, lsb_over, o.fs_opt, sd, err)) {
+    return kExitRuntime;
   }
-  std::vector<std::int32_t> counts[kNumChannels];
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     if (sd.ch[c].present) {
-      to_counts(sd.ch[c], counts[c]);
+      const int st = to_counts(o.path, c, sd.ch[c], counts[c], err);
+      if (st != kExitOk) {
+        return st;
+      }
     }
+  }
+  if (!plan_send(sd, plan)) {
+    err = o.path + ": no sample has every channel finite (nothing to send; --only-channel sends "
+          "one channel)";
+    return kExitRuntime;
+  }
+  if (plan.sent < 16) {
+    err = o.path + ": " + std::to_string(plan.sent) +
+          " samples to send: too short for an ADEV (16 or more)";
+    return kExitRuntime;
+  }
+  if (plan.hi - plan.lo > 0xFFFFFFFFULL) {
+    err = o.path + ": more than 2^32 samples (the sequence number would wrap)";
+    return kExitRuntime;
+  }
+  if (!check_cov_windows(o, sd, err)) {
+    return kExitUsage;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int cmd_run(int argc, char** argv) {
+  std::string err;
+  RunOptions o;
+  if (!parse_run(argc, argv, o, err)) {
+    return fail(kCmd, err + " (imu-sim run --help)", kExitUsage);
+  }
+  if (o.help) {
+    return print_help("run");
+  }
+  ReportOptions& ro = o.ro;
+  const std::string& path = o.path;
+  const std::string& chan_name = o.chan_name;
+  const std::size_t chan = o.chan;
+  const std::string& bus = o.bus;
+  const bool is_loopback = o.is_loopback;
+  const std::string& rate = o.rate;
+  const std::string& node_mode = o.node_mode;
+  std::string layout_s = o.layout_s;
+  hal::Layout layout = o.layout;
+  const std::string& out_dir = o.out_dir;
+  const double timeout_s = o.timeout_s;
+  const bool quiet = o.quiet;
+
+  // ---- Data ------------------------------------------------------------------------------
+  const double t0 = now_s();
+  SensorData sd;
+  std::vector<std::int32_t> counts[kNumChannels];
+  SendPlan plan;
+  const int load_status = load_run_data(o, sd, counts, plan, err);
+  if (load_status != kExitOk) {
+    return fail(kCmd, err, load_status);
   }
   const double t_load = now_s() - t0;
   const std::size_t n = sd.n_samples;
-  if (n < 16) {
-    return fail(kCmd, path + ": " + std::to_string(n) + " samples: too short for an ADEV (16 or more)");
-  }
-  if (n > 0xFFFFFFFFULL) {
-    return fail(kCmd, path + ": more than 2^32 samples (the sequence number would wrap)");
-  }
+  const std::uint64_t span = plan.hi - plan.lo;  // sequence numbers 0 .. span - 1
 
   // ---- Bus and node ------------------------------------------------------------------------
   hal::CanSocket sock;
@@ -397,7 +556,7 @@ int cmd_run(int argc, char** argv) {
     }
     layout_s = layout == hal::Layout::kFd ? "fd" : "classic";
     if (node_mode == "spawn") {
-      const std::string fw = a.get("--fw", self_dir() + "/imu-fw");
+      const std::string fw = o.fw.empty() ? self_dir() + "/imu-fw" : o.fw;
       if (access(fw.c_str(), X_OK) != 0) {
         return fail(kCmd, "imu-fw not found at '" + fw + "' (give --fw PATH)");
       }
@@ -459,38 +618,42 @@ int cmd_run(int argc, char** argv) {
   std::uint64_t last_processed = 0;
   std::uint8_t cfg_tid = 0;
   int status = 0;
-  const auto credit = static_cast<std::uint64_t>(window);
+  const std::uint64_t credit = o.window;
   const std::uint64_t period_ns = static_cast<std::uint64_t>(std::llround(1e9 / sd.fs_hz));
-  for (std::size_t k = 0; k < n && status == 0; ++k) {
-    if (k % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
+  for (std::size_t k = plan.lo; k < plan.hi && status == 0; ++k) {
+    const std::uint64_t q = k - plan.lo;  // sequence number
+    if (q % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
       hal::encode(cfg, layout, cfg_tid++, fr);
       for (std::size_t i = 0; i < fr.count && status == 0; ++i) {
-        if (!link.send(fr.frame[i], k == 0 ? 10000 : 0, err)) {
+        if (!link.send(fr.frame[i], q == 0 ? 10000 : 0, err)) {
           std::string msg = "send on " + bus_used + " failed: ";
           msg += err;
-          if (k == 0 && node_mode != "inproc") {
+          if (q == 0 && node_mode != "inproc") {
             msg += " (is imu-fw running on this bus?)";
           }
           status = fail(kCmd, msg);
         }
       }
     }
+    if (plan.skip[k] != 0) {
+      continue;  // a non-finite value: not sent, the node counts the sequence number missing
+    }
     hal::SampleRecord s{};
-    s.seq = static_cast<std::uint32_t>(k);
-    s.t_sensor_ns = static_cast<std::uint64_t>(k) * period_ns;
+    s.seq = static_cast<std::uint32_t>(q);
+    s.t_sensor_ns = q * period_ns;
     s.cfg_id = cfg.cfg_id;
     for (std::size_t c = 0; c < kNumChannels; ++c) {
       s.counts[c] = sd.ch[c].present ? counts[c][k] : 0;
     }
     if (rate == "realtime") {
-      const double due = t_send0 + static_cast<double>(k) / sd.fs_hz;
+      const double due = t_send0 + static_cast<double>(q) / sd.fs_hz;
       double now = now_s();
       while (now < due) {
         link.service(static_cast<int>(std::ceil((due - now) * 1000.0)), false);
         now = now_s();
       }
     }
-    while (credit > 0 && k >= tel.processed() + credit && status == 0) {
+    while (credit > 0 && q >= tel.processed() + credit && status == 0) {
       link.service(50, false);
       if (tel.processed() != last_processed) {
         last_processed = tel.processed();
@@ -511,17 +674,17 @@ int cmd_run(int argc, char** argv) {
         status = fail(kCmd, msg);
       }
     }
-    if ((k & 63U) == 63U) {
+    if ((q & 63U) == 63U) {
       link.drain();
       const double now = now_s();
       if (!quiet && now - t_send0 > 2.0 && now - last_progress >= 1.0) {
         last_progress = now;
-        print_progress(t_send0, k + 1, n, tel, tty, false);
+        print_progress(t_send0, q + 1, span, tel, tty, false);
       }
     }
   }
-  tel.target = n;
-  if (tel.processed() >= n) {
+  tel.target = span;
+  if (tel.processed() >= span) {
     tel.armed = true;  // already reported: the next complete set is the final one
     for (auto& g : tel.got) {
       g.reset();
@@ -540,7 +703,7 @@ int cmd_run(int argc, char** argv) {
   }
   const double t_total = now_s() - t_send0;
   if (!quiet && t_total > 2.0) {
-    print_progress(t_send0, n, n, tel, tty, true);
+    print_progress(t_send0, span, span, tel, tty, true);
   }
   sock.close();  // the node sees the end of the stream (loopback)
   if (inproc) {
@@ -566,7 +729,7 @@ int cmd_run(int argc, char** argv) {
     return fail(kCmd, "no final telemetry from the firmware node within " +
                           std::to_string(static_cast<int>(timeout_s)) + " s on " + bus_used +
                           " (processed " + std::to_string(tel.processed()) + " of " +
-                          std::to_string(n) + " samples)");
+                          std::to_string(span) + " samples)");
   }
 
   // ---- Report ------------------------------------------------------------------------------
@@ -596,6 +759,8 @@ int cmd_run(int argc, char** argv) {
   ri.stats.push_back(StatGroup{
       "sender (imu-sim emulator)",
       {{"samples", static_cast<double>(n)},
+       {"sent", static_cast<double>(plan.sent)},
+       {"non_finite", static_cast<double>(n - plan.sent)},
        {"frames", static_cast<double>(link.frames())},
        {"backpressure_waits", static_cast<double>(link.backpressure_waits())},
        {"tx_link_down", static_cast<double>(ls.tx_link_down)},
@@ -612,7 +777,7 @@ int cmd_run(int argc, char** argv) {
                                 {"duplicates", d(ns.duplicates)},
                                 {"truncated", d(ns.truncated)},
                                 {"error_frames", d(ns.error_frames)},
-                                {"lost", d(n) - d(ns.samples)}}});
+                                {"lost", d(plan.sent) - d(ns.samples)}}});
   ri.stats.push_back(StatGroup{
       "telemetry receiver (imu-sim)",
       {{"frames", static_cast<double>(rs.frames)},
@@ -679,8 +844,10 @@ int cmd_run(int argc, char** argv) {
     ri.notes.push_back(std::to_string(sd.ch[chan].off_grid) +
                        " samples are not integer multiples of the LSB (quantised to it)");
   }
-  if (sd.ch[chan].saturated > 0) {
-    ri.notes.push_back(std::to_string(sd.ch[chan].saturated) + " samples saturated int32 counts");
+  if (n > plan.sent) {
+    ri.notes.push_back(std::to_string(n - plan.sent) +
+                       " samples hold NaN/Inf in a channel sent: not sent (gaps; the node counts "
+                       "those between finite samples as missing)");
   }
   if (child > 0) {
     ri.notes.push_back("imu-fw ran as a separate process; its output is in " + out_dir +
@@ -694,7 +861,7 @@ int cmd_run(int argc, char** argv) {
   }
   std::fputs(text.c_str(), stdout);
   std::printf("\nreport folder: %s\n", out_dir.c_str());
-  return 0;
+  return kExitOk;
 }
 
 }  // namespace imu::sim
