@@ -385,18 +385,19 @@ TEST(SimCliInputs, NumericOptionsAreRangeChecked) {
 
 // ---- Outputs -----------------------------------------------------------------------------------
 
-/// Run imu-sim in a child process whose files may not grow beyond max_file_bytes (a full disk,
-/// reproducibly); returns the exit status and the child's stderr.
-simtest::CliResult run_with_file_limit(const std::vector<std::string>& args,
-                                       rlim_t max_file_bytes, const std::string& err_path) {
+constexpr int kEscaped = 98;
+
+/// Run imu-sim in a child process under a resource limit (RLIMIT_FSIZE: a full disk,
+/// reproducibly; RLIMIT_AS: a machine out of memory); returns the exit status (-1 if killed by
+/// a signal) and the child's stderr.
+simtest::CliResult run_limited(const std::vector<std::string>& args, int resource, rlim_t limit,
+                               const std::string& err_path) {
   const pid_t pid = fork();
   if (pid == 0) {
     const int fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
     (void)dup2(fd, 2);
     (void)freopen("/dev/null", "w", stdout);
     (void)signal(SIGXFSZ, SIG_IGN);  // write() then fails with EFBIG instead of killing us
-    const rlimit lim{max_file_bytes, max_file_bytes};
-    (void)setrlimit(RLIMIT_FSIZE, &lim);
     std::vector<std::string> store = args;
     store.insert(store.begin(), "imu-sim");
     std::vector<char*> argv;
@@ -405,13 +406,34 @@ simtest::CliResult run_with_file_limit(const std::vector<std::string>& args,
       argv.push_back(s.data());
     }
     argv.push_back(nullptr);
-    const int st = imu::sim::cli_main(static_cast<int>(store.size()), argv.data());
+    const rlimit lim{limit, limit};
+    (void)setrlimit(resource, &lim);
+    // An exception escaping cli_main is status kEscaped (otherwise gtest's own handler in this
+    // forked copy would catch it and run on).
+    int st = kEscaped;
+    try {
+      st = imu::sim::cli_main(static_cast<int>(store.size()), argv.data());
+    } catch (...) {
+      std::fputs("exception escaped cli_main\n", stderr);
+    }
     std::fflush(stderr);
     _exit(st);
   }
   int status = 0;
   (void)waitpid(pid, &status, 0);
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, "", simtest::read_text(err_path)};
+}
+
+simtest::CliResult run_with_file_limit(const std::vector<std::string>& args,
+                                       rlim_t max_file_bytes, const std::string& err_path) {
+  return run_limited(args, RLIMIT_FSIZE, max_file_bytes, err_path);
+}
+
+/// This process's virtual size (VmSize), bytes.
+rlim_t vm_size_bytes() {
+  const std::string status = simtest::read_text("/proc/self/status");
+  const std::size_t k = status.find("VmSize:");
+  return k == std::string::npos ? 0 : static_cast<rlim_t>(std::strtoull(status.c_str() + k + 7, nullptr, 10)) * 1024U;
 }
 
 /// Names in a folder other than the given ones (leftover temporary files).
@@ -460,6 +482,20 @@ TEST(SimCliInputs, FailedWritesLeaveNoPartialFile) {
   EXPECT_EQ(run({"synth", "--out", outs + "/s.mat", "--duration", "1000"}).status, 0);
   EXPECT_EQ(run({"adev", mat, "--json", outs + "/a.json"}).status, 0);
   EXPECT_EQ(others(outs, {}), (std::vector<std::string>{"a.json", "s.mat"}));
+}
+
+// Defect: an allocation failure escaped as std::bad_alloc (abort, core dump). It is caught at the
+// top of every command: one line, exit 1. Here synth's 2^25 samples (256 MiB, within the
+// option's range) meet an address space of 64 MiB more than the process already uses.
+TEST(SimCliInputs, AllocationFailureIsOneLineAndExit1) {
+  simtest::TempDir dir;
+  const rlim_t vm = vm_size_bytes();
+  ASSERT_GT(vm, 0U);
+  const auto r = run_limited({"synth", "--out", dir.file("big.mat"), "--duration", "335544"},
+                             RLIMIT_AS, vm + (64U << 20U), dir.file("err.txt"));
+  EXPECT_EQ(r.status, 1) << r.err;
+  EXPECT_EQ(r.err, "imu-sim synth: out of memory\n");
+  EXPECT_TRUE(simtest::read_text(dir.file("big.mat")).empty());
 }
 
 // ---- One command line --------------------------------------------------------------------------

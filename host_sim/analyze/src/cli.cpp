@@ -2,6 +2,7 @@
 // command-line parser and exit codes every imu-sim subcommand shares (host_sim/cli).
 #include <cmath>
 #include <cstdio>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -145,8 +146,14 @@ int cli_main(int argc, char** argv) {
   if (a.positional().empty() || !a.has("--channel")) {
     return fail("FILE and --channel NAME are required (imu-sim analyze --help)", kExitUsage);
   }
-  return analyze_file(a.positional()[0], a.get("--channel"), fs, lsb, a.get("--json"),
-                      a.get("--plots"));
+  // Sizes are bounded by the MAT reader's budget; this is the last line of defence (a machine
+  // short of memory): one line, exit 1, no exception escapes.
+  try {
+    return analyze_file(a.positional()[0], a.get("--channel"), fs, lsb, a.get("--json"),
+                        a.get("--plots"));
+  } catch (const std::bad_alloc&) {
+    return fail("out of memory", kExitRuntime);
+  }
 }
 
 }  // namespace imu::analyze
