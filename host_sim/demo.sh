@@ -30,7 +30,7 @@ echo "== 3/4 synthesise the default data ($out/synth.mat)"
 "$bin/imu-sim" synth --out "$out/synth.mat"
 
 echo "== 4/4 run: emulator -> loopback bus -> imu-fw (separate process) -> telemetry -> report"
-"$bin/imu-sim" run --mat "$out/synth.mat" --channel acc_z --bus loopback --rate max \
+"$bin/imu-sim" run "$out/synth.mat" --channel acc_z --bus loopback --rate max \
   --node spawn --fw "$bin/imu-fw" --out "$out" --N 3.3e-3 --B 9e-4 --Tp 300 --K 1.4e-4
 
 echo

@@ -27,7 +27,7 @@ TEST(SimAdis, RunAtMaxRateOverLoopback) {
   }
   simtest::TempDir dir;
   const double t0 = now_s();
-  auto r = simtest::run({"run", "--mat", mat, "--channel", "acc_z", "--bus", "loopback",
+  auto r = simtest::run({"run", mat, "--channel", "acc_z", "--bus", "loopback",
                          "--rate", "max", "--out", dir.file("run"), "--no-plots", "--quiet"});
   const double t_run = now_s() - t0;
   ASSERT_EQ(r.status, 0) << r.err;

@@ -4,7 +4,11 @@
 // here by hand; doubles are compared bit for bit (the reader must convert exactly).
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -511,6 +515,63 @@ TEST(MatReaderErrors, StreamInflatesBeyondDeclaredSize) {
   }
   EXPECT_TRUE(contains(column_error(image({compressed(shorter)}), "x"),
                        "miDOUBLE sub-element claims 16 bytes, only 8 remain in the matrix"));
+}
+
+// A directory (allocation sized from ftell), /dev/zero (read until bad_alloc) and a FIFO (open()
+// blocks with no writer) are refused from stat(), before anything is opened or read.
+TEST(MatReaderErrors, NonRegularFilesAreRefusedBeforeOpening) {
+  char tmpl[] = "/tmp/imu-mat-test-XXXXXX";
+  const char* dir = mkdtemp(tmpl);
+  ASSERT_NE(dir, nullptr);
+  const std::string fifo = std::string(dir) + "/fifo";
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const std::pair<std::string, std::string> cases[] = {
+      {dir, "is a directory, not a MAT-file"},
+      {fifo, "is a FIFO, not a MAT-file"},
+      {"/dev/zero", "is a device, not a MAT-file"},
+  };
+  for (const auto& c : cases) {
+    const auto r = MatFile::open(c.first);
+    ASSERT_FALSE(r.ok()) << c.first;
+    EXPECT_EQ(r.error().message, c.first + ": " + c.second);
+  }
+  (void)unlink(fifo.c_str());
+  (void)rmdir(dir);
+}
+
+// ReadLimits: a variable larger than the budget (as inflated, or as doubles) and a file larger
+// than the budget are errors naming the budget, found from the declared sizes.
+TEST(MatReaderErrors, MemoryBudgetIsCheckedBeforeReading) {
+  const std::vector<double> v(1000, 1.5);  // 8000 bytes of doubles, 8056 as a matrix element
+  imu::mat::ReadLimits small;
+  small.max_variable_bytes = 4000;
+  for (const Bytes& b : {image({double_matrix("x", 1000, 1, v)}),
+                         image({compressed(double_matrix("x", 1000, 1, v))})}) {
+    auto f = MatFile::from_memory("t.mat", b.data(), b.size(), small);
+    ASSERT_TRUE(f.ok()) << f.error().message;
+    const auto r = f.value().read_column("x");
+    ASSERT_FALSE(r.ok());
+    EXPECT_TRUE(contains(r.error().message, "more than the reader's budget of 4000 bytes"))
+        << r.error().message;
+    // The default budget (256 MiB) reads it.
+    auto g = MatFile::from_memory("t.mat", b.data(), b.size());
+    ASSERT_TRUE(g.ok());
+    EXPECT_TRUE(g.value().read_column("x").ok());
+  }
+  const Bytes b = image({double_matrix("x", 1000, 1, v)});
+  const std::string path = "/tmp/imu-mat-budget-" + std::to_string(getpid()) + ".mat";
+  std::FILE* fp = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(fp, nullptr);
+  ASSERT_EQ(std::fwrite(b.data(), 1, b.size(), fp), b.size());
+  std::fclose(fp);
+  imu::mat::ReadLimits tiny_file;
+  tiny_file.max_file_bytes = 1000;
+  const auto r = MatFile::open(path, tiny_file);
+  ASSERT_FALSE(r.ok());
+  EXPECT_EQ(r.error().message, path + ": " + std::to_string(b.size()) +
+                                   " bytes, more than the reader's budget of 1000 bytes");
+  EXPECT_TRUE(MatFile::open(path).ok());
+  (void)std::remove(path.c_str());
 }
 
 TEST(MatReaderErrors, VariableNotFound) {

@@ -1,132 +1,159 @@
-// `analyze FILE.mat --channel NAME [--fs HZ] [--lsb UNITS] [--json OUT] [--plots DIR]`
+// `analyze FILE.mat --channel NAME [--fs HZ] [--lsb UNITS] [--json OUT] [--plots DIR]`, on the
+// command-line parser and exit codes every imu-sim subcommand shares (host_sim/cli).
+#include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
+#include <new>
 #include <string>
+#include <vector>
 
 #include "imu/analyze/analyze.hpp"
+#include "imu/cli/args.hpp"
+#include "imu/cli/file_out.hpp"
 #include "imu/mat/mat_reader.hpp"
 
 namespace imu::analyze {
 namespace {
 
-int fail(const std::string& msg) {
-  std::fprintf(stderr, "analyze: %s\n", msg.c_str());
-  return 2;
+using imu::cli::kExitOk;
+using imu::cli::kExitRuntime;
+using imu::cli::kExitUsage;
+
+constexpr const char* kUsage =
+    "usage: imu-sim analyze FILE --channel NAME [--fs HZ] [--lsb UNITS] [--json OUT] [--plots DIR]\n"
+    "  (also imu-analyze) residual of the first-order model against the measured ADEV and the\n"
+    "  bias filter's innovations, effects found, augmented model. --fs (else the file's fs or\n"
+    "  Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or lsb) in\n"
+    "  [1e-12, 1e6]. A channel holding NaN/Inf is refused (gaps are not analysed yet).\n"
+    "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
+    "processed, failed write, out of memory), 2 command-line error\n";
+
+int fail(const std::string& msg, int status) {
+  std::fprintf(stderr, "imu-sim analyze: %s\n", msg.c_str());
+  return status;
 }
 
-bool parse_positive(const char* text, double& out) {
-  char* end = nullptr;
-  out = std::strtod(text, &end);
-  return end != text && *end == '\0' && out > 0.0 && out < 1e300;
-}
-
-}  // namespace
-
-int cli_main(int argc, char** argv) {
-  std::string file;
-  std::string channel;
-  std::string json;
-  std::string plots;
-  double fs = 0.0;
-  double lsb = 0.0;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    const bool has_value = i + 1 < argc;
-    if (a == "--channel" && has_value) {
-      channel = argv[++i];
-    } else if (a == "--json" && has_value) {
-      json = argv[++i];
-    } else if (a == "--plots" && has_value) {
-      plots = argv[++i];
-    } else if (a == "--fs" && has_value) {
-      if (!parse_positive(argv[++i], fs)) {
-        return fail("--fs needs a positive number, got '" + std::string(argv[i]) + "'");
+// The rate: --fs, else the file's `fs`, else its `Fs`.
+bool file_rate(const imu::mat::MatFile& m, const std::string& file, double& fs_hz,
+               std::string& err) {
+  for (const char* name : {"fs", "Fs"}) {
+    auto f = m.read_scalar(name);
+    if (f.ok()) {
+      fs_hz = f.value();
+      if (!(fs_hz >= 1e-3 && fs_hz <= 1e6)) {
+        err = file + ": " + name + " = " + std::to_string(fs_hz) +
+              " Hz is not a rate in [0.001, 1e+06] Hz (give --fs)";
+        return false;
       }
-    } else if (a == "--lsb" && has_value) {
-      if (!parse_positive(argv[++i], lsb)) {
-        return fail("--lsb needs a positive number, got '" + std::string(argv[i]) + "'");
-      }
-    } else if (a == "--help" || a == "-h") {
-      std::printf("usage: analyze FILE.mat --channel NAME [--fs HZ] [--lsb UNITS] [--json OUT] "
-                  "[--plots DIR]\n");
-      return 0;
-    } else if (!a.empty() && a[0] != '-' && file.empty()) {
-      file = a;
-    } else {
-      return fail("unexpected argument '" + a +
-                  "' (usage: analyze FILE.mat --channel NAME [--fs HZ] [--json OUT] [--plots DIR])");
+      return true;
     }
   }
-  if (file.empty() || channel.empty()) {
-    return fail("usage: analyze FILE.mat --channel NAME [--fs HZ] [--json OUT] [--plots DIR]");
+  err = file + ": no --fs given and no scalar 'fs' or 'Fs' in the file";
+  return false;
+}
+
+// acc_x -> acc_lsb, gyro_z -> gyro_lsb; also NAME_lsb and lsb. 0 if none.
+double file_lsb(const imu::mat::MatFile& m, const std::string& channel) {
+  const std::size_t us = channel.find('_');
+  const std::string names[3] = {
+      us != std::string::npos ? channel.substr(0, us) + "_lsb" : std::string(),
+      channel + "_lsb", "lsb"};
+  for (const auto& n : names) {
+    if (n.empty()) {
+      continue;
+    }
+    auto v = m.read_scalar(n);
+    if (v && v.value() > 0.0 && std::isfinite(v.value())) {
+      return v.value();
+    }
   }
+  return 0.0;
+}
+
+// The run-time part: read, analyse, print, write. Exit status.
+int analyze_file(const std::string& file, const std::string& channel, double fs, double lsb,
+                 const std::string& json, const std::string& plots) {
   auto mf = imu::mat::MatFile::open(file);
   if (!mf) {
-    return fail(mf.error().message);
+    return fail(mf.error().message, kExitRuntime);
   }
   const imu::mat::MatFile& m = mf.value();
   auto col = m.read_column(channel);
   if (!col) {
-    return fail(col.error().message);
+    return fail(col.error().message, kExitRuntime);
+  }
+  std::size_t non_finite = 0;
+  for (const double v : col.value()) {
+    non_finite += std::isfinite(v) ? 0U : 1U;
+  }
+  if (non_finite > 0) {
+    return fail(file + ": variable '" + channel + "': " + std::to_string(non_finite) +
+                    " non-finite samples (NaN/Inf): analyze does not handle gaps (imu-sim adev "
+                    "does)",
+                kExitRuntime);
   }
   Options o;
+  std::string err;
   if (fs > 0.0) {
     o.fs_hz = fs;
-  } else {
-    auto f = m.read_scalar("fs");
-    if (!f || !(f.value() > 0.0)) {
-      return fail(file + ": no --fs given and no positive scalar 'fs' in the file");
-    }
-    o.fs_hz = f.value();
+  } else if (!file_rate(m, file, o.fs_hz, err)) {
+    return fail(err, kExitRuntime);
   }
-  if (lsb > 0.0) {
-    o.lsb = lsb;
-  } else {
-    // acc_x -> acc_lsb, gyro_z -> gyro_lsb; also NAME_lsb and lsb.
-    const std::size_t us = channel.find('_');
-    const std::string names[3] = {
-        us != std::string::npos ? channel.substr(0, us) + "_lsb" : std::string(),
-        channel + "_lsb", "lsb"};
-    for (const auto& n : names) {
-      if (n.empty()) {
-        continue;
-      }
-      auto v = m.read_scalar(n);
-      if (v && v.value() > 0.0) {
-        o.lsb = v.value();
-        break;
-      }
-    }
-  }
+  o.lsb = lsb > 0.0 ? lsb : file_lsb(m, channel);
   Report r;
-  std::string err;
   if (!analyze(col.value(), channel, o, r, err)) {
-    return fail(err);
+    return fail(err, kExitRuntime);
   }
   if (o.lsb > 0.0 && lsb <= 0.0) {
     r.lsb_note = "LSB from the file: " + r.lsb_note.substr(r.lsb_note.find(':') + 2);
   }
   std::fputs(to_text(r).c_str(), stdout);
   if (!json.empty()) {
-    std::ofstream f(json);
-    if (!f) {
-      return fail("cannot write " + json);
-    }
-    f << to_json(r);
-    if (!f) {
-      return fail("error writing " + json);
+    if (!imu::cli::write_file_atomic(json, to_json(r), err)) {
+      return fail(err, kExitRuntime);
     }
     std::printf("wrote %s\n", json.c_str());
   }
   if (!plots.empty()) {
     std::string msg;
     if (!write_plots(r, plots, msg)) {
-      return fail(msg);
+      return fail(msg, kExitRuntime);
     }
     std::printf("%s\n", msg.c_str());
   }
-  return 0;
+  return kExitOk;
+}
+
+}  // namespace
+
+int cli_main(int argc, char** argv) {
+  imu::cli::Args a;
+  std::string err;
+  const std::vector<imu::cli::OptSpec> specs = {
+      {"--channel", true}, {"--json", true}, {"--plots", true}, {"--fs", true}, {"--lsb", true}};
+  if (!a.parse(argc, argv, 1, specs, 1, err)) {
+    return fail(err + " (imu-sim analyze --help)", kExitUsage);
+  }
+  if (a.help()) {
+    std::fputs(kUsage, stdout);
+    return kExitOk;
+  }
+  double fs = 0.0;
+  double lsb = 0.0;
+  if ((a.has("--fs") && !a.number("--fs", 0.0, 1e-3, 1e6, fs, err)) ||
+      (a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, lsb, err))) {
+    return fail(err, kExitUsage);
+  }
+  if (a.positional().empty() || !a.has("--channel")) {
+    return fail("FILE and --channel NAME are required (imu-sim analyze --help)", kExitUsage);
+  }
+  // Sizes are bounded by the MAT reader's budget; this is the last line of defence (a machine
+  // short of memory): one line, exit 1, no exception escapes.
+  try {
+    return analyze_file(a.positional()[0], a.get("--channel"), fs, lsb, a.get("--json"),
+                        a.get("--plots"));
+  } catch (const std::bad_alloc&) {
+    return fail("out of memory", kExitRuntime);
+  }
 }
 
 }  // namespace imu::analyze

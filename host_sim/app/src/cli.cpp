@@ -3,11 +3,14 @@
 
 #include <cmath>
 #include <cstdio>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "common.hpp"
 #include "data.hpp"
+#include "imu/cli/file_out.hpp"
 #include "imu/error_model.hpp"
 #include "imu/mat/mat_writer.hpp"
 #include "imu/model_text.hpp"
@@ -23,23 +26,101 @@
 namespace imu::sim {
 namespace {
 
-constexpr const char* kUsage =
-    "usage: imu-sim <command> [options]\n"
-    "  synth [--out FILE] [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--K 1.4e-4] [--fs 100]\n"
-    "        [--duration 10000] [--seed 1] [--lsb 1e-6] [--channel acc_z]\n"
-    "        synthetic recording (MAT-file: channel, fs, acc_lsb/gyro_lsb, source) from the\n"
-    "        seed's error model plus rate random walk\n"
-    "  model [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--fs 100]\n"
-    "        the continuous and discrete first-order model in the seed's layout\n"
-    "  adev FILE [--channel acc_z] [--json OUT] [--lsb X] [--fs X]\n"
-    "        online ADEV of one channel (fw OnlineAdev<8,22>), with the time it took\n"
-    "  run --mat FILE [--channel acc_z] [--bus loopback|vcan0|can0] [--rate max|realtime]\n"
+using imu::cli::write_file_atomic;
+
+constexpr const char* kUsageSynth =
+    "usage: imu-sim synth [--out FILE] [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--K 1.4e-4]\n"
+    "                     [--fs 100] [--duration 10000] [--seed 1] [--lsb 1e-6] [--channel acc_z]\n"
+    "  synthetic recording (MAT-file: channel, fs, acc_lsb/gyro_lsb, source) from the seed's\n"
+    "  error model plus rate random walk. Ranges: --N --B in [1e-12, 1e3], --K in [0, 1e3],\n"
+    "  --Tp in [1e-6, 1e9] s, --fs in [1e-3, 1e6] Hz, --duration x --fs in [16, 2^25] samples,\n"
+    "  --seed an integer in [0, 2^53], --lsb in [1e-12, 1e6]; the model's values must fit int32\n"
+    "  counts of --lsb.\n";
+constexpr const char* kUsageModel =
+    "usage: imu-sim model [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--fs 100]\n"
+    "  the continuous and discrete first-order model in the seed's layout\n";
+constexpr const char* kUsageAdev =
+    "usage: imu-sim adev FILE [--channel acc_z] [--json OUT] [--lsb X] [--fs X]\n"
+    "  online ADEV of one channel (fw OnlineAdev<8,22>), with the time it took. NaN/Inf samples\n"
+    "  are gaps (counted: \"gaps\" in the JSON). The LSB (--lsb, else the file's acc_lsb/gyro_lsb,\n"
+    "  else 1e-6 / 1e-7) must fit the data in int32 counts and must not collapse it (refused:\n"
+    "  more than 99 % of the samples in one count while the quantised std is under half the\n"
+    "  data's). --fs (else the file's fs or Fs) in [1e-3, 1e6] Hz.\n";
+constexpr const char* kUsageRun =
+    "usage: imu-sim run FILE [--channel acc_z] [--bus loopback|vcan0|can0] [--rate max|realtime]\n"
     "      [--node inproc|spawn|external] [--out DIR] [--json FILE] [--N --B --Tp [--K]]\n"
     "      [--no-plots] [--quiet] [--T-avg 10] [--T-int 20] [--sim-windows 1000] [--seed 2]\n"
-    "      [--timeout 30] [--window 4096|256] [--layout auto|fd|classic] [--only-channel] [--fw PATH]\n"
-    "        sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON,\n"
-    "        CSV, SVG/PNG plots in DIR, default out/run)\n"
-    "  analyze ...   (host_sim/analyze)\n";
+    "      [--timeout 30] [--window 4096|256] [--layout auto|fd|classic] [--only-channel]\n"
+    "      [--fw PATH] [--lsb X] [--fs X]      (--mat FILE is an alias of FILE)\n"
+    "  sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON, CSV, SVG/PNG\n"
+    "  plots in DIR, default out/run). A sample with NaN/Inf in a channel sent is not sent (the\n"
+    "  node counts it missing). LSB and rate rules as for adev. Ranges: --T-avg + --T-int at\n"
+    "  most the recording, --sim-windows in [1, 1e5] (x window samples <= 2e8), --seed in\n"
+    "  [0, 2^53], --timeout in (0, 86400] s, --window in [0, 1e6].\n";
+constexpr const char* kUsageAnalyze =
+    "usage: imu-sim analyze FILE --channel NAME [--fs HZ] [--lsb UNITS] [--json OUT] [--plots DIR]\n"
+    "  residual of the first-order model against the measured ADEV, effects found, augmented\n"
+    "  model (host_sim/analyze)\n";
+constexpr const char* kExitCodes =
+    "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
+    "processed, bus error, failed write, out of memory), 2 command-line error (unknown option,\n"
+    "bad or out-of-range value, an option that does not fit the data); `imu-sim CMD --help`\n";
+
+// The options of synth, range-checked (issue 13: every number before it becomes a size).
+struct SynthOptions {
+  double n = 0, b = 0, tp = 0, k = 0, fs = 0, dur = 0, lsb = 0;
+  std::uint64_t seed = 0;
+  std::size_t count = 0;
+  std::size_t chan = 0;
+  std::string chan_name;
+  std::string out;
+};
+
+bool parse_synth(const Args& a, SynthOptions& o, std::string& err) {
+  if (!a.number("--N", 3.3e-3, 1e-12, 1e3, o.n, err) ||
+      !a.number("--B", 9e-4, 1e-12, 1e3, o.b, err) ||
+      !a.number("--Tp", 300.0, 1e-6, 1e9, o.tp, err) ||
+      !a.number("--K", 1.4e-4, 0.0, 1e3, o.k, err) ||
+      !a.number("--fs", 100.0, kMinFsHz, kMaxFsHz, o.fs, err) ||
+      !a.number("--duration", 10000.0, 0.0, 1e12, o.dur, err) ||
+      !a.integer("--seed", 1, 0, std::uint64_t{1} << 53U, o.seed, err) ||
+      !a.number("--lsb", 1e-6, 1e-12, 1e6, o.lsb, err)) {
+    return false;
+  }
+  o.chan_name = a.get("--channel", "acc_z");
+  if (!channel_index(o.chan_name, o.chan)) {
+    err = "unknown channel '" + o.chan_name + "' (acc_x acc_y acc_z gyro_x gyro_y gyro_z)";
+    return false;
+  }
+  const double samples = std::round(o.dur * o.fs);
+  if (!(samples >= 16.0 && samples <= static_cast<double>(kMaxSamples))) {
+    err = "--duration x --fs = " + std::to_string(samples) + " samples, outside [16, " +
+          std::to_string(kMaxSamples) + "]";
+    return false;
+  }
+  o.count = static_cast<std::size_t>(samples);
+  o.out = a.get("--out", "synth.mat");
+  return true;
+}
+
+// Draw the samples (exact LSB multiples). kExitUsage if the model's values do not fit int32
+// counts of the LSB (a saturated sample would be a wrong number in the file).
+int synth_samples(const SynthOptions& o, ModelSimulator<4>& sim, std::vector<double>& z,
+                  std::string& err) {
+  z.resize(o.count);
+  for (double& v : z) {
+    const double x = sim.next();
+    const QuantizeResult q = quantize(x, o.lsb);
+    if (q.saturated || !std::isfinite(x)) {
+      err = "the model's values reach " + std::to_string(x) +
+            ", beyond int32 counts of --lsb " + std::to_string(o.lsb) +
+            " (lower --N/--B/--K or raise --lsb)";
+      return kExitUsage;
+    }
+    v = static_cast<double>(q.counts) * o.lsb;
+  }
+  return kExitOk;
+}
 
 int cmd_synth(int argc, char** argv) {
   const char* cmd = "imu-sim synth";
@@ -50,77 +131,67 @@ int cmd_synth(int argc, char** argv) {
                                       {"--duration", true}, {"--seed", true}, {"--lsb", true},
                                       {"--channel", true}};
   if (!a.parse(argc, argv, 2, specs, 0, err)) {
-    return fail(cmd, err, 2);
+    return fail(cmd, err, kExitUsage);
   }
-  double n = 0, b = 0, tp = 0, k = 0, fs = 0, dur = 0, seed = 0, lsb = 0;
-  if (!a.number("--N", 3.3e-3, n, err) || !a.number("--B", 9e-4, b, err) ||
-      !a.number("--Tp", 300.0, tp, err) || !a.number("--K", 1.4e-4, k, err) ||
-      !a.number("--fs", 100.0, fs, err) || !a.number("--duration", 10000.0, dur, err) ||
-      !a.number("--seed", 1.0, seed, err) || !a.number("--lsb", 1e-6, lsb, err)) {
-    return fail(cmd, err, 2);
+  if (a.help()) {
+    return print_help("synth");
   }
-  std::size_t chan = 0;
-  const std::string chan_name = a.get("--channel", "acc_z");
-  if (!channel_index(chan_name, chan)) {
-    return fail(cmd, "unknown channel '" + chan_name + "'", 2);
-  }
-  if (!(dur > 0.0) || !(lsb > 0.0) || k < 0.0 || seed < 0.0 || dur * fs > 1e9) {
-    return fail(cmd, "--duration, --lsb must be > 0, --K >= 0, at most 1e9 samples", 2);
+  SynthOptions o;
+  if (!parse_synth(a, o, err)) {
+    return fail(cmd, err, kExitUsage);
   }
   FirstOrderGm gm{};
-  if (first_order_gm_from_asd(n, b, tp, fs, gm) != ModelStatus::kOk) {
-    return fail(cmd, "--N, --B, --Tp, --fs must be finite and > 0", 2);
+  if (first_order_gm_from_asd(o.n, o.b, o.tp, o.fs, gm) != ModelStatus::kOk) {
+    return fail(cmd, "--N, --B, --Tp, --fs do not make a first-order model", kExitUsage);
   }
   ModelParams mp{};
-  mp.n = n;
+  mp.n = o.n;
   mp.n_gm = 1;
   mp.gm[0] = GmParam{gm.sb, gm.tb_s};
-  mp.k = k;
+  mp.k = o.k;
   ContinuousModel<4> cm;
   DiscreteModel<4> dm;
   ModelSimulator<4> sim;
-  if (build_model(mp, cm) != ModelStatus::kOk || discretize(cm, 1.0 / fs, dm) != ModelStatus::kOk ||
-      sim.configure(dm, static_cast<std::uint64_t>(seed)) != ModelStatus::kOk) {
+  if (build_model(mp, cm) != ModelStatus::kOk || discretize(cm, 1.0 / o.fs, dm) != ModelStatus::kOk ||
+      sim.configure(dm, o.seed) != ModelStatus::kOk) {
     return fail(cmd, "the model could not be built or simulated");
   }
   const double t0 = now_s();
-  const auto count = static_cast<std::size_t>(std::llround(dur * fs));
-  std::vector<double> z(count);
-  for (double& v : z) {
-    v = static_cast<double>(quantize(sim.next(), lsb).counts) * lsb;  // exact LSB multiples
+  std::vector<double> z;
+  const int st_z = synth_samples(o, sim, z, err);
+  if (st_z != kExitOk) {
+    return fail(cmd, err, st_z);
   }
-  const std::string out = a.get("--out", "synth.mat");
   std::string source;
   appendf(source,
           "SYNTHETIC data from imu-sim synth (not a recording: the seed's marble-slab data is not "
           "public): white N=%.6g, first-order GM B=%.6g Tp=%.6g s, rate random walk K=%.6g, "
-          "fs=%.6g Hz, %zu samples, seed %.0f, quantized to LSB %.6g",
-          n, b, tp, k, fs, count, seed, lsb);
+          "fs=%.6g Hz, %zu samples, seed %llu, quantized to LSB %.6g",
+          o.n, o.b, o.tp, o.k, o.fs, o.count, static_cast<unsigned long long>(o.seed), o.lsb);
+  const char* lsb_name = o.chan < 3 ? "acc_lsb" : "gyro_lsb";
   mat::MatWriter w;
-  auto st = w.add_column(chan_name, z);
+  auto st = w.add_column(o.chan_name, z);
   if (st.ok()) {
-    st = w.add_scalar("fs", fs);
+    st = w.add_scalar("fs", o.fs);
   }
   if (st.ok()) {
-    st = w.add_scalar(chan < 3 ? "acc_lsb" : "gyro_lsb", lsb);
+    st = w.add_scalar(lsb_name, o.lsb);
   }
   if (st.ok()) {
     st = w.add_string("source", source);
   }
-  if (st.ok()) {
-    const std::size_t slash = out.rfind('/');
-    if (slash != std::string::npos && !make_dirs(out.substr(0, slash), err)) {
-      return fail(cmd, err);
-    }
-    st = w.save(out);
-  }
   if (!st.ok()) {
     return fail(cmd, st.error().message);
   }
-  std::printf("wrote %s: %s (%zu samples at %g Hz, %g s), fs, %s\n%s\ntook %.2f s\n", out.c_str(),
-              chan_name.c_str(), count, fs, dur, chan < 3 ? "acc_lsb" : "gyro_lsb",
-              source.c_str(), now_s() - t0);
-  return 0;
+  const std::size_t slash = o.out.rfind('/');
+  if ((slash != std::string::npos && !make_dirs(o.out.substr(0, slash), err)) ||
+      !write_file_atomic(o.out, w.bytes().data(), w.bytes().size(), err)) {
+    return fail(cmd, err);
+  }
+  std::printf("wrote %s: %s (%zu samples at %g Hz, %g s), fs, %s\n%s\ntook %.2f s\n",
+              o.out.c_str(), o.chan_name.c_str(), o.count, o.fs, o.dur, lsb_name, source.c_str(),
+              now_s() - t0);
+  return kExitOk;
 }
 
 int cmd_model(int argc, char** argv) {
@@ -129,19 +200,74 @@ int cmd_model(int argc, char** argv) {
   std::string err;
   const std::vector<OptSpec> specs = {{"--N", true}, {"--B", true}, {"--Tp", true}, {"--fs", true}};
   if (!a.parse(argc, argv, 2, specs, 0, err)) {
-    return fail(cmd, err, 2);
+    return fail(cmd, err, kExitUsage);
+  }
+  if (a.help()) {
+    return print_help("model");
   }
   double n = 0, b = 0, tp = 0, fs = 0;
   if (!a.number("--N", 3.3e-3, n, err) || !a.number("--B", 9e-4, b, err) ||
       !a.number("--Tp", 300.0, tp, err) || !a.number("--fs", 100.0, fs, err)) {
-    return fail(cmd, err, 2);
+    return fail(cmd, err, kExitUsage);
   }
   FirstOrderGm gm{};
   if (first_order_gm_from_asd(n, b, tp, fs, gm) != ModelStatus::kOk) {
-    return fail(cmd, "--N, --B, --Tp, --fs must be finite and > 0", 2);
+    return fail(cmd, "--N, --B, --Tp, --fs must be finite and > 0", kExitUsage);
   }
   std::fputs(format_seed_model(gm).c_str(), stdout);
-  return 0;
+  return kExitOk;
+}
+
+// The ADEV of one channel with its non-finite samples as gaps: samples before the first and
+// after the last finite one are not part of the series (as for the node, whose receiver starts
+// at the first sample it gets); each run of non-finite samples inside is one mark_missing().
+void adev_with_gaps(const std::vector<double>& values, const std::vector<std::int32_t>& counts,
+                    OnlineAdev<8, 22>& adev) {
+  std::size_t lo = 0;
+  std::size_t hi = values.size();
+  while (lo < hi && !std::isfinite(values[lo])) {
+    ++lo;
+  }
+  while (hi > lo && !std::isfinite(values[hi - 1])) {
+    --hi;
+  }
+  std::size_t i = lo;
+  while (i < hi) {
+    std::size_t j = i;
+    const bool finite = std::isfinite(values[i]);
+    while (j < hi && std::isfinite(values[j]) == finite) {
+      ++j;
+    }
+    if (finite) {
+      adev.push_block(counts.data() + i, j - i);
+    } else {
+      adev.mark_missing(j - i);
+    }
+    i = j;
+  }
+}
+
+struct AdevTiming {
+  double read, quantize, adev, total;
+};
+
+std::string adev_json(const std::string& path, const std::string& chan_name, std::size_t chan,
+                      const SensorData& sd, std::size_t n, const std::vector<AdevRow>& rows,
+                      const AdevTiming& t) {
+  const ChannelData& ch = sd.ch[chan];
+  std::string j = "{\n";
+  j += "  \"source\": " + json_str(path) + ",\n";
+  j += "  \"channel\": " + json_str(chan_name) + ",\n";
+  j += "  \"unit\": " + json_str(channel_unit(chan)) + ",\n";
+  j += "  \"fs_hz\": " + json_num(sd.fs_hz) + ",\n";
+  j += "  \"lsb\": " + json_num(ch.lsb) + ",\n";
+  j += "  \"n_samples\": " + std::to_string(n) + ",\n";
+  j += "  \"gaps\": " + std::to_string(ch.non_finite) + ",\n";
+  j += "  \"adev\": " + adev_json_list(rows) + ",\n";
+  j += "  \"timing_s\": {\"read\": " + json_num(t.read) + ", \"quantize\": " +
+       json_num(t.quantize) + ", \"adev\": " + json_num(t.adev) + ", \"total\": " +
+       json_num(t.total) + "}\n}\n";
+  return j;
 }
 
 int cmd_adev(int argc, char** argv) {
@@ -151,24 +277,26 @@ int cmd_adev(int argc, char** argv) {
   const std::vector<OptSpec> specs = {
       {"--channel", true}, {"--json", true}, {"--lsb", true}, {"--fs", true}};
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
-    return fail(cmd, err, 2);
+    return fail(cmd, err, kExitUsage);
+  }
+  if (a.help()) {
+    return print_help("adev");
   }
   if (a.positional().empty()) {
-    return fail(cmd, "a MAT-file is required: imu-sim adev FILE --channel C", 2);
+    return fail(cmd, "a MAT-file is required: imu-sim adev FILE --channel C", kExitUsage);
   }
+  const std::string path = a.positional()[0];
   std::size_t chan = 0;
   const std::string chan_name = a.get("--channel", "acc_z");
   if (!channel_index(chan_name, chan)) {
-    return fail(cmd, "unknown channel '" + chan_name + "'", 2);
+    return fail(cmd, "unknown channel '" + chan_name + "' (acc_x .. gyro_z); " +
+                         channels_held(path), kExitUsage);
   }
   double lsb = 0, fs = 0;
-  if (!a.number("--lsb", 0.0, lsb, err) || !a.number("--fs", 0.0, fs, err)) {
-    return fail(cmd, err, 2);
+  if ((a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, lsb, err)) ||
+      (a.has("--fs") && !a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, fs, err))) {
+    return fail(cmd, err, kExitUsage);
   }
-  if (lsb < 0.0 || fs < 0.0) {
-    return fail(cmd, "--lsb and --fs must be > 0", 2);
-  }
-  const std::string path = a.positional()[0];
   const double t0 = now_s();
   bool want[kNumChannels] = {};
   double lsb_over[kNumChannels] = {};
@@ -181,10 +309,13 @@ int cmd_adev(int argc, char** argv) {
   const double t1 = now_s();
   std::vector<std::int32_t> counts;
   ChannelData& ch = sd.ch[chan];
-  to_counts(ch, counts);
+  const int st = to_counts(path, chan, ch, counts, err);
+  if (st != kExitOk) {
+    return fail(cmd, err, st);
+  }
   const double t2 = now_s();
   OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
-  adev.push_block(counts.data(), counts.size());
+  adev_with_gaps(ch.values, counts, adev);
   AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
   const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
   const double t3 = now_s();
@@ -195,42 +326,25 @@ int cmd_adev(int argc, char** argv) {
   std::fputs(format_adev_table(rows).c_str(), stdout);
   std::printf("time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", t1 - t0,
               t2 - t1, t3 - t2, t3 - t0);
-  if (ch.off_grid > 0 || ch.saturated > 0) {
-    std::printf("note: %llu samples off the LSB grid, %llu saturated\n",
-                static_cast<unsigned long long>(ch.off_grid),
-                static_cast<unsigned long long>(ch.saturated));
+  if (ch.non_finite > 0) {
+    std::printf("note: %llu non-finite samples (NaN/Inf) treated as gaps\n",
+                static_cast<unsigned long long>(ch.non_finite));
   }
-  if (a.has("--json")) {
-    std::string j = "{\n";
-    j += "  \"source\": " + json_str(path) + ",\n";
-    j += "  \"channel\": " + json_str(chan_name) + ",\n";
-    j += "  \"unit\": " + json_str(channel_unit(chan)) + ",\n";
-    j += "  \"fs_hz\": " + json_num(sd.fs_hz) + ",\n";
-    j += "  \"lsb\": " + json_num(ch.lsb) + ",\n";
-    j += "  \"n_samples\": " + std::to_string(counts.size()) + ",\n";
-    j += "  \"adev\": " + adev_json_list(rows) + ",\n";
-    j += "  \"timing_s\": {\"read\": " + json_num(t1 - t0) + ", \"quantize\": " +
-         json_num(t2 - t1) + ", \"adev\": " + json_num(t3 - t2) + ", \"total\": " +
-         json_num(t3 - t0) + "}\n}\n";
-    if (!write_file(a.get("--json"), j, err)) {
-      return fail(cmd, err);
-    }
+  if (ch.off_grid > 0) {
+    std::printf("note: %llu samples off the LSB grid (quantised to it)\n",
+                static_cast<unsigned long long>(ch.off_grid));
   }
-  return 0;
+  if (a.has("--json") &&
+      !write_file(a.get("--json"),
+                  adev_json(path, chan_name, chan, sd, counts.size(), rows,
+                            AdevTiming{t1 - t0, t2 - t1, t3 - t2, t3 - t0}),
+                  err)) {
+    return fail(cmd, err);
+  }
+  return kExitOk;
 }
 
-}  // namespace
-
-int cli_main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fputs(kUsage, stderr);
-    return 2;
-  }
-  const std::string sub = argv[1];
-  if (sub == "-h" || sub == "--help" || sub == "help") {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
+int dispatch(const std::string& sub, int argc, char** argv) {
   if (sub == "synth") {
     return cmd_synth(argc, argv);
   }
@@ -243,15 +357,71 @@ int cli_main(int argc, char** argv) {
   if (sub == "run") {
     return cmd_run(argc, argv);
   }
-  if (sub == "analyze") {
 #ifdef IMU_HAVE_ANALYZE
-    return imu::analyze::cli_main(argc - 1, argv + 1);
+  return imu::analyze::cli_main(argc - 1, argv + 1);
 #else
-    return fail("imu-sim", "analyze: not built");
+  return fail("imu-sim", "analyze: not built");
 #endif
+}
+
+}  // namespace
+
+const char* command_usage(const std::string& cmd) {
+  if (cmd == "synth") {
+    return kUsageSynth;
   }
-  std::fprintf(stderr, "imu-sim: unknown command '%s'\n%s", sub.c_str(), kUsage);
-  return 2;
+  if (cmd == "model") {
+    return kUsageModel;
+  }
+  if (cmd == "adev") {
+    return kUsageAdev;
+  }
+  if (cmd == "run") {
+    return kUsageRun;
+  }
+  if (cmd == "analyze") {
+    return kUsageAnalyze;
+  }
+  return "";
+}
+
+int print_help(const std::string& cmd) {
+  std::fputs(command_usage(cmd), stdout);
+  std::fputs(kExitCodes, stdout);
+  return kExitOk;
+}
+
+int cli_main(int argc, char** argv) {
+  const auto usage = [](std::FILE* to) {
+    std::fputs("usage: imu-sim <command> [options]   (imu-sim <command> --help)\n", to);
+    for (const char* c : {"synth", "model", "adev", "run", "analyze"}) {
+      std::fputs(command_usage(c), to);
+    }
+    std::fputs(kExitCodes, to);
+  };
+  if (argc < 2) {
+    usage(stderr);
+    return kExitUsage;
+  }
+  const std::string sub = argv[1];
+  if (sub == "-h" || sub == "--help" || sub == "help") {
+    usage(stdout);
+    return kExitOk;
+  }
+  if (command_usage(sub)[0] == '\0') {
+    std::fprintf(stderr, "imu-sim: unknown command '%s' (synth, model, adev, run, analyze; "
+                 "imu-sim --help)\n", sub.c_str());
+    return kExitUsage;
+  }
+  // Sizes are checked before they are allocated; this is the last line of defence (a machine
+  // short of memory): one line, exit 1, and no exception escapes.
+  try {
+    return dispatch(sub, argc, argv);
+  } catch (const std::bad_alloc&) {
+    return fail(("imu-sim " + sub).c_str(), "out of memory");
+  } catch (const std::length_error&) {
+    return fail(("imu-sim " + sub).c_str(), "out of memory (a size beyond the address space)");
+  }
 }
 
 }  // namespace imu::sim

@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "imu/cli/file_out.hpp"
+
 namespace imu::sim {
 
 const char* const kChannelNames[kNumChannels] = {"acc_x",  "acc_y",  "acc_z",
@@ -29,75 +31,6 @@ const char* channel_unit(std::size_t c) { return c < 3 ? "m/s^2" : "rad/s"; }
 
 double default_lsb(std::size_t c) {
   return c < 3 ? imu::hal::kFineAccLsb_mps2 : imu::hal::kFineGyroLsb_rps;
-}
-
-bool Args::parse(int argc, char** argv, int first, const std::vector<OptSpec>& specs,
-                 std::size_t max_positional, std::string& err) {
-  for (int i = first; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a.size() > 2 && a[0] == '-' && a[1] == '-') {
-      std::string name = a;
-      std::string value;
-      bool inline_value = false;
-      const std::size_t eq = a.find('=');
-      if (eq != std::string::npos) {
-        name = a.substr(0, eq);
-        value = a.substr(eq + 1);
-        inline_value = true;
-      }
-      const OptSpec* spec = nullptr;
-      for (const OptSpec& s : specs) {
-        if (name == s.name) {
-          spec = &s;
-        }
-      }
-      if (spec == nullptr) {
-        err = "unknown option '" + name + "'";
-        return false;
-      }
-      if (spec->has_value && !inline_value) {
-        if (i + 1 >= argc) {
-          err = "option '" + name + "' needs a value";
-          return false;
-        }
-        value = argv[++i];
-      } else if (!spec->has_value && inline_value) {
-        err = "option '" + name + "' takes no value";
-        return false;
-      }
-      opts_[name] = value;
-    } else {
-      if (pos_.size() >= max_positional) {
-        err = "unexpected argument '" + a + "'";
-        return false;
-      }
-      pos_.push_back(a);
-    }
-  }
-  return true;
-}
-
-std::string Args::get(const std::string& name, const std::string& def) const {
-  const auto it = opts_.find(name);
-  return it == opts_.end() ? def : it->second;
-}
-
-bool Args::number(const std::string& name, double def, double& out, std::string& err) const {
-  const auto it = opts_.find(name);
-  if (it == opts_.end()) {
-    out = def;
-    return true;
-  }
-  const char* s = it->second.c_str();
-  char* end = nullptr;
-  errno = 0;
-  const double v = std::strtod(s, &end);
-  if (end == s || *end != '\0' || errno != 0 || !std::isfinite(v)) {
-    err = "option '" + name + "': '" + it->second + "' is not a number";
-    return false;
-  }
-  out = v;
-  return true;
 }
 
 double now_s() {
@@ -152,17 +85,7 @@ bool make_dirs(const std::string& path, std::string& err) {
 }
 
 bool write_file(const std::string& path, const std::string& text, std::string& err) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (f == nullptr) {
-    err = "cannot write '" + path + "': " + std::strerror(errno);
-    return false;
-  }
-  const std::size_t w = std::fwrite(text.data(), 1, text.size(), f);
-  const bool ok = w == text.size() && std::fclose(f) == 0;
-  if (!ok) {
-    err = "write error on '" + path + "'";
-  }
-  return ok;
+  return imu::cli::write_file_atomic(path, text, err);
 }
 
 int fail(const char* cmd, const std::string& msg, int status) {

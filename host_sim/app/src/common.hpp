@@ -1,4 +1,4 @@
-// Internal helpers of imu-sim / imu-fw: option parsing, channel names, timing, text output.
+// Internal helpers of imu-sim / imu-fw: channel names, timing, text output, failures.
 // Host code (allocates). Not installed.
 #ifndef IMU_SIM_COMMON_HPP
 #define IMU_SIM_COMMON_HPP
@@ -6,10 +6,10 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
-#include <map>
 #include <string>
 #include <vector>
 
+#include "imu/cli/args.hpp"
 #include "imu/hal/codec.hpp"
 
 namespace imu::sim {
@@ -25,29 +25,12 @@ extern const char* const kChannelNames[kNumChannels];
 /// Default LSB when a file has none: 1e-6 m/s^2 / 1e-7 rad/s (finer than any IMU noise).
 [[nodiscard]] double default_lsb(std::size_t c);
 
-/// One option of a subcommand.
-struct OptSpec {
-  const char* name;  ///< "--bus"
-  bool has_value;
-};
-
-/// Parsed command line: options by name, positionals in order. parse() fails on an unknown
-/// option, a missing value, or more positionals than allowed, with a one-line error.
-class Args {
- public:
-  [[nodiscard]] bool parse(int argc, char** argv, int first, const std::vector<OptSpec>& specs,
-                           std::size_t max_positional, std::string& err);
-  [[nodiscard]] bool has(const std::string& name) const { return opts_.count(name) != 0; }
-  [[nodiscard]] std::string get(const std::string& name, const std::string& def = "") const;
-  /// Numeric option: def if absent; false (with err) if present but not a finite number.
-  [[nodiscard]] bool number(const std::string& name, double def, double& out,
-                            std::string& err) const;
-  [[nodiscard]] const std::vector<std::string>& positional() const { return pos_; }
-
- private:
-  std::map<std::string, std::string> opts_;
-  std::vector<std::string> pos_;
-};
+/// The shared parser and exit codes (host_sim/cli): one parser for every subcommand.
+using imu::cli::Args;
+using imu::cli::kExitOk;
+using imu::cli::kExitRuntime;
+using imu::cli::kExitUsage;
+using imu::cli::OptSpec;
 
 /// Monotonic seconds.
 [[nodiscard]] double now_s();
@@ -57,7 +40,8 @@ __attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char*
 
 /// Create a directory and its parents; false with err on failure.
 [[nodiscard]] bool make_dirs(const std::string& path, std::string& err);
-/// Write a whole file; false with err on failure.
+/// Write a whole file under a temporary name and rename it: a failure leaves no partial file
+/// (imu::cli::write_file_atomic). False with err on failure.
 [[nodiscard]] bool write_file(const std::string& path, const std::string& text, std::string& err);
 
 /// Print "imu-sim <cmd>: <msg>" on stderr and return the status (1 or 2).

@@ -2,11 +2,133 @@
 #include "data.hpp"
 
 #include <cmath>
+#include <cstdio>
 
 #include "imu/mat/mat_reader.hpp"
 #include "imu/online_adev.hpp"
 
 namespace imu::sim {
+namespace {
+
+const mat::VariableInfo* find_var(const std::vector<mat::VariableInfo>& vars, const char* name) {
+  for (const auto& v : vars) {
+    if (v.name == name) {
+      return &v;
+    }
+  }
+  return nullptr;
+}
+
+std::string num(double v) {
+  char buf[32];
+  (void)std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+
+// The rate: fs_override, else the file's `fs`, else its `Fs`, within [kMinFsHz, kMaxFsHz].
+bool read_rate(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& vars,
+               const std::string& path, double fs_override, double& fs_hz, std::string& err) {
+  if (fs_override > 0.0) {
+    fs_hz = fs_override;
+    return true;
+  }
+  const char* name = find_var(vars, "fs") == nullptr && find_var(vars, "Fs") != nullptr ? "Fs"
+                                                                                       : "fs";
+  auto fs = mf.read_scalar(name);
+  if (!fs.ok()) {
+    err = fs.error().message + " (give --fs)";
+    return false;
+  }
+  fs_hz = fs.value();
+  if (!(fs_hz >= kMinFsHz && fs_hz <= kMaxFsHz)) {
+    err = path + ": " + name + " = " + num(fs_hz) + " Hz is not a rate in [" + num(kMinFsHz) +
+          ", " + num(kMaxFsHz) + "] Hz (give --fs)";
+    return false;
+  }
+  return true;
+}
+
+// acc_lsb and gyro_lsb if present (0 if absent).
+bool read_file_lsbs(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& vars,
+                    const std::string& path, double (&file_lsb)[2], std::string& err) {
+  const char* lsb_names[2] = {"acc_lsb", "gyro_lsb"};
+  for (std::size_t g = 0; g < 2; ++g) {
+    file_lsb[g] = 0.0;
+    if (find_var(vars, lsb_names[g]) == nullptr) {
+      continue;
+    }
+    auto l = mf.read_scalar(lsb_names[g]);
+    if (!l.ok()) {
+      err = l.error().message;
+      return false;
+    }
+    if (!(l.value() > 0.0) || !std::isfinite(l.value())) {
+      err = path + ": " + lsb_names[g] + " is not a positive number";
+      return false;
+    }
+    file_lsb[g] = l.value();
+  }
+  return true;
+}
+
+// A channel is one vector: an N x M matrix would be read as its first column without a word.
+bool check_vector(const mat::VariableInfo& v, const std::string& path, std::string& err) {
+  if (v.rows <= 1U || v.cols <= 1U) {
+    return true;
+  }
+  err = path + ": variable '" + v.name + "' is a " + std::to_string(v.rows) + "x" +
+        std::to_string(v.cols) + " matrix, not one channel: save each column as its own vector " +
+        "named acc_x .. gyro_z (e.g. in MATLAB/Octave " + v.name + " = " + v.name + "(:,3))";
+  return false;
+}
+
+// Statistics of the finite samples of a channel.
+struct Scan {
+  std::uint64_t finite = 0;
+  double max_abs = 0.0;
+  double mean = 0.0;
+  double m2 = 0.0;  ///< Welford's sum of squared deviations
+  [[nodiscard]] double std_dev() const {
+    return finite > 1 ? std::sqrt(m2 / static_cast<double>(finite - 1)) : 0.0;
+  }
+  void add(double v) {
+    ++finite;
+    max_abs = std::fabs(v) > max_abs ? std::fabs(v) : max_abs;
+    const double d = v - mean;
+    mean += d / static_cast<double>(finite);
+    m2 += d * (v - mean);
+  }
+};
+
+// Share of the finite samples in the most common count (Boyer-Moore majority vote: exact when
+// one count holds more than half, which is all the 99 % rule needs) and the std of the
+// quantised values.
+void count_spread(const std::vector<double>& values, const std::vector<std::int32_t>& counts,
+                  double lsb, double& top_share, double& quantised_std) {
+  std::int32_t cand = 0;
+  std::uint64_t votes = 0;
+  Scan q;
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    if (!std::isfinite(values[i])) {
+      continue;
+    }
+    q.add(static_cast<double>(counts[i]) * lsb);
+    if (votes == 0) {
+      cand = counts[i];
+      votes = 1;
+    } else {
+      votes = counts[i] == cand ? votes + 1 : votes - 1;
+    }
+  }
+  std::uint64_t same = 0;
+  for (std::size_t i = 0; i < counts.size(); ++i) {
+    same += std::isfinite(values[i]) && counts[i] == cand ? 1U : 0U;
+  }
+  top_share = q.finite > 0 ? static_cast<double>(same) / static_cast<double>(q.finite) : 0.0;
+  quantised_std = q.std_dev();
+}
+
+}  // namespace
 
 bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
                  const bool (&required)[kNumChannels], const double (&lsb_override)[kNumChannels],
@@ -19,56 +141,25 @@ bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
     return false;
   }
   const mat::MatFile& mf = file.value();
-  auto vars = mf.list_variables();
-  if (!vars.ok()) {
-    err = vars.error().message;
+  auto listed = mf.list_variables();
+  if (!listed.ok()) {
+    err = listed.error().message;
     return false;
   }
-  auto has_var = [&](const char* name) {
-    for (const auto& v : vars.value()) {
-      if (v.name == name) {
-        return true;
-      }
-    }
-    return false;
-  };
-  if (fs_override > 0.0) {
-    out.fs_hz = fs_override;
-  } else {
-    auto fs = mf.read_scalar("fs");
-    if (!fs.ok()) {
-      err = fs.error().message + " (give --fs)";
-      return false;
-    }
-    out.fs_hz = fs.value();
-    if (!(out.fs_hz > 0.0) || !std::isfinite(out.fs_hz)) {
-      err = path + ": fs = " + std::to_string(out.fs_hz) + " is not a positive rate";
-      return false;
-    }
-  }
+  const std::vector<mat::VariableInfo>& vars = listed.value();
   double file_lsb[2] = {0.0, 0.0};
-  const char* lsb_names[2] = {"acc_lsb", "gyro_lsb"};
-  for (int g = 0; g < 2; ++g) {
-    if (has_var(lsb_names[g])) {
-      auto l = mf.read_scalar(lsb_names[g]);
-      if (!l.ok()) {
-        err = l.error().message;
-        return false;
-      }
-      if (!(l.value() > 0.0) || !std::isfinite(l.value())) {
-        err = path + ": " + lsb_names[g] + " is not a positive number";
-        return false;
-      }
-      file_lsb[g] = l.value();
-    }
+  if (!read_rate(mf, vars, path, fs_override, out.fs_hz, err) ||
+      !read_file_lsbs(mf, vars, path, file_lsb, err)) {
+    return false;
   }
   bool any = false;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    if (!want[c]) {
+    const mat::VariableInfo* info = find_var(vars, kChannelNames[c]);
+    if (!want[c] || (info == nullptr && !required[c])) {
       continue;
     }
-    if (!has_var(kChannelNames[c]) && !required[c]) {
-      continue;
+    if (info != nullptr && !check_vector(*info, path, err)) {
+      return false;
     }
     ChannelData& ch = out.ch[c];
     auto col = mf.read_column(kChannelNames[c]);
@@ -77,10 +168,6 @@ bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
       return false;
     }
     ch.values = std::move(col.value());
-    if (ch.values.empty()) {
-      err = path + ": variable '" + kChannelNames[c] + "' is empty";
-      return false;
-    }
     if (any && ch.values.size() != out.n_samples) {
       err = path + ": variable '" + kChannelNames[c] + "' has " +
             std::to_string(ch.values.size()) + " samples, others " +
@@ -91,14 +178,9 @@ bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
     any = true;
     ch.present = true;
     const double fl = file_lsb[c < 3 ? 0 : 1];
-    if (lsb_override[c] > 0.0) {
-      ch.lsb = lsb_override[c];
-    } else if (fl > 0.0) {
-      ch.lsb = fl;
-      ch.lsb_from_file = true;
-    } else {
-      ch.lsb = default_lsb(c);
-    }
+    ch.lsb = lsb_override[c] > 0.0 ? lsb_override[c] : (fl > 0.0 ? fl : default_lsb(c));
+    ch.lsb_from_option = lsb_override[c] > 0.0;
+    ch.lsb_from_file = !ch.lsb_from_option && fl > 0.0;
   }
   if (!any) {
     err = path + ": none of the channels acc_x .. gyro_z is in the file";
@@ -107,17 +189,67 @@ bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
   return true;
 }
 
-void to_counts(ChannelData& ch, std::vector<std::int32_t>& counts) {
+int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
+              std::vector<std::int32_t>& counts, std::string& err) {
+  const std::string where = path + ": variable '" + kChannelNames[c] + "': ";
+  Scan s;
+  for (const double v : ch.values) {
+    if (std::isfinite(v)) {
+      s.add(v);
+    }
+  }
+  ch.non_finite = ch.values.size() - s.finite;
+  if (s.finite == 0) {
+    err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
+    return kExitRuntime;
+  }
+  const int misfit = ch.lsb_from_option ? kExitUsage : kExitRuntime;
+  const std::string lsb_origin =
+      ch.lsb_from_option ? "--lsb " : (ch.lsb_from_file ? "the file's LSB " : "the default LSB ");
+  constexpr double kMaxCounts = 2147483647.0;
+  if (s.max_abs / ch.lsb >= kMaxCounts + 0.5) {
+    err = where + "values up to " + num(s.max_abs) + " do not fit int32 counts at " + lsb_origin +
+          num(ch.lsb) + " (the LSB must be at least " + num(s.max_abs / kMaxCounts) + ")";
+    return misfit;
+  }
   counts.resize(ch.values.size());
-  ch.saturated = 0;
   ch.off_grid = 0;
   for (std::size_t i = 0; i < ch.values.size(); ++i) {
-    const QuantizeResult q = quantize(ch.values[i], ch.lsb);
-    counts[i] = q.counts;
-    ch.saturated += q.saturated ? 1U : 0U;
-    const double resid = ch.values[i] / ch.lsb - static_cast<double>(q.counts);
-    ch.off_grid += std::fabs(resid) > 1e-6 ? 1U : 0U;
+    const double v = ch.values[i];
+    counts[i] = std::isfinite(v) ? quantize(v, ch.lsb).counts : 0;
+    const double resid = v / ch.lsb - static_cast<double>(counts[i]);
+    ch.off_grid += std::isfinite(v) && std::fabs(resid) > 1e-6 ? 1U : 0U;
   }
+  double top_share = 0.0;
+  double q_std = 0.0;
+  count_spread(ch.values, counts, ch.lsb, top_share, q_std);
+  if (top_share > 0.99 && q_std < 0.5 * s.std_dev()) {
+    err = where + lsb_origin + num(ch.lsb) + " puts " + num(100.0 * top_share) +
+          " % of the samples in one count (std " + num(s.std_dev()) + " becomes " + num(q_std) +
+          "): the LSB is too coarse for these data";
+    counts.clear();
+    return misfit;
+  }
+  return kExitOk;
+}
+
+std::string channels_held(const std::string& path) {
+  auto vars = mat::list_variables(path);
+  if (!vars.ok()) {
+    return "the file cannot be listed (" + vars.error().message + ")";
+  }
+  std::string held;
+  std::string others;
+  for (const auto& v : vars.value()) {
+    std::size_t c = 0;
+    std::string& list = channel_index(v.name, c) ? held : others;
+    list += (list.empty() ? "" : ", ") + v.name;
+  }
+  if (!held.empty()) {
+    return "the file holds " + held;
+  }
+  return "the file holds none of acc_x .. gyro_z (variables: " +
+         (others.empty() ? std::string("none") : others) + ")";
 }
 
 }  // namespace imu::sim

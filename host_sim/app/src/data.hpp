@@ -1,4 +1,16 @@
 // Loading a sensor recording from a MAT-file and converting it to counts (host code).
+//
+// What the data may hold, and what is refused (issue 13: no silent wrong answer):
+//  * non-finite samples (NaN, +-Inf) are gaps, never numbers: counted (non_finite), given count 0
+//    in the counts and skipped by every consumer (ADEV: mark_missing; run: not sent). Samples
+//    before the first / after the last finite one are not part of the series. A channel with no
+//    finite sample is an error.
+//  * the LSB must represent the data: every finite |value| / LSB must fit int32 counts, and the
+//    quantisation must not collapse the data (refused when more than 99 % of the finite samples
+//    fall in one count while the std of the quantised values is under half the values' std; data
+//    already on a coarse grid keep their std and pass).
+//  * the rate must be in [kMinFsHz, kMaxFsHz]; `fs` or else `Fs` is read from the file.
+//  * a channel must be a vector (an N x 6 matrix is refused, with how to split it).
 #ifndef IMU_SIM_DATA_HPP
 #define IMU_SIM_DATA_HPP
 
@@ -11,13 +23,21 @@
 
 namespace imu::sim {
 
+/// Sampling rates imu-sim accepts (file or --fs): beyond them taus and sample periods are absurd
+/// or overflow the sensor clock (ns).
+inline constexpr double kMinFsHz = 1e-3;
+inline constexpr double kMaxFsHz = 1e6;
+/// Samples of one channel: the MAT reader's budget (256 MiB of doubles per variable).
+inline constexpr std::uint64_t kMaxSamples = std::uint64_t{1} << 25U;
+
 struct ChannelData {
   bool present = false;
-  std::vector<double> values;   ///< channel units, as stored in the file
+  std::vector<double> values;   ///< channel units, as stored in the file (may hold NaN/Inf)
   double lsb = 0.0;             ///< value of one count
   bool lsb_from_file = false;   ///< acc_lsb / gyro_lsb read from the file
-  std::uint64_t saturated = 0;  ///< samples clipped by quantize()
-  std::uint64_t off_grid = 0;   ///< samples that are not an integer multiple of lsb (> 1e-6 lsb)
+  bool lsb_from_option = false; ///< given on the command line (a misfit is a usage error)
+  std::uint64_t off_grid = 0;   ///< finite samples not an integer multiple of lsb (> 1e-6 lsb)
+  std::uint64_t non_finite = 0; ///< NaN / Inf samples: gaps
 };
 
 // NOLINTNEXTLINE(bugprone-reserved-identifier): '__i0' is the compiler's implicit array copy loop
@@ -28,17 +48,25 @@ struct SensorData {
   ChannelData ch[kNumChannels];
 };
 
-/// Read `fs` and the wanted channels (want[c]; a wanted channel that is absent is an error only
-/// if required[c]). LSB: lsb_override[c] if > 0, else the file's acc_lsb / gyro_lsb, else
-/// default_lsb(c). fs: fs_override if > 0, else the file's `fs`. err is one line naming the
+/// Read `fs` (or `Fs`) and the wanted channels (want[c]; a wanted channel that is absent is an
+/// error only if required[c]). LSB: lsb_override[c] if > 0, else the file's acc_lsb / gyro_lsb,
+/// else default_lsb(c). fs: fs_override if > 0, else the file's. err is one line naming the
 /// file. Cost: one inflate per channel read.
 [[nodiscard]] bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
                                const bool (&required)[kNumChannels],
                                const double (&lsb_override)[kNumChannels], double fs_override,
                                SensorData& out, std::string& err);
 
-/// Counts of one channel (imu::quantize with its LSB); counts saturated / off the LSB grid.
-void to_counts(ChannelData& ch, std::vector<std::int32_t>& counts);
+/// Counts of channel c of file `path` (imu::quantize with its LSB; 0 for a non-finite sample), after checking
+/// that the LSB represents the data (see the top of this file). Returns the exit status: 0, or
+/// kExitUsage when an LSB given as an option does not fit, kExitRuntime for bad data (no finite
+/// sample, the file's LSB does not fit). O(n), one pass to check and one to quantise.
+[[nodiscard]] int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
+                            std::vector<std::int32_t>& counts, std::string& err);
+
+/// "the file holds acc_x, gyro_y" (the channels acc_x .. gyro_z present in it), or what else
+/// it holds; for an unknown --channel. Never fails (a bad file is described as such).
+[[nodiscard]] std::string channels_held(const std::string& path);
 
 }  // namespace imu::sim
 

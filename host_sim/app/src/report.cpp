@@ -266,11 +266,18 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
     err = "covariance prediction failed";
     return false;
   }
-  cov.data_windows = data.size() / win;
-  cov.traj_data.assign(cov.data_windows * cov.n_int, 0.0);
-  for (std::size_t w = 0; w < cov.data_windows; ++w) {
-    integrate_window(&data[w * win], cov.n_avg, cov.n_int, ts_s, &cov.traj_data[w * cov.n_int]);
+  // A window holding a non-finite sample (a gap) is left out: a gap is not a number.
+  const std::size_t all_windows = data.size() / win;
+  cov.traj_data.assign(all_windows * cov.n_int, 0.0);
+  cov.data_windows = 0;
+  for (std::size_t w = 0; w < all_windows; ++w) {
+    const double* x = &data[w * win];
+    if (std::all_of(x, x + win, [](double v) { return std::isfinite(v); })) {
+      integrate_window(x, cov.n_avg, cov.n_int, ts_s, &cov.traj_data[cov.data_windows * cov.n_int]);
+      ++cov.data_windows;
+    }
   }
+  cov.traj_data.resize(cov.data_windows * cov.n_int);
   cov.sim_windows = opt.sim_windows;
   cov.traj_sim.assign(cov.sim_windows * cov.n_int, 0.0);
   {

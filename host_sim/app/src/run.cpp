@@ -204,6 +204,16 @@ struct InprocNode {
       th.join();
     }
   }
+  InprocNode() = default;
+  InprocNode(const InprocNode&) = delete;
+  InprocNode& operator=(const InprocNode&) = delete;
+  InprocNode(InprocNode&&) = delete;
+  InprocNode& operator=(InprocNode&&) = delete;
+  /// An early return (or an exception) must not leave a joinable thread: std::terminate.
+  ~InprocNode() {
+    stop.store(true);
+    join();
+  }
 };
 
 std::string self_dir() {
@@ -243,11 +253,105 @@ void print_progress(double t0, std::uint64_t sent, std::uint64_t total,
   std::fflush(stderr);
 }
 
-}  // namespace
+/// What `run` was asked to do: the options, range-checked.
+struct RunOptions {
+  bool help = false;
+  std::string path;
+  std::string chan_name;
+  std::size_t chan = 0;
+  std::string bus;
+  bool is_loopback = false;
+  std::string rate;
+  std::string node_mode;
+  std::string layout_s;
+  hal::Layout layout = hal::Layout::kFd;
+  std::string out_dir;
+  std::string fw;
+  ReportOptions ro;
+  double timeout_s = 30.0;
+  std::uint64_t window = 0;
+  double lsb_opt = 0.0;
+  double fs_opt = 0.0;
+  bool quiet = false;
+  bool only_channel = false;
+};
 
-int cmd_run(int argc, char** argv) {
+// Work limits of the covariance check: simulated windows, and samples simulated in all.
+constexpr std::uint64_t kMaxSimWindows = 100000;
+constexpr double kMaxSimSamples = 2e8;
+
+// The enumerated options and the file (positional, or --mat as an alias).
+bool parse_run_names(const Args& a, RunOptions& o, std::string& err) {
+  if (a.has("--mat") && !a.positional().empty()) {
+    err = "FILE given twice ('" + a.positional()[0] + "' and --mat " + a.get("--mat") + ")";
+    return false;
+  }
+  o.path = a.positional().empty() ? a.get("--mat") : a.positional()[0];
+  if (o.path.empty()) {
+    err = "a MAT-file is required: imu-sim run FILE";
+    return false;
+  }
+  o.chan_name = a.get("--channel", "acc_z");
+  if (!channel_index(o.chan_name, o.chan)) {
+    err = "unknown channel '" + o.chan_name + "' (acc_x .. gyro_z); " + channels_held(o.path);
+    return false;
+  }
+  o.bus = a.get("--bus", "loopback");
+  o.is_loopback = o.bus == "loopback" || o.bus.rfind("loopback:", 0) == 0;
+  o.rate = a.get("--rate", "max");
+  o.node_mode = a.get("--node", o.is_loopback ? "inproc" : "external");
+  o.layout_s = a.get("--layout", "auto");
+  if (o.rate != "max" && o.rate != "realtime") {
+    err = "--rate must be max or realtime";
+  } else if (o.node_mode != "inproc" && o.node_mode != "spawn" && o.node_mode != "external") {
+    err = "--node must be inproc, spawn or external";
+  } else if (o.layout_s != "fd" && o.layout_s != "classic" && o.layout_s != "auto") {
+    err = "--layout must be auto, fd or classic";
+  }
+  o.layout = o.layout_s == "classic" ? hal::Layout::kClassic : hal::Layout::kFd;
+  o.out_dir = a.get("--out", "out/run");
+  o.fw = a.get("--fw", "");
+  o.quiet = a.has("--quiet");
+  o.only_channel = a.has("--only-channel");
+  return err.empty();
+}
+
+// The numeric options, each in its range before it becomes a size, a count or an integer.
+bool parse_run_numbers(const Args& a, RunOptions& o, std::string& err) {
+  ReportOptions& ro = o.ro;
+  ro.out_dir = o.out_dir;
+  ro.json_path = a.get("--json", o.out_dir + "/report.json");
+  ro.plots = !a.has("--no-plots");
+  const int given = (a.has("--N") ? 1 : 0) + (a.has("--B") ? 1 : 0) + (a.has("--Tp") ? 1 : 0);
+  if (given != 0 && given != 3) {
+    err = "give all of --N, --B, --Tp (the model under test) or none (fit)";
+    return false;
+  }
+  ro.given_model = given == 3;
+  // Credit window: on the loopback bus back-pressure already protects the node; on SocketCAN
+  // the sender must not get further ahead than the node's socket queue holds (a few hundred
+  // frames at the default buffer size).
+  const std::uint64_t window_default = o.is_loopback ? 4096 : 256;
+  std::uint64_t sim_windows = 0;
+  if (!a.number("--N", 0.0, 1e-12, 1e3, ro.n, err) || !a.number("--B", 0.0, 1e-12, 1e3, ro.b, err) ||
+      !a.number("--Tp", 0.0, 1e-6, 1e9, ro.tp_s, err) ||
+      !a.number("--K", 0.0, 0.0, 1e3, ro.k, err) ||
+      !a.number("--T-avg", 10.0, 1e-6, 1e9, ro.t_avg_s, err) ||
+      !a.number("--T-int", 20.0, 1e-6, 1e9, ro.t_int_s, err) ||
+      !a.integer("--sim-windows", 1000, 1, kMaxSimWindows, sim_windows, err) ||
+      !a.integer("--seed", 2, 0, std::uint64_t{1} << 53U, ro.seed, err) ||
+      !a.number("--timeout", 30.0, 1e-3, 86400.0, o.timeout_s, err) ||
+      !a.integer("--window", window_default, 0, 1000000, o.window, err) ||
+      (a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, o.lsb_opt, err)) ||
+      (a.has("--fs") && !a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, o.fs_opt, err))) {
+    return false;
+  }
+  ro.sim_windows = static_cast<std::size_t>(sim_windows);
+  return true;
+}
+
+bool parse_run(int argc, char** argv, RunOptions& o, std::string& err) {
   Args a;
-  std::string err;
   const std::vector<OptSpec> specs = {
       {"--mat", true},     {"--channel", true},   {"--bus", true},       {"--rate", true},
       {"--node", true},    {"--out", true},       {"--json", true},      {"--N", true},
@@ -256,329 +360,379 @@ int cmd_run(int argc, char** argv) {
       {"--sim-windows", true}, {"--seed", true},  {"--timeout", true},   {"--window", true},
       {"--lsb", true},     {"--fs", true},        {"--layout", true},    {"--only-channel", false},
   };
-  if (!a.parse(argc, argv, 2, specs, 0, err)) {
-    return fail(kCmd, err + " (see imu-sim --help)", 2);
+  if (!a.parse(argc, argv, 2, specs, 1, err)) {
+    return false;
   }
-  if (!a.has("--mat")) {
-    return fail(kCmd, "--mat FILE is required", 2);
-  }
-  const std::string path = a.get("--mat");
-  const std::string chan_name = a.get("--channel", "acc_z");
-  std::size_t chan = 0;
-  if (!channel_index(chan_name, chan)) {
-    return fail(kCmd, "unknown channel '" + chan_name + "' (acc_x acc_y acc_z gyro_x gyro_y gyro_z)", 2);
-  }
-  const std::string bus = a.get("--bus", "loopback");
-  const bool is_loopback = bus == "loopback" || bus.rfind("loopback:", 0) == 0;
-  const std::string rate = a.get("--rate", "max");
-  if (rate != "max" && rate != "realtime") {
-    return fail(kCmd, "--rate must be max or realtime", 2);
-  }
-  const std::string node_mode = a.get("--node", is_loopback ? "inproc" : "external");
-  if (node_mode != "inproc" && node_mode != "spawn" && node_mode != "external") {
-    return fail(kCmd, "--node must be inproc, spawn or external", 2);
-  }
-  std::string layout_s = a.get("--layout", "auto");
-  if (layout_s != "fd" && layout_s != "classic" && layout_s != "auto") {
-    return fail(kCmd, "--layout must be auto, fd or classic", 2);
-  }
-  hal::Layout layout = layout_s == "classic" ? hal::Layout::kClassic : hal::Layout::kFd;
-  const std::string out_dir = a.get("--out", "out/run");
-  ReportOptions ro;
-  ro.out_dir = out_dir;
-  ro.json_path = a.get("--json", out_dir + "/report.json");
-  ro.plots = !a.has("--no-plots");
-  const int given = (a.has("--N") ? 1 : 0) + (a.has("--B") ? 1 : 0) + (a.has("--Tp") ? 1 : 0);
-  if (given != 0 && given != 3) {
-    return fail(kCmd, "give all of --N, --B, --Tp (the model under test) or none (fit)", 2);
-  }
-  ro.given_model = given == 3;
-  double timeout_s = 30.0;
-  // Credit window: on the loopback bus back-pressure already protects the node; on SocketCAN
-  // the sender must not get further ahead than the node's socket queue holds (a few hundred
-  // frames at the default buffer size).
-  const double window_default = is_loopback ? 4096.0 : 256.0;
-  double window = window_default;
-  double sim_windows = 1000.0;
-  double seed = 1.0;
-  double lsb_opt = 0.0;
-  double fs_opt = 0.0;
-  if (!a.number("--N", 0.0, ro.n, err) || !a.number("--B", 0.0, ro.b, err) ||
-      !a.number("--Tp", 0.0, ro.tp_s, err) || !a.number("--K", 0.0, ro.k, err) ||
-      !a.number("--T-avg", 10.0, ro.t_avg_s, err) || !a.number("--T-int", 20.0, ro.t_int_s, err) ||
-      !a.number("--sim-windows", 1000.0, sim_windows, err) || !a.number("--seed", 2.0, seed, err) ||
-      !a.number("--timeout", 30.0, timeout_s, err) || !a.number("--window", window_default, window, err) ||
-      !a.number("--lsb", 0.0, lsb_opt, err) || !a.number("--fs", 0.0, fs_opt, err)) {
-    return fail(kCmd, err, 2);
-  }
-  if (!(ro.t_avg_s > 0.0) || !(ro.t_int_s > 0.0) || sim_windows < 1.0 || window < 0.0 ||
-      !(timeout_s > 0.0) || seed < 0.0 || lsb_opt < 0.0 || fs_opt < 0.0) {
-    return fail(kCmd, "a numeric option is out of range", 2);
-  }
-  ro.sim_windows = static_cast<std::size_t>(sim_windows);
-  ro.seed = static_cast<std::uint64_t>(seed);
-  const bool quiet = a.has("--quiet");
+  o.help = a.help();
+  return o.help || (parse_run_names(a, o, err) && parse_run_numbers(a, o, err));
+}
 
-  // ---- Data ------------------------------------------------------------------------------
-  const double t0 = now_s();
+/// Which samples are sent. A sample with a non-finite value in any channel sent is not sent (the
+/// protocol has no per-channel validity): inside [lo, hi) it is a gap the node counts missing;
+/// before the first / after the last sendable sample it is not part of the series (the node's
+/// receiver starts at the first sequence number it sees).
+struct SendPlan {
+  std::size_t lo = 0;
+  std::size_t hi = 0;
+  std::vector<std::uint8_t> skip;  ///< per sample: 1 = not sent
+  std::uint64_t sent = 0;
+};
+
+bool plan_send(const SensorData& sd, SendPlan& plan) {
+  const std::size_t n = sd.n_samples;
+  plan.skip.assign(n, 0);
+  for (const ChannelData& ch : sd.ch) {
+    for (std::size_t k = 0; ch.present && k < n; ++k) {
+      plan.skip[k] = std::isfinite(ch.values[k]) ? plan.skip[k] : std::uint8_t{1};
+    }
+  }
+  plan.lo = 0;
+  plan.hi = n;
+  while (plan.lo < plan.hi && plan.skip[plan.lo] != 0) {
+    ++plan.lo;
+  }
+  while (plan.hi > plan.lo && plan.skip[plan.hi - 1] != 0) {
+    --plan.hi;
+  }
+  plan.sent = 0;
+  for (std::size_t k = plan.lo; k < plan.hi; ++k) {
+    plan.sent += plan.skip[k] == 0 ? 1U : 0U;
+  }
+  return plan.sent > 0;
+}
+
+// The covariance check's windows and simulation in a work and memory budget: a window of at
+// most kMaxSamples, at most kMaxSimSamples samples simulated, at most kMaxSamples doubles of
+// simulated trajectories (256 MiB). A window longer than the recording is allowed (the check
+// then has simulated windows only, and says so).
+bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& err) {
+  const double n_avg = std::round(o.ro.t_avg_s * sd.fs_hz);
+  const double n_int = std::round(o.ro.t_int_s * sd.fs_hz);
+  const double win = n_avg + n_int;
+  const auto windows = static_cast<double>(o.ro.sim_windows);
+  const auto max_samples = static_cast<double>(kMaxSamples);
+  if (n_avg < 1.0 || n_int < 1.0 || win > max_samples) {
+    err = "--T-avg and --T-int (" + std::to_string(o.ro.t_avg_s) + " s, " +
+          std::to_string(o.ro.t_int_s) + " s at " + std::to_string(sd.fs_hz) +
+          " Hz) must each be at least one sample and together at most " +
+          std::to_string(kMaxSamples) + " samples";
+    return false;
+  }
+  if (windows * win > kMaxSimSamples || windows * n_int > max_samples) {
+    err = "--sim-windows x (--T-avg + --T-int) = " + std::to_string(windows * win) +
+          " samples to simulate (at most 2e8, and --sim-windows x --T-int at most " +
+          std::to_string(kMaxSamples) + " samples)";
+    return false;
+  }
+  return true;
+}
+
+// Read the file, convert every present channel to counts, plan what is sent. Exit status.
+int load_run_data(const RunOptions& o, SensorData& sd, std::vector<std::int32_t> (&counts)[kNumChannels],
+                  SendPlan& plan, std::string& err) {
   bool want[kNumChannels];
   bool required[kNumChannels];
   double lsb_over[kNumChannels];
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    want[c] = !a.has("--only-channel") || c == chan;
-    required[c] = c == chan;
-    lsb_over[c] = c == chan ? lsb_opt : 0.0;
+    want[c] = !o.only_channel || c == o.chan;
+    required[c] = c == o.chan;
+    lsb_over[c] = c == o.chan ? o.lsb_opt : 0.0;
   }
-  SensorData sd;
-  if (!load_sensor(path, want, required, lsb_over, fs_opt, sd, err)) {
-    return fail(kCmd, err);
+  if (!load_sensor(o.path, want, required, lsb_over, o.fs_opt, sd, err)) {
+    return kExitRuntime;
   }
-  std::vector<std::int32_t> counts[kNumChannels];
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     if (sd.ch[c].present) {
-      to_counts(sd.ch[c], counts[c]);
+      const int st = to_counts(o.path, c, sd.ch[c], counts[c], err);
+      if (st != kExitOk) {
+        return st;
+      }
     }
   }
-  const double t_load = now_s() - t0;
-  const std::size_t n = sd.n_samples;
-  if (n < 16) {
-    return fail(kCmd, path + ": " + std::to_string(n) + " samples: too short for an ADEV (16 or more)");
+  if (!plan_send(sd, plan)) {
+    err = o.path + ": no sample has every channel finite (nothing to send; --only-channel sends "
+          "one channel)";
+    return kExitRuntime;
   }
-  if (n > 0xFFFFFFFFULL) {
-    return fail(kCmd, path + ": more than 2^32 samples (the sequence number would wrap)");
+  if (plan.sent < 16) {
+    err = o.path + ": " + std::to_string(plan.sent) +
+          " samples to send: too short for an ADEV (16 or more)";
+    return kExitRuntime;
   }
+  if (plan.hi - plan.lo > 0xFFFFFFFFULL) {
+    err = o.path + ": more than 2^32 samples (the sequence number would wrap)";
+    return kExitRuntime;
+  }
+  if (!check_cov_windows(o, sd, err)) {
+    return kExitUsage;
+  }
+  return kExitOk;
+}
 
-  // ---- Bus and node ------------------------------------------------------------------------
+/// The bus and the firmware node on it: a thread of this process, a child imu-fw, or none.
+struct Session {
   hal::CanSocket sock;
   std::unique_ptr<InprocNode> inproc;
   pid_t child = -1;
-  std::string bus_used = bus;
+  int child_status = 0;
+  std::string bus_used;
+  hal::Layout layout = hal::Layout::kFd;
+  std::string layout_s;
+};
+
+// The node's configuration: the model under test, when given, on the channel group of --channel.
+node::NodeConfig node_config(const RunOptions& o) {
   node::NodeConfig nc;
-  if (ro.given_model) {
-    const std::size_t first = chan < 3 ? 0 : 3;
+  if (o.ro.given_model) {
+    const std::size_t first = o.chan < 3 ? 0 : 3;
     for (std::size_t c = first; c < first + 3; ++c) {
-      nc.model[c] = node::ChannelModel{ro.n, ro.b, ro.tp_s};
+      nc.model[c] = node::ChannelModel{o.ro.n, o.ro.b, o.ro.tp_s};
     }
   }
-  if (node_mode == "inproc") {
-    inproc = std::make_unique<InprocNode>();
-    hal::IoStatus st = hal::IoStatus::kOk;
-    if (is_loopback) {
-      st = hal::CanSocket::open_pair(sock, inproc->sock);
-      bus_used = "in-process loopback pair";
-    } else {
-      st = sock.open(bus.c_str());
-      if (st == hal::IoStatus::kOk) {
-        st = inproc->sock.open(bus.c_str());
-      }
-    }
-    if (st != hal::IoStatus::kOk) {
-      return fail(kCmd, std::string("cannot open bus: ") +
-                            (sock.error()[0] != '\0' ? sock.error() : inproc->sock.error()));
-    }
-    if (layout_s == "auto" && !sock.fd_capable()) {
-      layout = hal::Layout::kClassic;  // CAN interface with MTU 16: classic frames only
-    }
-    nc.layout = layout;
-    if (inproc->node.configure(nc, inproc->sock, &inproc->static_line, &inproc->alarm_line) !=
-        node::NodeStatus::kOk) {
-      return fail(kCmd, "node configuration rejected (model parameters)");
-    }
-    inproc->start();
+  return nc;
+}
+
+bool start_inproc(const RunOptions& o, Session& s, std::string& err) {
+  s.inproc = std::make_unique<InprocNode>();
+  hal::IoStatus st = hal::IoStatus::kOk;
+  if (o.is_loopback) {
+    st = hal::CanSocket::open_pair(s.sock, s.inproc->sock);
+    s.bus_used = "in-process loopback pair";
   } else {
-    if (node_mode == "spawn" && bus == "loopback") {
-      bus_used = "loopback:imu-sim-" + std::to_string(getpid());
+    st = s.sock.open(o.bus.c_str());
+    if (st == hal::IoStatus::kOk) {
+      st = s.inproc->sock.open(o.bus.c_str());
     }
-    if (sock.open(bus_used.c_str()) != hal::IoStatus::kOk) {
-      return fail(kCmd, std::string("cannot open bus: ") + sock.error());
+  }
+  if (st != hal::IoStatus::kOk) {
+    err = std::string("cannot open bus: ") +
+          (s.sock.error()[0] != '\0' ? s.sock.error() : s.inproc->sock.error());
+    return false;
+  }
+  if (o.layout_s == "auto" && !s.sock.fd_capable()) {
+    s.layout = hal::Layout::kClassic;  // CAN interface with MTU 16: classic frames only
+  }
+  node::NodeConfig nc = node_config(o);
+  nc.layout = s.layout;
+  if (s.inproc->node.configure(nc, s.inproc->sock, &s.inproc->static_line,
+                               &s.inproc->alarm_line) != node::NodeStatus::kOk) {
+    err = "node configuration rejected (model parameters)";
+    return false;
+  }
+  s.inproc->start();
+  return true;
+}
+
+// fork + exec imu-fw on s.bus_used, its output in OUT/imu-fw.log.
+bool spawn_fw(const RunOptions& o, Session& s, std::string& err) {
+  const std::string fw = o.fw.empty() ? self_dir() + "/imu-fw" : o.fw;
+  if (access(fw.c_str(), X_OK) != 0) {
+    err = "imu-fw not found at '" + fw + "' (give --fw PATH)";
+    return false;
+  }
+  if (!make_dirs(o.out_dir, err)) {
+    return false;
+  }
+  std::vector<std::string> args = {fw, "--bus", s.bus_used, "--layout", s.layout_s};
+  if (o.ro.given_model) {
+    const std::string pre = o.chan < 3 ? "--" : "--gyro-";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.17g", o.ro.n);
+    args.insert(args.end(), {pre + "N", buf});
+    std::snprintf(buf, sizeof buf, "%.17g", o.ro.b);
+    args.insert(args.end(), {pre + "B", buf});
+    std::snprintf(buf, sizeof buf, "%.17g", o.ro.tp_s);
+    args.insert(args.end(), {pre + "Tp", buf});
+  }
+  const std::string log = o.out_dir + "/imu-fw.log";
+  std::vector<char*> av;
+  av.reserve(args.size() + 1);
+  for (std::string& a : args) {
+    av.push_back(a.data());
+  }
+  av.push_back(nullptr);
+  std::fflush(stdout);
+  std::fflush(stderr);
+  s.child = fork();
+  if (s.child < 0) {
+    err = std::string("fork: ") + std::strerror(errno);
+    return false;
+  }
+  if (s.child == 0) {
+    const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    if (fd >= 0) {
+      dup2(fd, 1);
+      dup2(fd, 2);
+      ::close(fd);
     }
-    if (layout_s == "auto" && !sock.fd_capable()) {
-      layout = hal::Layout::kClassic;  // CAN interface with MTU 16: classic frames only
+    execv(av[0], av.data());
+    _exit(127);
+  }
+  return true;
+}
+
+bool open_session(const RunOptions& o, Session& s, std::string& err) {
+  s.bus_used = o.bus;
+  s.layout = o.layout;
+  s.layout_s = o.layout_s;
+  if (o.node_mode == "inproc") {
+    return start_inproc(o, s, err);
+  }
+  if (o.node_mode == "spawn" && o.bus == "loopback") {
+    s.bus_used = "loopback:imu-sim-" + std::to_string(getpid());
+  }
+  if (s.sock.open(s.bus_used.c_str()) != hal::IoStatus::kOk) {
+    err = std::string("cannot open bus: ") + s.sock.error();
+    return false;
+  }
+  if (o.layout_s == "auto" && !s.sock.fd_capable()) {
+    s.layout = hal::Layout::kClassic;  // CAN interface with MTU 16: classic frames only
+  }
+  s.layout_s = s.layout == hal::Layout::kFd ? "fd" : "classic";
+  return o.node_mode != "spawn" || spawn_fw(o, s, err);
+}
+
+/// What the sending loop needs besides the data.
+struct Sender {
+  const RunOptions& o;
+  Session& s;
+  Link& link;
+  Telemetry& tel;
+  hal::ConfigRecord cfg{};
+  std::uint8_t cfg_tid = 0;
+  hal::EncodedFrames fr{};
+  double t_send0 = 0.0;
+  double last_progress = 0.0;
+  double last_credit = 0.0;
+  std::uint64_t last_processed = 0;
+  bool tty = false;
+
+  // Send the encoded frames; 0 or the failure status (printed). first: wait for a peer.
+  int send_frames(bool first, bool hint_node) {
+    std::string err;
+    for (std::size_t i = 0; i < fr.count; ++i) {
+      if (!link.send(fr.frame[i], first ? 10000 : 0, err)) {
+        return fail(kCmd, "send on " + s.bus_used + " failed: " + err +
+                              (hint_node ? " (is imu-fw running on this bus?)" : ""));
+      }
     }
-    layout_s = layout == hal::Layout::kFd ? "fd" : "classic";
-    if (node_mode == "spawn") {
-      const std::string fw = a.get("--fw", self_dir() + "/imu-fw");
-      if (access(fw.c_str(), X_OK) != 0) {
-        return fail(kCmd, "imu-fw not found at '" + fw + "' (give --fw PATH)");
-      }
-      std::string err_dir;
-      if (!make_dirs(out_dir, err_dir)) {
-        return fail(kCmd, err_dir);
-      }
-      std::vector<std::string> args = {fw, "--bus", bus_used, "--layout", layout_s};
-      if (ro.given_model) {
-        const std::string pre = chan < 3 ? "--" : "--gyro-";
-        char buf[64];
-        std::snprintf(buf, sizeof buf, "%.17g", ro.n);
-        args.insert(args.end(), {pre + "N", buf});
-        std::snprintf(buf, sizeof buf, "%.17g", ro.b);
-        args.insert(args.end(), {pre + "B", buf});
-        std::snprintf(buf, sizeof buf, "%.17g", ro.tp_s);
-        args.insert(args.end(), {pre + "Tp", buf});
-      }
-      const std::string log = out_dir + "/imu-fw.log";
-      std::fflush(stdout);
-      std::fflush(stderr);
-      child = fork();
-      if (child < 0) {
-        return fail(kCmd, std::string("fork: ") + std::strerror(errno));
-      }
-      if (child == 0) {
-        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fd >= 0) {
-          dup2(fd, 1);
-          dup2(fd, 2);
-          ::close(fd);
-        }
-        std::vector<char*> av;
-        av.reserve(args.size() + 1);
-        for (std::string& s : args) {
-          av.push_back(s.data());
-        }
-        av.push_back(nullptr);
-        execv(av[0], av.data());
-        _exit(127);
-      }
-    }
+    return kExitOk;
   }
 
-  // ---- Send --------------------------------------------------------------------------------
-  Telemetry tel;
-  Link link(sock, tel);
-  hal::ConfigRecord cfg{};
-  cfg.cfg_id = 1;
-  cfg.rate_hz = sd.fs_hz;
-  for (std::size_t c = 0; c < kNumChannels; ++c) {
-    cfg.lsb[c] = sd.ch[c].present ? sd.ch[c].lsb : default_lsb(c);
-  }
-  hal::EncodedFrames fr{};
-  const bool tty = isatty(2) != 0;
-  const double t_send0 = now_s();
-  double last_progress = t_send0;
-  double last_credit = t_send0;
-  std::uint64_t last_processed = 0;
-  std::uint8_t cfg_tid = 0;
-  int status = 0;
-  const auto credit = static_cast<std::uint64_t>(window);
-  const std::uint64_t period_ns = static_cast<std::uint64_t>(std::llround(1e9 / sd.fs_hz));
-  for (std::size_t k = 0; k < n && status == 0; ++k) {
-    if (k % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
-      hal::encode(cfg, layout, cfg_tid++, fr);
-      for (std::size_t i = 0; i < fr.count && status == 0; ++i) {
-        if (!link.send(fr.frame[i], k == 0 ? 10000 : 0, err)) {
-          std::string msg = "send on " + bus_used + " failed: ";
-          msg += err;
-          if (k == 0 && node_mode != "inproc") {
-            msg += " (is imu-fw running on this bus?)";
-          }
-          status = fail(kCmd, msg);
-        }
-      }
-    }
-    hal::SampleRecord s{};
-    s.seq = static_cast<std::uint32_t>(k);
-    s.t_sensor_ns = static_cast<std::uint64_t>(k) * period_ns;
-    s.cfg_id = cfg.cfg_id;
-    for (std::size_t c = 0; c < kNumChannels; ++c) {
-      s.counts[c] = sd.ch[c].present ? counts[c][k] : 0;
-    }
-    if (rate == "realtime") {
-      const double due = t_send0 + static_cast<double>(k) / sd.fs_hz;
-      double now = now_s();
-      while (now < due) {
-        link.service(static_cast<int>(std::ceil((due - now) * 1000.0)), false);
-        now = now_s();
-      }
-    }
-    while (credit > 0 && k >= tel.processed() + credit && status == 0) {
+  // Hold sample q until the node has acknowledged all but --window samples; 0 or status.
+  int wait_for_credit(std::uint64_t q) {
+    while (o.window > 0 && q >= tel.processed() + o.window) {
       link.service(50, false);
       if (tel.processed() != last_processed) {
         last_processed = tel.processed();
         last_credit = now_s();
       } else if (now_s() - last_credit > 10.0) {
-        status = fail(kCmd, "no progress report from the firmware node for 10 s on " + bus_used +
-                                " (is imu-fw running? --window 0 disables the credit window)");
+        return fail(kCmd, "no progress report from the firmware node for 10 s on " + s.bus_used +
+                              " (is imu-fw running? --window 0 disables the credit window)");
       }
     }
-    if (status != 0) {
-      break;
-    }
-    hal::encode(s, layout, fr);
-    for (std::size_t i = 0; i < fr.count && status == 0; ++i) {
-      if (!link.send(fr.frame[i], 0, err)) {
-        std::string msg = "send on " + bus_used + " failed: ";
-        msg += err;
-        status = fail(kCmd, msg);
-      }
-    }
-    if ((k & 63U) == 63U) {
-      link.drain();
-      const double now = now_s();
-      if (!quiet && now - t_send0 > 2.0 && now - last_progress >= 1.0) {
-        last_progress = now;
-        print_progress(t_send0, k + 1, n, tel, tty, false);
-      }
-    }
+    return kExitOk;
   }
-  tel.target = n;
-  if (tel.processed() >= n) {
-    tel.armed = true;  // already reported: the next complete set is the final one
-    for (auto& g : tel.got) {
-      g.reset();
-    }
-  }
-  const double t_sent = now_s() - t_send0;
 
-  // ---- Wait for the final telemetry ---------------------------------------------------------
-  const double wait_end = now_s() + timeout_s;
-  while (status == 0 && !tel.final_done && now_s() < wait_end && !link.link_down()) {
+  void pace(std::uint64_t q, double fs_hz) {
+    const double due = t_send0 + static_cast<double>(q) / fs_hz;
+    double now = now_s();
+    while (now < due) {
+      link.service(static_cast<int>(std::ceil((due - now) * 1000.0)), false);
+      now = now_s();
+    }
+  }
+};
+
+// Send the planned samples (configuration first and every 100 samples). 0 or the status of the
+// failure, already printed.
+int send_samples(const SensorData& sd, const std::vector<std::int32_t> (&counts)[kNumChannels],
+                 const SendPlan& plan, Sender& tx) {
+  tx.cfg.cfg_id = 1;
+  tx.cfg.rate_hz = sd.fs_hz;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    tx.cfg.lsb[c] = sd.ch[c].present ? sd.ch[c].lsb : default_lsb(c);
+  }
+  const std::uint64_t span = plan.hi - plan.lo;
+  const auto period_ns = static_cast<std::uint64_t>(std::llround(1e9 / sd.fs_hz));
+  for (std::size_t k = plan.lo; k < plan.hi; ++k) {
+    const std::uint64_t q = k - plan.lo;  // sequence number
+    if (q % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
+      hal::encode(tx.cfg, tx.s.layout, tx.cfg_tid++, tx.fr);
+      const int st = tx.send_frames(q == 0, q == 0 && tx.o.node_mode != "inproc");
+      if (st != kExitOk) {
+        return st;
+      }
+    }
+    if (plan.skip[k] != 0) {
+      continue;  // a non-finite value: not sent, the node counts the sequence number missing
+    }
+    hal::SampleRecord rec{};
+    rec.seq = static_cast<std::uint32_t>(q);
+    rec.t_sensor_ns = q * period_ns;
+    rec.cfg_id = tx.cfg.cfg_id;
+    for (std::size_t c = 0; c < kNumChannels; ++c) {
+      rec.counts[c] = sd.ch[c].present ? counts[c][k] : 0;
+    }
+    if (tx.o.rate == "realtime") {
+      tx.pace(q, sd.fs_hz);
+    }
+    int st = tx.wait_for_credit(q);
+    if (st == kExitOk) {
+      hal::encode(rec, tx.s.layout, tx.fr);
+      st = tx.send_frames(false, false);
+    }
+    if (st != kExitOk) {
+      return st;
+    }
+    if ((q & 63U) == 63U) {
+      tx.link.drain();
+      const double now = now_s();
+      if (!tx.o.quiet && now - tx.t_send0 > 2.0 && now - tx.last_progress >= 1.0) {
+        tx.last_progress = now;
+        print_progress(tx.t_send0, q + 1, span, tx.tel, tx.tty, false);
+      }
+    }
+  }
+  return kExitOk;
+}
+
+// After the last sample: wait for the final telemetry (--timeout at most).
+void wait_final_telemetry(const RunOptions& o, Session& s, Link& link, const Telemetry& tel) {
+  const double wait_end = now_s() + o.timeout_s;
+  while (!tel.final_done && now_s() < wait_end && !link.link_down()) {
     link.service(50, false);
-    if (inproc && inproc->done.load()) {
+    if (s.inproc && s.inproc->done.load()) {
       link.drain();
       break;
     }
   }
-  const double t_total = now_s() - t_send0;
-  if (!quiet && t_total > 2.0) {
-    print_progress(t_send0, n, n, tel, tty, true);
+}
+
+// End the stream, stop the in-process node, reap the child (SIGTERM after 5 s).
+void end_session(Session& s) {
+  s.sock.close();  // the node sees the end of the stream (loopback)
+  if (s.inproc) {
+    s.inproc->stop.store(true);
+    s.inproc->join();
   }
-  sock.close();  // the node sees the end of the stream (loopback)
-  if (inproc) {
-    inproc->stop.store(true);
-    inproc->join();
-  }
-  int child_status = 0;
-  if (child > 0) {
+  if (s.child > 0) {
     const double kill_at = now_s() + 5.0;
     pid_t w = 0;
-    while ((w = waitpid(child, &child_status, WNOHANG)) == 0 && now_s() < kill_at) {
+    while ((w = waitpid(s.child, &s.child_status, WNOHANG)) == 0 && now_s() < kill_at) {
       usleep(20000);
     }
     if (w == 0) {
-      kill(child, SIGTERM);
-      (void)waitpid(child, &child_status, 0);
+      kill(s.child, SIGTERM);
+      (void)waitpid(s.child, &s.child_status, 0);
     }
   }
-  if (status != 0) {
-    return status;
-  }
-  if (!tel.final_done) {
-    return fail(kCmd, "no final telemetry from the firmware node within " +
-                          std::to_string(static_cast<int>(timeout_s)) + " s on " + bus_used +
-                          " (processed " + std::to_string(tel.processed()) + " of " +
-                          std::to_string(n) + " samples)");
-  }
+}
 
-  // ---- Report ------------------------------------------------------------------------------
-  ReportInput ri;
-  ri.source = path;
-  ri.channel = chan_name;
-  ri.channel_index = chan;
-  ri.fs_hz = sd.fs_hz;
-  ri.lsb = sd.ch[chan].lsb;
-  ri.data = &sd.ch[chan].values;
-  ri.adev_origin = "online ADEV of the firmware node, received as telemetry over " + bus_used;
-  const double ts_s = 1.0 / sd.fs_hz;
+// The channel's ADEV as received, tau rebuilt exactly from the averaging factor.
+std::vector<AdevRow> received_adev(const Telemetry& tel, std::size_t chan, double fs_hz) {
+  std::vector<AdevRow> rows;
+  const double ts_s = 1.0 / fs_hz;
   for (std::size_t i = 0; i < tel.n_points[chan]; ++i) {
     const hal::AdevRecord& r = tel.curve[chan][i];
     const auto af = static_cast<std::uint32_t>(std::lround(static_cast<double>(r.tau_s) / ts_s));
@@ -589,112 +743,202 @@ int cmd_run(int argc, char** argv) {
     row.ci_hi = static_cast<double>(r.ci_hi);
     row.n_terms = r.n_terms;
     row.edf = edf_of(af, r.n_terms);
-    ri.adev.push_back(row);
+    rows.push_back(row);
   }
-  const hal::RxStats& rs = tel.rx.stats();
-  const hal::LinkStats& ls = sock.stats();
-  ri.stats.push_back(StatGroup{
-      "sender (imu-sim emulator)",
-      {{"samples", static_cast<double>(n)},
-       {"frames", static_cast<double>(link.frames())},
-       {"backpressure_waits", static_cast<double>(link.backpressure_waits())},
-       {"tx_link_down", static_cast<double>(ls.tx_link_down)},
-       {"sys_errors", static_cast<double>(ls.sys_errors)}}});
-  const hal::StatsRecord& ns = tel.stats;
+  return rows;
+}
+
+std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
+                                   const SendPlan& plan, const Session& s, const Link& link,
+                                   const Telemetry& tel) {
   auto d = [](std::uint64_t v) { return static_cast<double>(v); };
-  ri.stats.push_back(StatGroup{"firmware node (its StatsRecord)",
-                               {{"frames", d(ns.frames)},
-                                {"samples", d(ns.samples)},
-                                {"missing", d(ns.missing)},
-                                {"crc_errors", d(ns.crc_errors)},
-                                {"bad_mtu_or_dlc", d(ns.bad_mtu_or_dlc)},
-                                {"unknown_id", d(ns.unknown_id)},
-                                {"duplicates", d(ns.duplicates)},
-                                {"truncated", d(ns.truncated)},
-                                {"error_frames", d(ns.error_frames)},
-                                {"lost", d(n) - d(ns.samples)}}});
-  ri.stats.push_back(StatGroup{
-      "telemetry receiver (imu-sim)",
-      {{"frames", static_cast<double>(rs.frames)},
-       {"adev_records", static_cast<double>(tel.adev_records)},
-       {"stats_records", static_cast<double>(tel.stats_records)},
-       {"crc_errors", static_cast<double>(rs.crc_errors)},
-       {"bad_mtu", static_cast<double>(rs.bad_mtu)},
-       {"bad_dlc", static_cast<double>(rs.bad_dlc)},
-       {"unknown_id", static_cast<double>(rs.unknown_id)},
-       {"kernel_drops", static_cast<double>(ls.kernel_drops)}}});
-  if (inproc) {
-    const node::NodeStats& st = inproc->node.stats();
-    ri.stats.push_back(StatGroup{
-        "firmware node (in-process counters)",
-        {{"telemetry_frames", static_cast<double>(st.telemetry_frames)},
-         {"telemetry_failures", static_cast<double>(st.telemetry_failures)},
-         {"adev_sets", static_cast<double>(st.adev_sets)},
-         {"status_sets", static_cast<double>(st.status_sets)},
-         {"alarm_changes", static_cast<double>(st.alarm_changes)},
-         {"saturated", static_cast<double>(st.saturated)}}});
+  const hal::RxStats& rs = tel.rx.stats();
+  const hal::LinkStats& ls = s.sock.stats();
+  const hal::StatsRecord& ns = tel.stats;
+  std::vector<StatGroup> g;
+  g.push_back(StatGroup{"sender (imu-sim emulator)",
+                        {{"samples", d(sd.n_samples)},
+                         {"sent", d(plan.sent)},
+                         {"non_finite", d(sd.n_samples - plan.sent)},
+                         {"frames", d(link.frames())},
+                         {"backpressure_waits", d(link.backpressure_waits())},
+                         {"tx_link_down", d(ls.tx_link_down)},
+                         {"sys_errors", d(ls.sys_errors)}}});
+  g.push_back(StatGroup{"firmware node (its StatsRecord)",
+                        {{"frames", d(ns.frames)},
+                         {"samples", d(ns.samples)},
+                         {"missing", d(ns.missing)},
+                         {"crc_errors", d(ns.crc_errors)},
+                         {"bad_mtu_or_dlc", d(ns.bad_mtu_or_dlc)},
+                         {"unknown_id", d(ns.unknown_id)},
+                         {"duplicates", d(ns.duplicates)},
+                         {"truncated", d(ns.truncated)},
+                         {"error_frames", d(ns.error_frames)},
+                         {"lost", d(plan.sent) - d(ns.samples)}}});
+  g.push_back(StatGroup{"telemetry receiver (imu-sim)",
+                        {{"frames", d(rs.frames)},
+                         {"adev_records", d(tel.adev_records)},
+                         {"stats_records", d(tel.stats_records)},
+                         {"crc_errors", d(rs.crc_errors)},
+                         {"bad_mtu", d(rs.bad_mtu)},
+                         {"bad_dlc", d(rs.bad_dlc)},
+                         {"unknown_id", d(rs.unknown_id)},
+                         {"kernel_drops", d(ls.kernel_drops)}}});
+  if (s.inproc) {
+    const node::NodeStats& st = s.inproc->node.stats();
+    g.push_back(StatGroup{"firmware node (in-process counters)",
+                          {{"telemetry_frames", d(st.telemetry_frames)},
+                           {"telemetry_failures", d(st.telemetry_failures)},
+                           {"adev_sets", d(st.adev_sets)},
+                           {"status_sets", d(st.status_sets)},
+                           {"alarm_changes", d(st.alarm_changes)},
+                           {"saturated", d(st.saturated)}}});
   }
   if (tel.have_bias) {
-    ri.stats.push_back(StatGroup{
-        "bias filter (last BiasRecord, channel " + chan_name + ")",
-        {{"bias", static_cast<double>(tel.bias.bias[chan])},
-         {"std", std::sqrt(static_cast<double>(tel.bias.var[chan]))},
-         {"static_flag", static_cast<double>(tel.bias.flags & hal::kBiasStatic)}}});
+    g.push_back(StatGroup{"bias filter (last BiasRecord, channel " + o.chan_name + ")",
+                          {{"bias", static_cast<double>(tel.bias.bias[o.chan])},
+                           {"std", std::sqrt(static_cast<double>(tel.bias.var[o.chan]))},
+                           {"static_flag", static_cast<double>(tel.bias.flags & hal::kBiasStatic)}}});
   }
   if (tel.have_monitor) {
-    ri.stats.push_back(StatGroup{"residual monitors (last MonitorRecord)",
-                                 {{"nis_mean", static_cast<double>(tel.monitor.nis_mean)},
-                                  {"whiteness_ratio", static_cast<double>(tel.monitor.whiteness)},
-                                  {"flags", static_cast<double>(tel.monitor.flags)},
-                                  {"cusum_mask", static_cast<double>(tel.monitor.cusum_mask)}}});
+    g.push_back(StatGroup{"residual monitors (last MonitorRecord)",
+                          {{"nis_mean", static_cast<double>(tel.monitor.nis_mean)},
+                           {"whiteness_ratio", static_cast<double>(tel.monitor.whiteness)},
+                           {"flags", static_cast<double>(tel.monitor.flags)},
+                           {"cusum_mask", static_cast<double>(tel.monitor.cusum_mask)}}});
   }
-  ri.timing_s = {{"read MAT-file + quantize", t_load},
-                 {"send all samples (" + rate + ")", t_sent},
-                 {"until final telemetry", t_total}};
+  return g;
+}
+
+// Say what the raw monitor flags mean: a user reading "flags 5" should not have to open codec.hpp.
+std::string monitor_note(const hal::MonitorRecord& m, const std::string& chan_name) {
+  std::string chans;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    if ((m.cusum_mask & (1U << c)) != 0U) {
+      chans += (chans.empty() ? "" : ", ") + std::string(kChannelNames[c]);
+    }
+  }
+  std::string what;
+  if ((m.flags & hal::kMonitorCusum) != 0U) {
+    what += "the innovation CUSUM alarm (" + (chans.empty() ? std::string("-") : chans) + ")";
+  }
+  if ((m.flags & hal::kMonitorWhiteness) != 0U) {
+    what += std::string(what.empty() ? "" : ", ") + "a failed whiteness check";
+  }
+  if ((m.flags & hal::kMonitorAlarmLine) != 0U) {
+    what += std::string(what.empty() ? "" : "; ") + "the alarm line is set";
+  }
+  return "residual monitors: " + what + ". The node's bias filter is the seed's first-order "
+         "model (white + one GM); its innovations drift when the data hold an effect that model "
+         "lacks (a rate random walk, a step, a ramp). `imu-sim analyze FILE.mat --channel " +
+         chan_name + "` names it.";
+}
+
+std::vector<std::string> report_notes(const RunOptions& o, const SensorData& sd,
+                                      const SendPlan& plan, const Session& s,
+                                      const Telemetry& tel) {
+  std::vector<std::string> notes;
   if (tel.have_monitor && tel.monitor.flags != 0) {
-    // Say what the raw flags mean: a user reading "flags 5" should not have to open codec.hpp.
-    std::string chans;
-    for (std::size_t c = 0; c < kNumChannels; ++c) {
-      if ((tel.monitor.cusum_mask & (1U << c)) != 0U) {
-        chans += (chans.empty() ? "" : ", ") + std::string(kChannelNames[c]);
-      }
-    }
-    std::string what;
-    if ((tel.monitor.flags & hal::kMonitorCusum) != 0U) {
-      what += "the innovation CUSUM alarm (" + (chans.empty() ? std::string("-") : chans) + ")";
-    }
-    if ((tel.monitor.flags & hal::kMonitorWhiteness) != 0U) {
-      what += std::string(what.empty() ? "" : ", ") + "a failed whiteness check";
-    }
-    if ((tel.monitor.flags & hal::kMonitorAlarmLine) != 0U) {
-      what += std::string(what.empty() ? "" : "; ") + "the alarm line is set";
-    }
-    ri.notes.push_back(
-        "residual monitors: " + what + ". The node's bias filter is the seed's first-order "
-        "model (white + one GM); its innovations drift when the data hold an effect that model "
-        "lacks (a rate random walk, a step, a ramp). `imu-sim analyze FILE.mat --channel " +
-        chan_name + "` names it.");
+    notes.push_back(monitor_note(tel.monitor, o.chan_name));
   }
-  if (sd.ch[chan].off_grid > 0) {
-    ri.notes.push_back(std::to_string(sd.ch[chan].off_grid) +
-                       " samples are not integer multiples of the LSB (quantised to it)");
+  if (sd.ch[o.chan].off_grid > 0) {
+    notes.push_back(std::to_string(sd.ch[o.chan].off_grid) +
+                    " samples are not integer multiples of the LSB (quantised to it)");
   }
-  if (sd.ch[chan].saturated > 0) {
-    ri.notes.push_back(std::to_string(sd.ch[chan].saturated) + " samples saturated int32 counts");
+  if (sd.n_samples > plan.sent) {
+    notes.push_back(std::to_string(sd.n_samples - plan.sent) +
+                    " samples hold NaN/Inf in a channel sent: not sent (gaps; the node counts "
+                    "those between finite samples as missing)");
   }
-  if (child > 0) {
-    ri.notes.push_back("imu-fw ran as a separate process; its output is in " + out_dir +
-                       "/imu-fw.log (exit status " +
-                       std::to_string(WIFEXITED(child_status) ? WEXITSTATUS(child_status) : -1) +
-                       ")");
+  if (s.child > 0) {
+    const int st = WIFEXITED(s.child_status) ? WEXITSTATUS(s.child_status) : -1;
+    notes.push_back("imu-fw ran as a separate process; its output is in " + o.out_dir +
+                    "/imu-fw.log (exit status " + std::to_string(st) + ")");
   }
+  return notes;
+}
+
+}  // namespace
+
+int cmd_run(int argc, char** argv) {
+  std::string err;
+  RunOptions o;
+  if (!parse_run(argc, argv, o, err)) {
+    return fail(kCmd, err + " (imu-sim run --help)", kExitUsage);
+  }
+  if (o.help) {
+    return print_help("run");
+  }
+  const double t0 = now_s();
+  SensorData sd;
+  std::vector<std::int32_t> counts[kNumChannels];
+  SendPlan plan;
+  const int load_status = load_run_data(o, sd, counts, plan, err);
+  if (load_status != kExitOk) {
+    return fail(kCmd, err, load_status);
+  }
+  const double t_load = now_s() - t0;
+  const std::uint64_t span = plan.hi - plan.lo;  // sequence numbers 0 .. span - 1
+
+  Session s;
+  if (!open_session(o, s, err)) {
+    return fail(kCmd, err);  // no thread started, no child forked
+  }
+  Telemetry tel;
+  Link link(s.sock, tel);
+  Sender tx{o, s, link, tel};
+  tx.tty = isatty(2) != 0;
+  tx.t_send0 = now_s();
+  tx.last_progress = tx.t_send0;
+  tx.last_credit = tx.t_send0;
+  const int status = send_samples(sd, counts, plan, tx);
+  tel.target = span;
+  if (tel.processed() >= span) {
+    tel.armed = true;  // already reported: the next complete set is the final one
+    for (auto& g : tel.got) {
+      g.reset();
+    }
+  }
+  const double t_sent = now_s() - tx.t_send0;
+  if (status == kExitOk) {
+    wait_final_telemetry(o, s, link, tel);
+  }
+  const double t_total = now_s() - tx.t_send0;
+  if (!o.quiet && t_total > 2.0) {
+    print_progress(tx.t_send0, span, span, tel, tx.tty, true);
+  }
+  end_session(s);
+  if (status != kExitOk) {
+    return status;
+  }
+  if (!tel.final_done) {
+    return fail(kCmd, "no final telemetry from the firmware node within " +
+                          std::to_string(static_cast<int>(o.timeout_s)) + " s on " + s.bus_used +
+                          " (processed " + std::to_string(tel.processed()) + " of " +
+                          std::to_string(span) + " samples)");
+  }
+
+  ReportInput ri;
+  ri.source = o.path;
+  ri.channel = o.chan_name;
+  ri.channel_index = o.chan;
+  ri.fs_hz = sd.fs_hz;
+  ri.lsb = sd.ch[o.chan].lsb;
+  ri.data = &sd.ch[o.chan].values;
+  ri.adev_origin = "online ADEV of the firmware node, received as telemetry over " + s.bus_used;
+  ri.adev = received_adev(tel, o.chan, sd.fs_hz);
+  ri.stats = chain_stats(o, sd, plan, s, link, tel);
+  ri.timing_s = {{"read MAT-file + quantize", t_load},
+                 {"send all samples (" + o.rate + ")", t_sent},
+                 {"until final telemetry", t_total}};
+  ri.notes = report_notes(o, sd, plan, s, tel);
   std::string text;
-  if (!write_report(ri, ro, text, err)) {
+  if (!write_report(ri, o.ro, text, err)) {
     return fail(kCmd, err);
   }
   std::fputs(text.c_str(), stdout);
-  std::printf("\nreport folder: %s\n", out_dir.c_str());
-  return 0;
+  std::printf("\nreport folder: %s\n", o.out_dir.c_str());
+  return kExitOk;
 }
 
 }  // namespace imu::sim

@@ -1,6 +1,8 @@
 // MAT-file level 5 reader. See imu/mat/mat_reader.hpp for the contract.
 #include "imu/mat/mat_reader.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <array>
 #include <cerrno>
@@ -41,6 +43,8 @@ constexpr std::size_t kHeaderBytes = 128;
 // + 8 = 240 bytes at most for valid names; longer headers fall back to a whole inflate.
 constexpr std::size_t kPeekBytes = 512;
 constexpr std::size_t kMaxDims = 32;
+// Second, longer peek when a header does not fit in kPeekBytes (names up to ~65,000 characters).
+constexpr std::size_t kLongHeaderBytes = std::size_t{1} << 16U;
 constexpr std::array<std::uint8_t, 8> kHdf5Signature = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1A, '\n'};
 
 bool host_little_endian() {
@@ -429,7 +433,8 @@ MatFile::MatFile(MatFile&& other) noexcept
       owned_(std::move(other.owned_)),
       data_(other.data_),
       size_(other.size_),
-      swap_(other.swap_) {}
+      swap_(other.swap_),
+      limits_(other.limits_) {}
 
 MatFile& MatFile::operator=(MatFile&& other) noexcept {
   if (this != &other) {
@@ -438,12 +443,13 @@ MatFile& MatFile::operator=(MatFile&& other) noexcept {
     data_ = other.data_;
     size_ = other.size_;
     swap_ = other.swap_;
+    limits_ = other.limits_;
   }
   return *this;
 }
 
 Result<MatFile> MatFile::from_memory(std::string display_name, const std::uint8_t* data,
-                                     std::size_t size) {
+                                     std::size_t size, ReadLimits limits) {
   const auto fail = [&display_name](const std::string& what) {
     return MatError{display_name + ": " + what};
   };
@@ -486,36 +492,68 @@ Result<MatFile> MatFile::from_memory(std::string display_name, const std::uint8_
   f.data_ = data;
   f.size_ = size;
   f.swap_ = big_endian;
+  f.limits_ = limits;
   return f;
 }
 
-Result<MatFile> MatFile::open(const std::string& path) {
+namespace {
+
+const char* file_kind(mode_t mode) {
+  if (S_ISDIR(mode)) {
+    return "a directory";
+  }
+  if (S_ISFIFO(mode)) {
+    return "a FIFO";
+  }
+  if (S_ISCHR(mode) || S_ISBLK(mode)) {
+    return "a device";
+  }
+  if (S_ISSOCK(mode)) {
+    return "a socket";
+  }
+  return "not a regular file";
+}
+
+// The whole of a regular file, at most `limit` bytes (a file that grew meanwhile is cut there
+// and then fails the MAT-file checks). Nothing is opened before stat() says "regular file".
+Status read_regular_file(const std::string& path, std::size_t limit,
+                         std::vector<std::uint8_t>& bytes) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    return MatError{path + ": cannot open: " + std::strerror(errno)};
+  }
+  if (!S_ISREG(st.st_mode)) {
+    return MatError{path + ": is " + file_kind(st.st_mode) + ", not a MAT-file"};
+  }
+  const auto size = static_cast<std::uint64_t>(st.st_size);
+  if (size > limit) {
+    return MatError{path + ": " + std::to_string(size) + " bytes, more than the reader's budget of " +
+                    std::to_string(limit) + " bytes"};
+  }
   std::FILE* fp = std::fopen(path.c_str(), "rb");
   if (fp == nullptr) {
     return MatError{path + ": cannot open: " + std::strerror(errno)};
   }
-  std::vector<std::uint8_t> bytes;
-  std::array<std::uint8_t, 1U << 16U> chunk{};
-  if (std::fseek(fp, 0, SEEK_END) == 0) {
-    const long end = std::ftell(fp);
-    if (end > 0) {
-      bytes.reserve(static_cast<std::size_t>(end));
-    }
-    std::rewind(fp);
-  }
-  for (;;) {
-    const std::size_t got = std::fread(chunk.data(), 1, chunk.size(), fp);
-    bytes.insert(bytes.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(got));
-    if (got < chunk.size()) {
-      break;
-    }
-  }
+  bytes.resize(static_cast<std::size_t>(size));
+  const std::size_t got = std::fread(bytes.data(), 1, bytes.size(), fp);
   const bool read_error = std::ferror(fp) != 0;
   std::fclose(fp);
   if (read_error) {
     return MatError{path + ": read error"};
   }
-  Result<MatFile> r = from_memory(path, bytes.data(), bytes.size());
+  bytes.resize(got);  // shorter if the file shrank meanwhile
+  return Status{};
+}
+
+}  // namespace
+
+Result<MatFile> MatFile::open(const std::string& path, ReadLimits limits) {
+  std::vector<std::uint8_t> bytes;
+  const Status st = read_regular_file(path, limits.max_file_bytes, bytes);
+  if (!st.ok()) {
+    return st.error();
+  }
+  Result<MatFile> r = from_memory(path, bytes.data(), bytes.size(), limits);
   if (!r.ok()) {
     return r;
   }
@@ -624,8 +662,10 @@ Status peek_header(const std::string& file, const std::uint8_t* data, bool big_e
     if (r == Parse::corrupt || attempt == 1 || scratch.size() < cap) {
       return MatError{where + (r == Parse::need_more ? "matrix header is truncated" : problem)};
     }
-    // Header longer than the peek (very long name or many dimensions): inflate it all.
-    ir = inflate_zlib(data + payload, bytes, max_inflated_size(bytes), InflateMode::whole, scratch);
+    // Header longer than the peek (very long name or many dimensions): inflate more of it,
+    // kLongHeaderBytes at most (not the whole variable: its size is not checked yet).
+    ir = inflate_zlib(data + payload, bytes, std::min(kLongHeaderBytes, max_inflated_size(bytes)),
+                      InflateMode::prefix, scratch);
     if (ir.status != InflateStatus::ok) {
       return MatError{where + "corrupt zlib stream (" + describe(ir.status) + ")"};
     }
@@ -768,6 +808,11 @@ Status MatFile::load(std::string_view name, const Element& elem, std::vector<std
     if (!m.has_data) {
       return Status{};  // cell, struct, ...: the caller rejects the class, nothing to inflate
     }
+    if (inner_bytes > limits_.max_variable_bytes) {
+      return MatError{where + "declares " + std::to_string(inner_bytes) +
+                      " bytes inflated, more than the reader's budget of " +
+                      std::to_string(limits_.max_variable_bytes) + " bytes per variable"};
+    }
     // Bound: the declared size. Initial buffer: the declared size only up to 16 x the compressed
     // size (IMU data inflates ~14x); beyond that the buffer grows with what actually inflates,
     // so a consistent but false claim of gigabytes costs nothing until the stream delivers.
@@ -828,6 +873,11 @@ Status MatFile::read_column_into(std::string_view name, std::size_t column,
     }
     first = static_cast<std::uint64_t>(column) * m.rows;
     count = m.rows;
+  }
+  if (count > limits_.max_variable_bytes / sizeof(double)) {
+    return MatError{where + std::to_string(count) + " elements (" + dims_text(m.dims) +
+                    ") are more than the reader's budget of " +
+                    std::to_string(limits_.max_variable_bytes) + " bytes as double"};
   }
   const std::size_t unit = numeric_size(m.data_type);
   out.resize(static_cast<std::size_t>(count));

@@ -156,7 +156,8 @@ struct Report {
 [[nodiscard]] bool write_plots(const Report& r, const std::string& dir, std::string& message);
 
 /// `analyze FILE.mat --channel NAME [--fs HZ] [--json OUT] [--plots DIR]` (argv[0] = "analyze").
-/// Prints the text report on stdout; returns 0, or 2 with a one-line error on stderr.
+/// Prints the text report on stdout; returns 0, or 1 (run-time error) / 2 (command-line error)
+/// with a one-line error on stderr (imu/cli/args.hpp). -h / --help prints the usage.
 int cli_main(int argc, char** argv);
 
 }  // namespace imu::analyze

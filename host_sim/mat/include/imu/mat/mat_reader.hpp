@@ -36,6 +36,17 @@
 
 namespace imu::mat {
 
+/// Memory budget of one MatFile: what a hostile or mistaken file may make the reader read or
+/// allocate. Checked against the sizes the file declares, before anything is read or inflated;
+/// exceeding one is an error naming the limit (never an allocation failure).
+struct ReadLimits {
+  /// open(): the largest file read into memory (bytes).
+  std::size_t max_file_bytes = std::size_t{1} << 31U;  // 2 GiB
+  /// The largest variable, as inflated (compressed) and as converted to double (8 bytes per
+  /// element): 256 MiB, i.e. 2^25 = 33.5 million samples of one channel.
+  std::size_t max_variable_bytes = std::size_t{1} << 28U;
+};
+
 /// What list_variables() reports for each top-level variable, in file order.
 struct VariableInfo {
   std::string name;
@@ -57,13 +68,17 @@ struct Matrix;   // a parsed miMATRIX (implementation detail)
 /// A MAT-file image in memory: owned (open()) or borrowed (from_memory()).
 class MatFile {
  public:
-  /// Read the whole file at `path` into memory and check its 128-byte header.
-  [[nodiscard]] static Result<MatFile> open(const std::string& path);
+  /// Read the whole file at `path` into memory and check its 128-byte header. Only a regular
+  /// file is opened (a directory, FIFO, socket or device is refused before open(), so a FIFO
+  /// cannot block and /dev/zero cannot be read forever); its size is limits.max_file_bytes at
+  /// most. POSIX (stat). Cost: one read of the file.
+  [[nodiscard]] static Result<MatFile> open(const std::string& path, ReadLimits limits = {});
 
   /// Use `size` bytes at `data` as a MAT-file image. No copy: the caller keeps the bytes alive
   /// (and unchanged) for the life of the MatFile. `display_name` prefixes error messages.
   [[nodiscard]] static Result<MatFile> from_memory(std::string display_name,
-                                                   const std::uint8_t* data, std::size_t size);
+                                                   const std::uint8_t* data, std::size_t size,
+                                                   ReadLimits limits = {});
 
   MatFile(MatFile&& other) noexcept;
   MatFile& operator=(MatFile&& other) noexcept;
@@ -106,6 +121,7 @@ class MatFile {
   const std::uint8_t* data_ = nullptr;
   std::size_t size_ = 0;
   bool swap_ = false;  ///< file byte order differs from little-endian
+  ReadLimits limits_{};
 };
 
 /// Convenience wrappers: open `path` and do one read.

@@ -1,0 +1,64 @@
+// The command-line parser of every imu-sim subcommand (and imu-analyze), and the exit codes.
+//
+//   Exit status: kExitOk (0) success; kExitRuntime (1) a run-time failure (bad or unreadable
+//   file, data that cannot be processed, bus error, failed write, out of memory); kExitUsage (2)
+//   a command-line error (unknown option, missing or malformed value, a number out of its range,
+//   an option that does not fit the data it applies to).
+//
+// Grammar: `--name VALUE`, `--name=VALUE`, `--flag`; `-h` / `--help` anywhere asks for the usage;
+// any other argument starting with '-' (except "-" itself) is an unknown option, never a file
+// name; the rest are positionals, at most max_positional of them. Numbers are checked before
+// they become sizes or integers: finite, in [lo, hi], integers where asked.
+// Host code (allocates). Errors are one line, without the command's name (the caller adds it).
+#ifndef IMU_CLI_ARGS_HPP
+#define IMU_CLI_ARGS_HPP
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace imu::cli {
+
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitRuntime = 1;
+inline constexpr int kExitUsage = 2;
+
+/// One option of a subcommand.
+struct OptSpec {
+  const char* name;  ///< "--bus"
+  bool has_value;
+};
+
+/// Parsed command line: options by name, positionals in order.
+class Args {
+ public:
+  /// Parse argv[first..argc). False (with err) on an unknown option, a missing value, a value
+  /// given to a flag, or more positionals than allowed. O(argc x specs).
+  [[nodiscard]] bool parse(int argc, char** argv, int first, const std::vector<OptSpec>& specs,
+                           std::size_t max_positional, std::string& err);
+  /// -h or --help was given (parse() then ignores everything else and returns true).
+  [[nodiscard]] bool help() const { return help_; }
+  [[nodiscard]] bool has(const std::string& name) const { return opts_.count(name) != 0; }
+  [[nodiscard]] std::string get(const std::string& name, const std::string& def = "") const;
+  /// Numeric option: def if absent; false (with err) unless a finite number in [lo, hi].
+  [[nodiscard]] bool number(const std::string& name, double def, double lo, double hi, double& out,
+                            std::string& err) const;
+  /// Any finite number (callers that check the range themselves).
+  [[nodiscard]] bool number(const std::string& name, double def, double& out,
+                            std::string& err) const;
+  /// Integer option: def if absent; false (with err) unless an integer in [lo, hi] (hi <= 2^53).
+  [[nodiscard]] bool integer(const std::string& name, std::uint64_t def, std::uint64_t lo,
+                             std::uint64_t hi, std::uint64_t& out, std::string& err) const;
+  [[nodiscard]] const std::vector<std::string>& positional() const { return pos_; }
+
+ private:
+  std::map<std::string, std::string> opts_;
+  std::vector<std::string> pos_;
+  bool help_ = false;
+};
+
+}  // namespace imu::cli
+
+#endif  // IMU_CLI_ARGS_HPP

@@ -1,0 +1,26 @@
+// Outputs written whole or not at all: the bytes go to a temporary file next to `path` (same
+// folder, so the rename cannot cross file systems), are flushed and synced, and the file is
+// renamed over `path` only when all of it was written. On any failure (full disk, file size
+// limit, I/O error) the temporary file is removed and `path` is left as it was. POSIX.
+#ifndef IMU_CLI_FILE_OUT_HPP
+#define IMU_CLI_FILE_OUT_HPP
+
+#include <cstddef>
+#include <string>
+
+namespace imu::cli {
+
+/// Write `size` bytes at `data` as the file `path`. False with a one-line err naming the path
+/// and the OS error. Cost: one write, one fsync, one rename.
+[[nodiscard]] bool write_file_atomic(const std::string& path, const void* data, std::size_t size,
+                                     std::string& err);
+
+/// Same for a text.
+[[nodiscard]] inline bool write_file_atomic(const std::string& path, const std::string& text,
+                                            std::string& err) {
+  return write_file_atomic(path, text.data(), text.size(), err);
+}
+
+}  // namespace imu::cli
+
+#endif  // IMU_CLI_FILE_OUT_HPP

@@ -1,0 +1,124 @@
+// The shared command-line parser (see imu/cli/args.hpp).
+#include "imu/cli/args.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+
+namespace imu::cli {
+namespace {
+
+// "1e-06" rather than "0.000001" in messages about ranges.
+std::string num_text(double v) {
+  char buf[32];
+  (void)std::snprintf(buf, sizeof buf, "%g", v);
+  return buf;
+}
+
+bool is_option_like(const std::string& a) { return a.size() > 1 && a[0] == '-'; }
+
+}  // namespace
+
+bool Args::parse(int argc, char** argv, int first, const std::vector<OptSpec>& specs,
+                 std::size_t max_positional, std::string& err) {
+  for (int i = first; i < argc; ++i) {
+    if (std::string(argv[i]) == "-h" || std::string(argv[i]) == "--help") {
+      help_ = true;
+      return true;
+    }
+  }
+  for (int i = first; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (!is_option_like(a)) {
+      if (pos_.size() >= max_positional) {
+        err = "unexpected argument '" + a + "'";
+        return false;
+      }
+      pos_.push_back(a);
+      continue;
+    }
+    std::string name = a;
+    std::string value;
+    const std::size_t eq = a.find('=');
+    const bool inline_value = eq != std::string::npos;
+    if (inline_value) {
+      name = a.substr(0, eq);
+      value = a.substr(eq + 1);
+    }
+    const OptSpec* spec = nullptr;
+    for (const OptSpec& s : specs) {
+      if (name == s.name) {
+        spec = &s;
+      }
+    }
+    if (spec == nullptr) {
+      err = "unknown option '" + name + "'";
+      return false;
+    }
+    if (spec->has_value && !inline_value) {
+      if (i + 1 >= argc) {
+        err = "option '" + name + "' needs a value";
+        return false;
+      }
+      value = argv[++i];
+    } else if (!spec->has_value && inline_value) {
+      err = "option '" + name + "' takes no value";
+      return false;
+    }
+    opts_[name] = value;
+  }
+  return true;
+}
+
+std::string Args::get(const std::string& name, const std::string& def) const {
+  const auto it = opts_.find(name);
+  return it == opts_.end() ? def : it->second;
+}
+
+bool Args::number(const std::string& name, double def, double lo, double hi, double& out,
+                  std::string& err) const {
+  const auto it = opts_.find(name);
+  if (it == opts_.end()) {
+    out = def;
+    return true;
+  }
+  const char* s = it->second.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double v = std::strtod(s, &end);
+  if (end == s || *end != '\0' || !std::isfinite(v)) {
+    err = "option '" + name + "': '" + it->second + "' is not a number";
+    return false;
+  }
+  if (!(v >= lo && v <= hi)) {
+    err = "option '" + name + "': " + it->second + " is out of range [" + num_text(lo) + ", " +
+          num_text(hi) + "]";
+    return false;
+  }
+  out = v;
+  return true;
+}
+
+bool Args::number(const std::string& name, double def, double& out, std::string& err) const {
+  constexpr double kMax = std::numeric_limits<double>::max();
+  return number(name, def, -kMax, kMax, out, err);
+}
+
+bool Args::integer(const std::string& name, std::uint64_t def, std::uint64_t lo,
+                   std::uint64_t hi, std::uint64_t& out, std::string& err) const {
+  double v = 0.0;
+  if (!number(name, static_cast<double>(def), static_cast<double>(lo), static_cast<double>(hi),
+              v, err)) {
+    return false;
+  }
+  if (std::floor(v) < v) {
+    err = "option '" + name + "': '" + get(name) + "' is not an integer";
+    return false;
+  }
+  out = static_cast<std::uint64_t>(v);  // in [lo, hi] <= 2^53: exact
+  return true;
+}
+
+}  // namespace imu::cli
