@@ -65,7 +65,9 @@ enum class FrameVerdict : std::uint8_t {
 
 /// One output event. `rec` holds the member named by `type` (kMissing uses no member).
 struct RxEvent {
-  enum class Type : std::uint8_t { kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats };
+  enum class Type : std::uint8_t {
+    kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats, kRejects
+  };
   Type type;
   std::uint64_t rx_time_ns;           ///< receive time of the frame that completed the record
   std::uint32_t missing_first_seq;    ///< kMissing: first missing sequence number
@@ -79,6 +81,7 @@ struct RxEvent {
     BiasRecord bias;
     MonitorRecord monitor;
     StatsRecord stats;
+    RejectsRecord rejects;
   } rec;
 };
 
@@ -370,6 +373,9 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
       break;
     case RecordKind::kStats:
       parse(buf, enqueue(RxEvent::Type::kStats, rx_time_ns).rec.stats);
+      break;
+    case RecordKind::kRejects:
+      parse(buf, enqueue(RxEvent::Type::kRejects, rx_time_ns).rec.rejects);
       break;
   }
   return FrameVerdict::kRecord;
