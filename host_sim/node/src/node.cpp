@@ -1,8 +1,6 @@
 // The firmware node core (see node.hpp). Compiled with fw/src/fw_prelude.hpp force-included.
 #include "imu/node/node.hpp"
 
-#include <cstring>
-
 namespace imu::node {
 namespace {
 
@@ -14,11 +12,15 @@ std::uint32_t sat_u32(std::uint64_t v) {
 
 bool in_range(double v, double lo, double hi) { return v >= lo && v <= hi; }  // false for NaN
 
+// Exact equality without operator== on doubles (-Wfloat-equal): neither is less nor greater.
+// Both records passed config_in_range (no NaN), so this is value equality; any change of the
+// rate or an LSB, however small, is a new stream.
+bool same_value(double x, double y) { return !(x < y) && !(x > y); }
+
 bool same_values(const hal::ConfigRecord& a, const hal::ConfigRecord& b) {
-  // Bitwise: a config that changes any bit of the rate or an LSB is a new stream.
-  bool same = std::memcmp(&a.rate_hz, &b.rate_hz, sizeof a.rate_hz) == 0;
+  bool same = same_value(a.rate_hz, b.rate_hz);
   for (std::size_t c = 0; c < kChannels; ++c) {
-    same = same && std::memcmp(&a.lsb[c], &b.lsb[c], sizeof a.lsb[c]) == 0;
+    same = same && same_value(a.lsb[c], b.lsb[c]);
   }
   return same;
 }
