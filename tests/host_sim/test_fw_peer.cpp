@@ -57,6 +57,7 @@ class FwProcess {
       dup2(fo, 1);
       dup2(fe, 2);
       std::vector<char*> av;
+      av.reserve(args.size() + 1);
       for (std::string& s : args) {
         av.push_back(s.data());
       }
