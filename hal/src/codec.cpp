@@ -321,6 +321,7 @@ void serialize(const RejectsRecord& r, std::uint8_t* buf) {
   w.u32(r.telemetry_failures);
   w.u32(r.gpio_errors);
   w.u32(r.peer_refused);
+  w.u32(r.bad_record);
   w.crc();
 }
 
@@ -411,6 +412,7 @@ void parse(const std::uint8_t* buf, RejectsRecord& r) {
   r.telemetry_failures = rd.u32();
   r.gpio_errors = rd.u32();
   r.peer_refused = rd.u32();
+  r.bad_record = rd.u32();
 }
 
 // ---- encode ----------------------------------------------------------------------------------

@@ -201,7 +201,7 @@ TEST(Codec, TelemetryRoundTripsExactly) {
   EXPECT_EQ(st2.kernel_drops, 0xDEADBEEFU);
 }
 
-// The RejectsRecord (added for issue 12): 60 bytes, FD id 0x240 (len 64), classic 0x241 in 9
+// The RejectsRecord (added for issue 12): 64 bytes, FD id 0x240 (len 64), classic 0x241 in 10
 // fragments; every field at its own offset (distinct values), through the Receiver in both layouts.
 TEST(Codec, RejectsRecordRoundTripsInBothLayouts) {
   imu::hal::RejectsRecord r{};
@@ -209,7 +209,7 @@ TEST(Codec, RejectsRecordRoundTripsInBothLayouts) {
                              &r.samples_before_config, &r.cfg_mismatch,    &r.late,
                              &r.resyncs,            &r.remote_frames,      &r.bad_fragment,
                              &r.orphan_fragments,   &r.busy,               &r.telemetry_failures,
-                             &r.gpio_errors,        &r.peer_refused};
+                             &r.gpio_errors,        &r.peer_refused,       &r.bad_record};
   static_assert(sizeof(fields) / sizeof(fields[0]) * 4 + 4 == imu::hal::kRejectsLen, "fields");
   std::uint32_t v = 0x01020304U;
   for (std::uint32_t* f : fields) {
@@ -224,7 +224,7 @@ TEST(Codec, RejectsRecordRoundTripsInBothLayouts) {
       EXPECT_EQ(out.frame[0].can_id, 0x240U);
       EXPECT_EQ(out.frame[0].len, 64);
     } else {
-      ASSERT_EQ(out.count, 9U);
+      ASSERT_EQ(out.count, 10U);
       EXPECT_EQ(out.frame[0].can_id, 0x241U);
     }
     imu::hal::Receiver<8> rx;

@@ -633,7 +633,8 @@ int cmd_run(int argc, char** argv) {
                                 {"busy", d(nr.busy)},
                                 {"telemetry_failures", d(nr.telemetry_failures)},
                                 {"gpio_errors", d(nr.gpio_errors)},
-                                {"peer_refused", d(nr.peer_refused)}}});
+                                {"peer_refused", d(nr.peer_refused)},
+                                {"bad_record", d(nr.bad_record)}}});
   ri.stats.push_back(StatGroup{
       "telemetry receiver (imu-sim)",
       {{"frames", static_cast<double>(rs.frames)},

@@ -382,6 +382,7 @@ void Node::send_status() {
   rj.telemetry_failures = sat_u32(stats_.telemetry_failures);
   rj.gpio_errors = sat_u32(stats_.gpio_errors);
   rj.peer_refused = sat_u32(peer_refused_);
+  rj.bad_record = sat_u32(rs.bad_record);
   hal::encode(rj, cfg_node_.layout, transfer_id_++, fr);
   send_frames(fr);
   ++stats_.status_sets;

@@ -163,7 +163,7 @@ struct StatsRecord {
 };
 
 /// Everything the sender refused or could not do, beyond StatsRecord (its own receiver, node and
-/// link). 60 bytes. Counters saturate. Sent after each StatsRecord/BiasRecord/MonitorRecord set.
+/// link). 64 bytes. Counters saturate. Sent after each StatsRecord/BiasRecord/MonitorRecord set.
 struct RejectsRecord {
   std::uint32_t bad_config;             ///< ConfigRecords refused (values out of range)
   std::uint32_t config_same_values;     ///< new cfg_id with unchanged values: kept, no restart
@@ -179,6 +179,7 @@ struct RejectsRecord {
   std::uint32_t telemetry_failures;     ///< telemetry frames the link refused
   std::uint32_t gpio_errors;            ///< static input / alarm output failures
   std::uint32_t peer_refused;           ///< loopback peers refused (other user id)
+  std::uint32_t bad_record;             ///< CRC-valid records refused (Config channel count)
 };
 
 /// Record lengths in bytes on the wire, CRC included.
@@ -188,7 +189,7 @@ inline constexpr std::size_t kAdevLen = 28;
 inline constexpr std::size_t kBiasLen = 60;
 inline constexpr std::size_t kMonitorLen = 20;
 inline constexpr std::size_t kStatsLen = 44;
-inline constexpr std::size_t kRejectsLen = 60;
+inline constexpr std::size_t kRejectsLen = 64;
 
 /// Wire length of a record kind; FD identifier of a kind. Constant time.
 [[nodiscard]] std::size_t record_len(RecordKind k);
