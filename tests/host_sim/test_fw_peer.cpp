@@ -127,6 +127,20 @@ void send_stream(imu::hal::CanSocket& peer, std::uint32_t n) {
   }
 }
 
+// Start-up check: these passed (first_order_gm_from_asd gave kOk with phi = 1, a NaN or an
+// infinite Qn) and imu-fw ran with filters never configured. Now exit 2, one line, at once.
+TEST(ImuFwPeer, AbsurdModelOptionsAreRefusedAtStart) {
+  const std::vector<std::vector<std::string>> cases = {
+      {"--Tp", "1e-300"}, {"--Tp", "1e300"}, {"--N", "1e300"}, {"--gyro-B", "1e-300"}};
+  for (const auto& opt : cases) {
+    FwProcess fw({"--bus", unique_bus("model"), opt[0], opt[1], "--quiet"});
+    ASSERT_TRUE(fw.wait(5.0)) << opt[0] << " " << opt[1] << ": imu-fw still running";
+    EXPECT_EQ(fw.status(), 2) << opt[0] << " " << opt[1];
+    EXPECT_EQ(simtest::count_lines(fw.err()), 1U) << fw.err();
+    EXPECT_NE(fw.err().find("node configuration rejected"), std::string::npos) << fw.err();
+  }
+}
+
 // No peer ever comes: before --peer-timeout-s imu-fw waited forever (there was no such option:
 // exit 2 on the unknown option).
 TEST(ImuFwPeer, NoPeerAtAllEndsWithStatusOneAndOneLine) {
