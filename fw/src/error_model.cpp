@@ -55,6 +55,13 @@ ModelStatus first_order_gm_from_asd(double n, double b, double tp_s, double fs_h
   m.qn = m.sn * fs_hz;
   m.qw = d.qd(0, 0);
   m.pss_d = m.qw / (1.0 - m.phi * m.phi);
+  // Finite positive inputs can still give a useless model: Tp = 1e300 gives phi = 1 and
+  // Qw = 0 (pss_d = 0/0), Tp = 1e-300 overflows the matrix exponential, N = 1e300 gives an
+  // infinite Qn. Every derived quantity a filter uses must be finite, phi in [0, 1), Qw > 0.
+  if (!(m.phi >= 0.0 && m.phi < 1.0) || !positive_finite(m.qw) || !positive_finite(m.qn) ||
+      !positive_finite(m.pss_d) || !positive_finite(m.sb) || !positive_finite(m.pss)) {
+    return ModelStatus::kBadParameter;
+  }
   out = m;
   return ModelStatus::kOk;
 }

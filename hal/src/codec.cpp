@@ -189,6 +189,7 @@ std::size_t record_len(RecordKind k) {
     case RecordKind::kBias: return kBiasLen;
     case RecordKind::kMonitor: return kMonitorLen;
     case RecordKind::kStats: return kStatsLen;
+    case RecordKind::kRejects: return kRejectsLen;
   }
   return 0;
 }
@@ -201,6 +202,7 @@ std::uint32_t fd_id(RecordKind k) {
     case RecordKind::kBias: return kIdBiasFd;
     case RecordKind::kMonitor: return kIdMonitorFd;
     case RecordKind::kStats: return kIdStatsFd;
+    case RecordKind::kRejects: return kIdRejectsFd;
   }
   return 0;
 }
@@ -210,7 +212,8 @@ bool kind_of_id(std::uint32_t can_id, RecordKind& kind, Layout& layout) {
     return false;
   }
   constexpr RecordKind kAll[] = {RecordKind::kConfig, RecordKind::kSample, RecordKind::kAdev,
-                                 RecordKind::kBias,   RecordKind::kMonitor, RecordKind::kStats};
+                                 RecordKind::kBias,   RecordKind::kMonitor, RecordKind::kStats,
+                                 RecordKind::kRejects};
   for (const RecordKind k : kAll) {
     const std::uint32_t id = fd_id(k);
     if (can_id == id || can_id == id + 1) {
@@ -302,6 +305,26 @@ void serialize(const StatsRecord& r, std::uint8_t* buf) {
   w.crc();
 }
 
+void serialize(const RejectsRecord& r, std::uint8_t* buf) {
+  Writer w(buf);
+  w.u32(r.bad_config);
+  w.u32(r.config_same_values);
+  w.u32(r.model_rejected);
+  w.u32(r.samples_before_config);
+  w.u32(r.cfg_mismatch);
+  w.u32(r.late);
+  w.u32(r.resyncs);
+  w.u32(r.remote_frames);
+  w.u32(r.bad_fragment);
+  w.u32(r.orphan_fragments);
+  w.u32(r.busy);
+  w.u32(r.telemetry_failures);
+  w.u32(r.gpio_errors);
+  w.u32(r.peer_refused);
+  w.u32(r.bad_record);
+  w.crc();
+}
+
 // ---- parse -----------------------------------------------------------------------------------
 
 void parse(const std::uint8_t* buf, ConfigRecord& r) {
@@ -373,6 +396,25 @@ void parse(const std::uint8_t* buf, StatsRecord& r) {
   r.kernel_drops = rd.u32();
 }
 
+void parse(const std::uint8_t* buf, RejectsRecord& r) {
+  Reader rd(buf);
+  r.bad_config = rd.u32();
+  r.config_same_values = rd.u32();
+  r.model_rejected = rd.u32();
+  r.samples_before_config = rd.u32();
+  r.cfg_mismatch = rd.u32();
+  r.late = rd.u32();
+  r.resyncs = rd.u32();
+  r.remote_frames = rd.u32();
+  r.bad_fragment = rd.u32();
+  r.orphan_fragments = rd.u32();
+  r.busy = rd.u32();
+  r.telemetry_failures = rd.u32();
+  r.gpio_errors = rd.u32();
+  r.peer_refused = rd.u32();
+  r.bad_record = rd.u32();
+}
+
 // ---- encode ----------------------------------------------------------------------------------
 
 void encode(const ConfigRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out) {
@@ -411,6 +453,13 @@ void encode(const StatsRecord& r, Layout layout, std::uint8_t transfer_id, Encod
   std::uint8_t buf[kStatsLen];
   serialize(r, buf);
   frame_record(buf, kStatsLen, RecordKind::kStats, layout, transfer_id, out);
+}
+
+void encode(const RejectsRecord& r, Layout layout, std::uint8_t transfer_id,
+            EncodedFrames& out) {
+  std::uint8_t buf[kRejectsLen];
+  serialize(r, buf);
+  frame_record(buf, kRejectsLen, RecordKind::kRejects, layout, transfer_id, out);
 }
 
 }  // namespace imu::hal

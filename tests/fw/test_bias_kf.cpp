@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 
 #include "imu/error_model.hpp"
@@ -121,6 +122,43 @@ TEST(BiasKf, PredictsOnlyWhileNotStaticAndTracksAKnownSignal) {
   EXPECT_EQ(kf.stats().updates, 50000U);
   (void)kf.step(std::nan(""), true);
   EXPECT_EQ(kf.stats().rejected_nonfinite, 1U);
+}
+
+// predict(k) replaces k prediction-only steps (lost samples). Up to kExactPredictSteps it is
+// that loop; above, the closed form. Reference: the loop itself (k calls of step(z, false)) in
+// double, which is what the closed form must reproduce; tolerance 1e-9 relative (pow and the
+// geometric sum in double against k roundings of the loop, k <= 1e5: ~1e5 ulp = 2e-11).
+TEST(BiasKf, PredictOfKStepsEqualsKPredictionsAndIsConstantTime) {
+  const imu::FirstOrderGm m = seed_model();
+  for (std::uint64_t k : {std::uint64_t{1}, std::uint64_t{64}, std::uint64_t{65},
+                          std::uint64_t{1000}, std::uint64_t{100000}}) {
+    imu::ScalarBiasKf<double> a;
+    imu::ScalarBiasKf<double> b;
+    ASSERT_EQ(a.configure(m.phi, m.qw, m.qn, 1e-9, 1e-3, 0.0), imu::KfStatus::kOk);
+    ASSERT_EQ(b.configure(m.phi, m.qw, m.qn, 1e-9, 1e-3, 0.0), imu::KfStatus::kOk);
+    for (std::uint64_t i = 0; i < k; ++i) {
+      (void)a.step(0.0, false);
+    }
+    b.predict(k);
+    EXPECT_NEAR(b.variance(), a.variance(), 1e-9 * a.variance()) << "k = " << k;
+    EXPECT_NEAR(b.bias(), a.bias(), 1e-9 * std::fabs(a.bias()) + 1e-300) << "k = " << k;
+    EXPECT_EQ(b.stats().predictions, k);
+  }
+  // A jump of 2^31 samples (a hostile sequence number): far beyond the correlation time
+  // (Tb = 159 s = 15,900 samples), so the prediction is the steady state Qw / (1 - phi^2) with
+  // the bias forgotten; the node used to loop 2^31 steps here (seconds, test_node times it).
+  imu::ScalarBiasKf<float> f;
+  ASSERT_EQ(f.configure(m.phi, m.qw, m.qn, 1e-9, 1e-3, 0.0), imu::KfStatus::kOk);
+  f.predict(std::uint64_t{1} << 31);
+  // The float filter holds phi and Qw rounded to float, so its steady state is that of the
+  // rounded parameters (1 - phi^2 = 1.3e-4 makes it 5e-4 away from m.pss_d); the result is one
+  // rounding of the double closed form: 1e-6 relative.
+  const auto phi_f = static_cast<double>(static_cast<float>(m.phi));
+  const auto qw_f = static_cast<double>(static_cast<float>(m.qw));
+  const double pss_f = qw_f / (1.0 - phi_f * phi_f);
+  EXPECT_NEAR(static_cast<double>(f.variance()), pss_f, 1e-6 * pss_f);
+  EXPECT_FLOAT_EQ(f.bias(), 0.0F);
+  EXPECT_EQ(f.stats().predictions, std::uint64_t{1} << 31);
 }
 
 TEST(BiasKf, RejectsBadModels) {

@@ -61,6 +61,14 @@ TEST(ErrorModel, RejectsBadInputs) {
             imu::ModelStatus::kBadParameter);
   EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, std::nan(""), 300.0, 100.0, m),
             imu::ModelStatus::kBadParameter);
+  // Finite, positive, but absurd (issue 12): each gave kOk with a NaN phi, phi = 1 or an
+  // infinite Qn before the derived quantities were checked.
+  EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 1e-300, 100.0, m),
+            imu::ModelStatus::kBadParameter);
+  EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 1e300, 100.0, m),
+            imu::ModelStatus::kBadParameter);
+  EXPECT_EQ(imu::first_order_gm_from_asd(1e300, 9e-4, 300.0, 100.0, m),
+            imu::ModelStatus::kBadParameter);
   imu::ContinuousModel<2> c;
   EXPECT_EQ(c.add_gauss_markov(1e-8, 100.0), imu::ModelStatus::kOk);
   EXPECT_EQ(c.add_ramp(1e-6), imu::ModelStatus::kCapacity);  // needs 2 states, 1 left

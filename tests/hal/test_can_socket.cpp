@@ -4,11 +4,16 @@
 #include "imu/hal/can_socket.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <thread>
 #include <vector>
@@ -313,6 +318,124 @@ TEST(CanSocket, NamedLoopbackAcrossOpensAndPeerDownUp) {
   ASSERT_FALSE(c2.seq.empty());
   EXPECT_EQ(c2.seq.back(), 10);
   EXPECT_GE(sender2.stats().reconnect_attempts, 1U);
+}
+
+// A loopback peer that dies (closes) with our frames unread: the kernel reports ECONNRESET
+// before the frames it sent earlier, and our next send meets EPIPE. Both used to close the
+// socket and drop those frames and the end of stream with them (imu-fw then waited for a new
+// peer). Every frame must still be received, then kLinkDown.
+TEST(CanSocket, PeerThatDiesWithOurFramesUnreadLosesNothing) {
+  const std::string bus = unique_bus("dies");
+  CanSocket listener;
+  ASSERT_EQ(listener.open(bus.c_str()), IoStatus::kOk);
+  CanSocket peer;
+  ASSERT_EQ(peer.open(bus.c_str()), IoStatus::kOk);
+  send_sample(listener, 1000);  // to the peer, which never reads it
+  for (std::uint32_t s = 0; s < 100; ++s) {
+    send_sample(peer, s);
+  }
+  peer.close();
+  EncodedFrames out{};
+  imu::hal::encode(sample(1001), Layout::kFd, out);
+  EXPECT_EQ(listener.send(out.frame[0], 0), IoStatus::kLinkDown);  // telemetry meets the end
+  Consumer c;
+  EXPECT_EQ(c.run(listener), IoStatus::kLinkDown);
+  EXPECT_EQ(c.seq, range(0, 100));
+  EXPECT_EQ(listener.stats().link_down, 1U);  // one loss, counted once
+}
+
+// The loopback name is in the abstract namespace, open to every user of the network namespace:
+// a process of another uid that holds the name first must not get our telemetry, and one that
+// connects to our name must not feed us frames. Both ends check SO_PEERCRED against geteuid().
+// Another uid needs root (setresuid in a forked child): skipped otherwise.
+constexpr uid_t kOtherUid = 65534;  // nobody
+
+/// Fork a child that drops to kOtherUid and runs body(); returns its pid (or -1).
+template <class Body>
+pid_t fork_as_other_user(Body body) {
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (setresgid(kOtherUid, kOtherUid, kOtherUid) != 0 ||
+        setresuid(kOtherUid, kOtherUid, kOtherUid) != 0) {
+      _exit(90);
+    }
+    _exit(body());
+  }
+  return pid;
+}
+
+TEST(CanSocket, LoopbackNameHeldByAnotherUserIsRefused) {
+  if (geteuid() != 0) {
+    GTEST_SKIP() << "needs root to run a peer under another uid";
+  }
+  const std::string bus = unique_bus("squat");
+  int ready[2];
+  int done[2];
+  ASSERT_EQ(pipe(ready), 0);
+  ASSERT_EQ(pipe(done), 0);
+  const pid_t child = fork_as_other_user([&]() {
+    CanSocket squatter;  // opens first: listens on our name
+    const bool ok = squatter.open(bus.c_str()) == IoStatus::kOk;
+    char c = ok ? 'y' : 'n';
+    (void)!write(ready[1], &c, 1);
+    (void)!read(done[0], &c, 1);  // hold the name until the parent has tried
+    return ok ? 0 : 1;
+  });
+  ASSERT_GT(child, 0);
+  char c = 0;
+  ASSERT_EQ(read(ready[0], &c, 1), 1);
+  ASSERT_EQ(c, 'y');
+  CanSocket me;
+  EXPECT_EQ(me.open(bus.c_str()), IoStatus::kSysError);
+  EXPECT_NE(std::string(me.error()).find("held by uid 65534"), std::string::npos) << me.error();
+  EXPECT_EQ(me.stats().peer_refused, 1U);
+  (void)!write(done[1], &c, 1);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  for (int fd : {ready[0], ready[1], done[0], done[1]}) {
+    close(fd);
+  }
+}
+
+TEST(CanSocket, LoopbackPeerOfAnotherUserIsNeverRead) {
+  if (geteuid() != 0) {
+    GTEST_SKIP() << "needs root to run a peer under another uid";
+  }
+  const std::string bus = unique_bus("intruder");
+  CanSocket listener;
+  ASSERT_EQ(listener.open(bus.c_str()), IoStatus::kOk);
+  const pid_t child = fork_as_other_user([&]() {
+    // A raw client (a CanSocket would itself refuse our listener, which is root's): connect to
+    // the abstract name and send one valid sample frame.
+    const int fd = socket(AF_UNIX, SOCK_SEQPACKET, 0);
+    sockaddr_un addr{};
+    addr.sun_family = AF_UNIX;
+    const std::string name = "imu-can-loopback:" + bus.substr(9);  // after "loopback:"
+    std::memcpy(addr.sun_path + 1, name.data(), name.size());
+    const auto len = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + 1 + name.size());
+    if (fd < 0 || connect(fd, reinterpret_cast<const sockaddr*>(&addr), len) != 0) {
+      return 1;
+    }
+    EncodedFrames out{};
+    imu::hal::encode(sample(0), Layout::kFd, out);
+    return send(fd, &out.frame[0], sizeof(CanFrame), 0) == sizeof(CanFrame) ? 0 : 2;
+  });
+  ASSERT_GT(child, 0);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << status;
+  Consumer c;
+  EXPECT_EQ(c.run(listener), IoStatus::kTimeout);
+  EXPECT_TRUE(c.seq.empty());
+  EXPECT_EQ(listener.stats().peer_refused, 1U);
+  EXPECT_EQ(listener.stats().link_up, 0U);
+  // A peer of our own uid is accepted as before.
+  CanSocket friend_;
+  ASSERT_EQ(friend_.open(bus.c_str()), IoStatus::kOk);
+  send_sample(friend_, 7);
+  EXPECT_EQ(c.run(listener), IoStatus::kTimeout);
+  EXPECT_EQ(c.seq, std::vector<std::int64_t>{7});
 }
 
 TEST(CanSocket, SocketCanOpenErrorsNameTheInterface) {

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <random>
 
+#include "imu/hal/receiver.hpp"
 #include "imu/online_adev.hpp"
 
 namespace {
@@ -198,6 +199,48 @@ TEST(Codec, TelemetryRoundTripsExactly) {
   imu::hal::parse(buf, st2);
   EXPECT_EQ(st2.frames, 1U);
   EXPECT_EQ(st2.kernel_drops, 0xDEADBEEFU);
+}
+
+// The RejectsRecord (added for issue 12): 64 bytes, FD id 0x240 (len 64), classic 0x241 in 10
+// fragments; every field at its own offset (distinct values), through the Receiver in both layouts.
+TEST(Codec, RejectsRecordRoundTripsInBothLayouts) {
+  imu::hal::RejectsRecord r{};
+  std::uint32_t* fields[] = {&r.bad_config,         &r.config_same_values, &r.model_rejected,
+                             &r.samples_before_config, &r.cfg_mismatch,    &r.late,
+                             &r.resyncs,            &r.remote_frames,      &r.bad_fragment,
+                             &r.orphan_fragments,   &r.busy,               &r.telemetry_failures,
+                             &r.gpio_errors,        &r.peer_refused,       &r.bad_record};
+  static_assert(sizeof(fields) / sizeof(fields[0]) * 4 + 4 == imu::hal::kRejectsLen, "fields");
+  std::uint32_t v = 0x01020304U;
+  for (std::uint32_t* f : fields) {
+    *f = v;
+    v += 0x11111111U;
+  }
+  for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+    EncodedFrames out{};
+    imu::hal::encode(r, layout, 5, out);
+    if (layout == Layout::kFd) {
+      ASSERT_EQ(out.count, 1U);
+      EXPECT_EQ(out.frame[0].can_id, 0x240U);
+      EXPECT_EQ(out.frame[0].len, 64);
+    } else {
+      ASSERT_EQ(out.count, 10U);
+      EXPECT_EQ(out.frame[0].can_id, 0x241U);
+    }
+    imu::hal::Receiver<8> rx;
+    std::size_t got = 0;
+    for (std::size_t i = 0; i < out.count; ++i) {
+      (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
+                          [&](const imu::hal::RxEvent& e) {
+                            ASSERT_EQ(e.type, imu::hal::RxEvent::Type::kRejects);
+                            EXPECT_EQ(std::memcmp(&e.rec.rejects, &r, sizeof r), 0);
+                            ++got;
+                          });
+    }
+    EXPECT_EQ(got, 1U);
+    EXPECT_EQ(rx.stats().records[static_cast<std::size_t>(imu::hal::RecordKind::kRejects)], 1U);
+    EXPECT_EQ(rx.stats().crc_errors, 0U);
+  }
 }
 
 TEST(Codec, IdentifierClassification) {

@@ -382,6 +382,46 @@ TEST(Receiver, FullEventQueueRefusesFramesWithoutLosingThem) {
   EXPECT_EQ(sink.seq, range(0, static_cast<std::int64_t>(seq) + 1));
 }
 
+// A CRC-valid Config record whose channel count byte is not 6 (a forged or foreign record):
+// its LSB list would not mean what it says. Refused and counted, no Config event (issue 12:
+// every parameter of a config checked); the count 6 still passes.
+TEST(Receiver, ConfigWithAnotherChannelCountIsRefused) {
+  imu::hal::ConfigRecord c{};
+  c.cfg_id = 3;
+  c.rate_hz = 100.0;
+  for (double& l : c.lsb) {
+    l = 1e-3;
+  }
+  for (const std::uint8_t n_ch : {std::uint8_t{5}, std::uint8_t{6}}) {
+    CanFrame f{};
+    f.can_id = imu::hal::kIdConfigFd;
+    f.len = 64;
+    f.flags = imu::hal::kCanFdFdf | imu::hal::kCanFdBrs;
+    imu::hal::serialize(c, f.data);
+    f.data[1] = n_ch;  // the channel count, then a valid CRC over the forged bytes
+    const std::uint32_t crc = imu::hal::crc32c(f.data, imu::hal::kConfigLen - 4);
+    for (std::size_t i = 0; i < 4; ++i) {
+      f.data[imu::hal::kConfigLen - 4 + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+    }
+    Rx rx;
+    std::size_t configs = 0;
+    const FrameVerdict v = rx.push_drain(f, imu::hal::kCanFdMtu, 0, [&](const RxEvent& e) {
+      configs += e.type == RxEvent::Type::kConfig ? 1U : 0U;
+    });
+    if (n_ch == 6) {
+      EXPECT_EQ(v, FrameVerdict::kRecord);
+      EXPECT_EQ(configs, 1U);
+      EXPECT_EQ(rx.stats().bad_record, 0U);
+    } else {
+      EXPECT_EQ(v, FrameVerdict::kBadRecord);
+      EXPECT_EQ(configs, 0U);
+      EXPECT_EQ(rx.stats().bad_record, 1U);
+      EXPECT_EQ(rx.stats().crc_errors, 0U);
+      EXPECT_EQ(rx.stats().frames, 1U);
+    }
+  }
+}
+
 TEST(Receiver, TelemetryAndConfigAreDeliveredInBothLayouts) {
   for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
     Rx rx;

@@ -4,8 +4,11 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <iterator>
 #include <memory>
 #include <vector>
 
@@ -24,6 +27,7 @@ using imu::node::NodeConfig;
 class CaptureSink final : public imu::hal::FrameSink {
  public:
   imu::hal::IoStatus send(const CanFrame& f, int /*timeout_ms*/) override {
+    ++tries;
     if (refuse) {
       return imu::hal::IoStatus::kLinkDown;
     }
@@ -43,6 +47,7 @@ class CaptureSink final : public imu::hal::FrameSink {
   std::vector<CanFrame> frames;
   imu::hal::Receiver<8> rx;
   bool refuse = false;
+  std::size_t tries = 0;  ///< send() calls, refused or not
 };
 
 std::size_t count_type(const std::vector<imu::hal::RxEvent>& ev, imu::hal::RxEvent::Type t) {
@@ -256,8 +261,159 @@ TEST_F(NodeTest, RefusedTelemetryIsCounted) {
   for (std::uint32_t k = 0; k < 100; ++k) {
     send_sample(k, c);
   }
-  EXPECT_EQ(node_->stats().telemetry_failures, 3U);  // stats, bias, monitor: one frame each
+  // stats, bias, monitor, rejects: one frame each
+  EXPECT_EQ(node_->stats().telemetry_failures, 4U);
   EXPECT_EQ(node_->stats().last_send_status, imu::hal::IoStatus::kLinkDown);
+}
+
+// ---- Hostile bus (issue 12, item 5): each of these failed before its fix. ----
+
+// A valid sample whose sequence number jumps 2^31 - 16 ahead: one missing run of that length.
+// It used to cost 2^31 prediction steps of six filters (tens of seconds); now mark_missing is
+// O(levels) and ScalarBiasKf::predict(n) O(1). Bound: 0.5 s for nine frames and an idle flush
+// (a few hundred microseconds measured), generous for a loaded machine and still 50x below the
+// old cost.
+TEST_F(NodeTest, SequenceJumpOfTwoToThe31IsConstantTime) {
+  send_config();
+  const std::int32_t c[6] = {3, 1, 1, 1, 1, 1};
+  for (std::uint32_t k = 0; k < 200; ++k) {  // past init_samples (100): the filters run
+    send_sample(k, c);
+  }
+  const std::uint32_t jump = 0x7FFFFFF0U;  // "ahead" for the receiver (below 2^31)
+  const auto t0 = std::chrono::steady_clock::now();
+  for (std::uint32_t k = 0; k < 9; ++k) {
+    send_sample(200 + jump + k, c);
+  }
+  node_->on_idle();
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(s, 0.5);
+  EXPECT_EQ(node_->stats().missing, jump);
+  EXPECT_EQ(node_->stats().samples, 209U);
+  EXPECT_EQ(node_->adev().channel(0).missing_samples(), jump);
+  EXPECT_EQ(node_->adev().channel(0).gaps(), 1U);
+  EXPECT_TRUE(std::isfinite(node_->bias_var(0)));
+  EXPECT_GT(node_->bias_var(0), 0.0F);
+}
+
+// A ConfigRecord with a new cfg_id but the values in use must not wipe the estimators (it did:
+// any new id restarted the stream). A change of any value still does.
+TEST_F(NodeTest, NewConfigIdWithTheSameValuesKeepsTheStream) {
+  send_config(100.0, 1e-3, 1);
+  const std::int32_t c[6] = {3, 1, 4, 1, 5, 9};
+  for (std::uint32_t k = 0; k < 500; ++k) {
+    send_sample(k, c, 1);
+  }
+  send_config(100.0, 1e-3, 2);
+  EXPECT_EQ(node_->adev().channel(0).samples(), 500U);
+  EXPECT_EQ(node_->stats().restarts, 0U);
+  EXPECT_EQ(node_->stats().config_same_values, 1U);
+  EXPECT_EQ(node_->sensor_config().cfg_id, 2U);
+  for (std::uint32_t k = 500; k < 600; ++k) {
+    send_sample(k, c, 2);
+  }
+  EXPECT_EQ(node_->adev().channel(0).samples(), 600U);
+  send_config(100.0, 2e-3, 3);  // a new LSB: a new stream
+  EXPECT_EQ(node_->stats().restarts, 1U);
+  EXPECT_EQ(node_->adev().channel(0).samples(), 0U);
+}
+
+// Rates and LSBs outside [0.1 Hz, 100 kHz] and [1e-12, 1e3] are refused and counted; before,
+// anything > 0 and < 1e6 passed (LSB 1e-300: every figure 0; rate 1e-300: every tau infinite).
+TEST_F(NodeTest, ConfigOutOfRangeIsRefusedAndCounted) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  const double cases[][2] = {{1e-300, 1e-3}, {100.0, 1e-300}, {1e300, 1e-3}, {100.0, 1e300},
+                             {0.05, 1e-3},   {2e5, 1e-3},     {nan, 1e-3},   {100.0, nan},
+                             {100.0, inf},   {100.0, -1e-3},  {100.0, 1e4},  {100.0, 1e-13}};
+  std::uint8_t id = 10;
+  for (const auto& cs : cases) {
+    send_config(cs[0], cs[1], id++);
+  }
+  EXPECT_FALSE(node_->have_config());
+  EXPECT_EQ(node_->stats().bad_config, std::size(cases));
+  send_config(imu::node::kMinRateHz, imu::node::kMinLsb, id++);  // the limits are accepted
+  EXPECT_TRUE(node_->have_config());
+  send_config(imu::node::kMaxRateHz, imu::node::kMaxLsb, id++);
+  EXPECT_EQ(node_->stats().restarts, 1U);
+  EXPECT_EQ(node_->stats().bad_config, std::size(cases));
+}
+
+// Model parameters that are finite and positive but absurd used to pass configure() (checked
+// at 100 Hz only, where first_order_gm_from_asd returned kOk with phi = 1, a NaN or an infinite
+// Qn) and left the filters unconfigured. Also the range limits and the rate limits.
+TEST_F(NodeTest, AbsurdModelParametersAreRefused) {
+  const imu::node::ChannelModel bad[] = {{3.3e-3, 9e-4, 1e-300}, {3.3e-3, 9e-4, 1e300},
+                                         {1e300, 9e-4, 300.0},   {3.3e-3, 1e300, 300.0},
+                                         {1e-300, 9e-4, 300.0},  {3.3e-3, 9e-4, 0.01},
+                                         {3.3e-3, 9e-4, 1e9}};
+  for (const auto& m : bad) {
+    Node n;
+    NodeConfig c;
+    c.model[3] = m;
+    EXPECT_EQ(n.configure(c, sink_, nullptr, nullptr), imu::node::NodeStatus::kBadConfig)
+        << m.n << " " << m.b << " " << m.tp_s;
+    EXPECT_FALSE(imu::node::model_in_range(m));
+  }
+  // The range ends are accepted, and so is the default model.
+  EXPECT_TRUE(imu::node::model_in_range({1e-12, 1e-12, imu::node::kMinTpS}));
+  EXPECT_TRUE(imu::node::model_in_range({1e3, 1e3, imu::node::kMaxTpS}));
+  Node n;
+  EXPECT_EQ(n.configure(NodeConfig{}, sink_, nullptr, nullptr), imu::node::NodeStatus::kOk);
+}
+
+// Every refusal is in telemetry: the RejectsRecord after each status set, and the kernel's
+// drop count (passed in by the host loop) in StatsRecord::kernel_drops, which was always 0.
+TEST_F(NodeTest, RefusalsAndKernelDropsAreSentInTelemetry) {
+  const std::int32_t c[6] = {1, 2, 3, 4, 5, 6};
+  send_sample(0, c);              // before any config: ignored, counted
+  send_config(1e-300, 1e-3, 7);   // refused
+  send_config(100.0, 1e-3, 1);
+  send_config(100.0, 1e-3, 2);    // same values, new id
+  CanFrame rtr{};
+  rtr.can_id = imu::hal::kIdSampleFd | imu::hal::kCanRtrFlag;
+  node_->on_frame(rtr, imu::hal::kCanMtu, 0);
+  node_->set_link_counters(17, 2);
+  sink_.frames.clear();
+  for (std::uint32_t k = 1; k <= 100; ++k) {
+    send_sample(k, c, 2);
+  }
+  const auto ev = sink_.events();
+  ASSERT_EQ(count_type(ev, imu::hal::RxEvent::Type::kRejects), 1U);
+  for (const auto& e : ev) {
+    if (e.type == imu::hal::RxEvent::Type::kStats) {
+      EXPECT_EQ(e.rec.stats.kernel_drops, 17U);
+    } else if (e.type == imu::hal::RxEvent::Type::kRejects) {
+      const imu::hal::RejectsRecord& r = e.rec.rejects;
+      EXPECT_EQ(r.bad_config, 1U);
+      EXPECT_EQ(r.config_same_values, 1U);
+      EXPECT_EQ(r.samples_before_config, 1U);
+      EXPECT_EQ(r.remote_frames, 1U);
+      EXPECT_EQ(r.peer_refused, 2U);
+      EXPECT_EQ(r.model_rejected, 0U);
+      EXPECT_EQ(r.telemetry_failures, 0U);
+    }
+  }
+}
+
+// Once the sink says the link is down, the rest of the telemetry is counted as failed without
+// being tried: on a loopback listener each try waited send_timeout_ms (2 s) for a new peer, so a
+// dead peer kept imu-fw alive for minutes. A received frame means a peer again.
+TEST_F(NodeTest, TelemetryIsNotRetriedPerFrameWhileTheLinkIsDown) {
+  send_config();
+  sink_.refuse = true;
+  const std::int32_t c[6] = {1, 2, 3, 4, 5, 6};
+  for (std::uint32_t k = 0; k < 100; ++k) {
+    send_sample(k, c);
+  }
+  node_->on_idle();  // a full set: status plus six ADEV curves, all refused
+  EXPECT_EQ(sink_.tries, 1U);
+  EXPECT_GT(node_->stats().telemetry_failures, 10U);
+  sink_.refuse = false;
+  for (std::uint32_t k = 100; k < 200; ++k) {
+    send_sample(k, c);
+  }
+  EXPECT_EQ(sink_.tries, 5U);  // the next status set (4 records) went out
+  EXPECT_EQ(node_->stats().telemetry_frames, 4U);
 }
 
 }  // namespace

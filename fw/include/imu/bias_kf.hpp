@@ -129,6 +129,39 @@ class ScalarBiasKf {
     return out;
   }
 
+  /// k samples without a measurement (e.g. lost frames): the same as k calls of step(z, false)
+  /// but constant time for any k. Up to kExactPredictSteps it is that loop (bit-identical
+  /// results); above, the closed form in double, rounded to T once:
+  ///   b_k = phi^k b,  P_k = phi^(2k) P + Qw (1 - phi^(2k)) / (1 - phi^2)  (P + k Qw if phi^2 = 1),
+  /// which for k far beyond the correlation time is the steady state Qw / (1 - phi^2) and b = 0
+  /// (phi^k underflows to 0: the prediction has forgotten everything). P is capped as in step().
+  void predict(std::uint64_t k) {
+    if (k <= kExactPredictSteps) {
+      for (std::uint64_t i = 0; i < k; ++i) {
+        (void)step(T(0), false);
+      }
+      return;
+    }
+    const double phi = static_cast<double>(phi_);
+    const double qw = static_cast<double>(qw_);
+    const double kd = static_cast<double>(k);
+    const double phi_k = std::pow(phi, kd);
+    const double phi_2k = phi_k * phi_k;
+    const double one_m_phi2 = 1.0 - phi * phi;
+    const double drive = one_m_phi2 > 0.0 ? qw * (1.0 - phi_2k) / one_m_phi2 : qw * kd;
+    const double p = phi_2k * static_cast<double>(p_) + drive;
+    b_ = static_cast<T>(phi_k * static_cast<double>(b_));
+    stats_.predictions += k;
+    if (!(p <= static_cast<double>(p_max_))) {  // also a non-finite drive (qw k overflow)
+      p_ = p_max_;
+      ++stats_.covariance_capped;
+    } else {
+      p_ = static_cast<T>(p);
+    }
+  }
+  /// predict(k) for k up to this is a loop of step() (exact); above it is the closed form.
+  static constexpr std::uint64_t kExactPredictSteps = 64;
+
   [[nodiscard]] T bias() const { return b_; }
   [[nodiscard]] T variance() const { return p_; }
   [[nodiscard]] const KfStats& stats() const { return stats_; }

@@ -72,7 +72,9 @@ struct FirstOrderGm {
 
 /// Seed conversion N, B, Tp, Fs -> continuous and discrete first-order model. Qw is computed by
 /// Van Loan (expm), not by the closed form, so the test of the closed form is independent.
-/// Returns kBadParameter unless every input is finite and > 0.
+/// Returns kBadParameter unless every input is finite and > 0 and every derived quantity is
+/// usable by a filter: phi in [0, 1), Qw, Qn, Sb, Pss and Pss_d finite and > 0 (e.g. Tp = 1e300
+/// gives phi = 1, N = 1e300 an infinite Qn: both refused).
 [[nodiscard]] ModelStatus first_order_gm_from_asd(double n, double b, double tp_s, double fs_hz,
                                                   FirstOrderGm& out);
 

@@ -65,6 +65,21 @@ bool configure_data_fd(int fd, const BusOptions& opt) {
   return stamps;
 }
 
+/// The loopback name lives in the abstract namespace, which any process of the network
+/// namespace can bind or connect to whatever its user: the credentials of the other end
+/// (SO_PEERCRED: the listener's at connect, the connector's at accept) must be our own
+/// effective uid, else the socket is closed unread. Returns the peer's uid in `uid`.
+bool peer_is_same_user(int fd, uid_t& uid) {
+  ucred cred{};
+  socklen_t len = sizeof cred;
+  if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) != 0 || len != sizeof cred) {
+    uid = static_cast<uid_t>(-1);
+    return false;
+  }
+  uid = cred.uid;
+  return cred.uid == geteuid();
+}
+
 socklen_t loopback_address(const char* name, sockaddr_un& addr) {
   std::memset(&addr, 0, sizeof addr);
   addr.sun_family = AF_UNIX;
@@ -113,6 +128,8 @@ void CanSocket::move_from(CanSocket& other) noexcept {
   fd_capable_ = other.fd_capable_;
   kernel_ts_ = other.kernel_ts_;
   down_ = other.down_;
+  tx_broken_ = other.tx_broken_;
+  rx_eof_pending_ = other.rx_eof_pending_;
   opt_ = other.opt_;
   std::memcpy(name_, other.name_, sizeof name_);
   std::memcpy(error_, other.error_, sizeof error_);
@@ -132,6 +149,8 @@ void CanSocket::close() {
     listen_fd_ = -1;
   }
   kind_ = BusKind::kNone;
+  tx_broken_ = false;
+  rx_eof_pending_ = false;
 }
 
 IoStatus CanSocket::fail(IoStatus s, int err, const char* what) {
@@ -231,6 +250,15 @@ IoStatus CanSocket::open_loopback() {
       return fail(IoStatus::kSysError, errno, "socket(AF_UNIX)");
     }
     if (connect(fd, reinterpret_cast<const sockaddr*>(&addr), len) == 0) {
+      uid_t uid = 0;
+      if (!peer_is_same_user(fd, uid)) {
+        ::close(fd);
+        ++stats_.peer_refused;
+        char what[64];
+        std::snprintf(what, sizeof what, "name held by uid %lu, we are %lu: refused",
+                      static_cast<unsigned long>(uid), static_cast<unsigned long>(geteuid()));
+        return fail(IoStatus::kSysError, 0, what);
+      }
       kernel_ts_ = configure_data_fd(fd, opt_);
       data_fd_ = fd;
       connector_ = true;
@@ -288,7 +316,9 @@ IoStatus CanSocket::open_pair(CanSocket& a, CanSocket& b) {
 }
 
 IoStatus CanSocket::link_lost(int err) {
-  ++stats_.link_down;
+  if (!tx_broken_) {
+    ++stats_.link_down;  // else a send that met the closed peer has counted this loss
+  }
   fail(IoStatus::kLinkDown, err, "link down");
   if (kind_ == BusKind::kSocketCan) {
     if (err == ENODEV || err == ENXIO) {
@@ -299,6 +329,7 @@ IoStatus CanSocket::link_lost(int err) {
   } else if (!pair_) {
     ::close(data_fd_);  // peer gone: reconnect or accept a new peer on the next call
     data_fd_ = -1;
+    tx_broken_ = false;
   } else {
     down_ = true;  // in-process pair: the other end is closed for good
   }
@@ -339,6 +370,12 @@ IoStatus CanSocket::ensure_link(int timeout_ms) {
   if (fd < 0) {
     return IoStatus::kTimeout;
   }
+  uid_t uid = 0;
+  if (!peer_is_same_user(fd, uid)) {
+    ::close(fd);  // another user's process connected to our name: never read from or write to it
+    ++stats_.peer_refused;
+    return IoStatus::kTimeout;
+  }
   kernel_ts_ = configure_data_fd(fd, opt_);
   data_fd_ = fd;
   ++stats_.link_up;
@@ -349,6 +386,10 @@ IoStatus CanSocket::receive(RxFrame* out, std::size_t cap, std::size_t& n, int t
   n = 0;
   if (out == nullptr || cap == 0) {
     return IoStatus::kBadArgument;
+  }
+  if (rx_eof_pending_) {  // the loopback peer's end was met (and counted) by a send
+    rx_eof_pending_ = false;
+    return IoStatus::kLinkDown;
   }
   const IoStatus link = ensure_link(timeout_ms);
   if (link != IoStatus::kOk) {
@@ -377,7 +418,14 @@ IoStatus CanSocket::receive(RxFrame* out, std::size_t cap, std::size_t& n, int t
     msgs[i].msg_hdr.msg_control = ctrl[i];
     msgs[i].msg_hdr.msg_controllen = kCtrlLen;
   }
-  const int m = recvmmsg(data_fd_, msgs, static_cast<unsigned>(cap), MSG_DONTWAIT, nullptr);
+  int m = recvmmsg(data_fd_, msgs, static_cast<unsigned>(cap), MSG_DONTWAIT, nullptr);
+  if (m < 0 && errno == ECONNRESET && kind_ == BusKind::kLoopback) {
+    // A loopback peer that closed with our frames unread (e.g. killed) leaves ECONNRESET,
+    // which recvmmsg reports before the frames it sent earlier and which are still queued.
+    // The call consumed the error: read again, so those frames are not lost; the end of
+    // stream (an empty message) follows them.
+    m = recvmmsg(data_fd_, msgs, static_cast<unsigned>(cap), MSG_DONTWAIT, nullptr);
+  }
   if (m < 0) {
     const int err = errno;
     if (err == EAGAIN || err == EWOULDBLOCK || err == EINTR) {
@@ -455,6 +503,15 @@ IoStatus CanSocket::send_raw(const void* bytes, std::size_t nbytes, int timeout_
 }
 
 IoStatus CanSocket::write_bytes(const void* bytes, std::size_t nbytes, int timeout_ms) {
+  if (tx_broken_) {  // loopback: an earlier send met the closed peer
+    int queued = 0;
+    if (ioctl(data_fd_, FIONREAD, &queued) == 0 && queued > 0) {
+      ++stats_.tx_link_down;  // its last frames are still to be read: receive() first
+      return fail(IoStatus::kLinkDown, EPIPE, "send: peer closed");
+    }
+    (void)link_lost(EPIPE);  // nothing left to read: drop it and reconnect / accept below
+    rx_eof_pending_ = true;  // the reader has not seen the end of that stream: tell it once
+  }
   const IoStatus link = ensure_link(timeout_ms);  // a loopback listener waits for its peer
   if (link != IoStatus::kOk) {
     if (link == IoStatus::kNotOpen) {
@@ -506,6 +563,14 @@ IoStatus CanSocket::write_bytes(const void* bytes, std::size_t nbytes, int timeo
     }
     if (is_link_error(err)) {
       ++stats_.tx_link_down;
+      if (kind_ == BusKind::kLoopback && !pair_) {
+        // The peer closed, but frames it sent before may still be queued for us: keep the
+        // socket for receive() to drain them and see the end of stream (closing it here lost
+        // them, and the end of stream with them). See the top of write_bytes for the next send.
+        tx_broken_ = true;
+        ++stats_.link_down;
+        return fail(IoStatus::kLinkDown, err, "send: peer closed");
+      }
       return link_lost(err);
     }
     if (err == EINVAL && nbytes == kCanFdMtu && kind_ == BusKind::kSocketCan) {

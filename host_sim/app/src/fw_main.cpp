@@ -29,10 +29,12 @@ constexpr const char* kFwUsage =
     "usage: imu-fw --bus loopback[:NAME]|vcan0|can0 [--gpio-chip CHIP --static-line NAME\n"
     "              --alarm-line NAME] [--N 3.3e-3 --B 9e-4 --Tp 300] [--gyro-N 5.8e-4\n"
     "              --gyro-B 1.2e-4 --gyro-Tp 300] [--listen-only] [--layout auto|fd|classic]\n"
-    "              [--idle-ms 200] [--exit-idle-s S] [--status-period 100]\n"
+    "              [--idle-ms 200] [--exit-idle-s S] [--peer-timeout-s S] [--status-period 100]\n"
     "              [--adev-period 6000] [--init-samples 1000] [--quiet]\n"
     "Runs until the stream ends: the loopback peer closes, or (CAN) no frame for --exit-idle-s\n"
-    "seconds after samples (default 3; 0 = run until SIGINT). Prints the final ADEV table.\n";
+    "seconds after samples (default 3; 0 = run until SIGINT). Prints the final ADEV table.\n"
+    "No frame at all for --peer-timeout-s seconds (default 10 on loopback, 0 = never on CAN):\n"
+    "the peer is gone, exit status 1.\n";
 
 }  // namespace
 
@@ -44,7 +46,8 @@ int fw_main(int argc, char** argv) {
       {"--alarm-line", true}, {"--N", true},           {"--B", true},
       {"--Tp", true},        {"--gyro-N", true},       {"--gyro-B", true},
       {"--gyro-Tp", true},   {"--listen-only", false}, {"--layout", true},
-      {"--idle-ms", true},   {"--exit-idle-s", true},  {"--status-period", true},
+      {"--idle-ms", true},   {"--exit-idle-s", true},  {"--peer-timeout-s", true},
+      {"--status-period", true},
       {"--adev-period", true}, {"--init-samples", true}, {"--quiet", false},
       {"--help", false}};
   if (!a.parse(argc, argv, 1, specs, 0, err)) {
@@ -63,19 +66,21 @@ int fw_main(int argc, char** argv) {
   const bool is_loopback = bus == "loopback" || bus.rfind("loopback:", 0) == 0;
   node::NodeConfig nc;
   double v[6] = {};
-  double idle_ms = 0, exit_idle_s = 0, status_p = 0, adev_p = 0, init_n = 0;
+  double idle_ms = 0, exit_idle_s = 0, peer_timeout_s = 0, status_p = 0, adev_p = 0, init_n = 0;
   if (!a.number("--N", 3.3e-3, v[0], err) || !a.number("--B", 9e-4, v[1], err) ||
       !a.number("--Tp", 300.0, v[2], err) || !a.number("--gyro-N", 5.8e-4, v[3], err) ||
       !a.number("--gyro-B", 1.2e-4, v[4], err) || !a.number("--gyro-Tp", 300.0, v[5], err) ||
       !a.number("--idle-ms", 200.0, idle_ms, err) ||
       !a.number("--exit-idle-s", is_loopback ? 0.0 : 3.0, exit_idle_s, err) ||
+      !a.number("--peer-timeout-s", is_loopback ? 10.0 : 0.0, peer_timeout_s, err) ||
       !a.number("--status-period", 100.0, status_p, err) ||
       !a.number("--adev-period", 6000.0, adev_p, err) ||
       !a.number("--init-samples", 1000.0, init_n, err)) {
     return fail(kCmd, err, 2);
   }
   if (idle_ms < 1.0 || exit_idle_s < 0.0 || status_p < 1.0 || adev_p < 0.0 || init_n < 1.0 ||
-      status_p > 4e9 || adev_p > 4e9 || init_n > 4e9 || idle_ms > 1e6 || exit_idle_s > 1e6) {
+      status_p > 4e9 || adev_p > 4e9 || init_n > 4e9 || idle_ms > 1e6 || exit_idle_s > 1e6 ||
+      !(peer_timeout_s >= 0.0 && peer_timeout_s <= 1e6)) {
     return fail(kCmd, "a numeric option is out of range", 2);
   }
   for (std::size_t c = 0; c < node::kChannels; ++c) {
@@ -155,6 +160,7 @@ int fw_main(int argc, char** argv) {
   lo.idle_ms = static_cast<int>(idle_ms);
   lo.exit_idle_ms = static_cast<int>(exit_idle_s * 1000.0);
   lo.exit_on_link_down = true;
+  lo.peer_timeout_ms = static_cast<int>(peer_timeout_s * 1000.0);
   lo.stop = &g_stop;
   const node::LoopEnd end = node::run_node_loop(*nd, sock, lo);
   sigaction(SIGINT, &old_int, nullptr);
@@ -193,6 +199,12 @@ int fw_main(int argc, char** argv) {
   }
   if (end == node::LoopEnd::kError) {
     return fail(kCmd, std::string("bus error: ") + sock.error());
+  }
+  if (end == node::LoopEnd::kPeerTimeout) {
+    char secs[32];
+    std::snprintf(secs, sizeof secs, "%g", peer_timeout_s);
+    return fail(kCmd, "no frame from the peer on " + bus + " for " + secs +
+                          " s (--peer-timeout-s): the peer is gone");
   }
   return 0;
 }

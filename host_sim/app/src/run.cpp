@@ -47,6 +47,7 @@ struct Telemetry {
   hal::BiasRecord bias{};
   bool have_monitor = false;
   hal::MonitorRecord monitor{};
+  hal::RejectsRecord rejects{};
   hal::AdevRecord curve[kNumChannels][node::kMaxAdevPoints] = {};
   std::uint8_t n_points[kNumChannels] = {};
   std::bitset<node::kMaxAdevPoints> got[kNumChannels];
@@ -104,6 +105,9 @@ struct Telemetry {
         }
         break;
       }
+      case hal::RxEvent::Type::kRejects:
+        rejects = e.rec.rejects;
+        break;
       case hal::RxEvent::Type::kSample:
       case hal::RxEvent::Type::kMissing:
       case hal::RxEvent::Type::kConfig:
@@ -774,7 +778,25 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
                          {"duplicates", d(ns.duplicates)},
                          {"truncated", d(ns.truncated)},
                          {"error_frames", d(ns.error_frames)},
+                         {"kernel_drops", d(ns.kernel_drops)},
                          {"lost", d(plan.sent) - d(ns.samples)}}});
+  const hal::RejectsRecord& nr = tel.rejects;
+  g.push_back(StatGroup{"firmware node refusals (its RejectsRecord)",
+                        {{"bad_config", d(nr.bad_config)},
+                         {"config_same_values", d(nr.config_same_values)},
+                         {"model_rejected", d(nr.model_rejected)},
+                         {"samples_before_config", d(nr.samples_before_config)},
+                         {"cfg_mismatch", d(nr.cfg_mismatch)},
+                         {"late", d(nr.late)},
+                         {"resyncs", d(nr.resyncs)},
+                         {"remote_frames", d(nr.remote_frames)},
+                         {"bad_fragment", d(nr.bad_fragment)},
+                         {"orphan_fragments", d(nr.orphan_fragments)},
+                         {"busy", d(nr.busy)},
+                         {"telemetry_failures", d(nr.telemetry_failures)},
+                         {"gpio_errors", d(nr.gpio_errors)},
+                         {"peer_refused", d(nr.peer_refused)},
+                         {"bad_record", d(nr.bad_record)}}});
   g.push_back(StatGroup{"telemetry receiver (imu-sim)",
                         {{"frames", d(rs.frames)},
                          {"adev_records", d(tel.adev_records)},

@@ -10,7 +10,48 @@ std::uint32_t sat_u32(std::uint64_t v) {
   return v > 0xFFFFFFFFULL ? 0xFFFFFFFFU : static_cast<std::uint32_t>(v);
 }
 
+bool in_range(double v, double lo, double hi) { return v >= lo && v <= hi; }  // false for NaN
+
+// Exact equality without operator== on doubles (-Wfloat-equal): neither is less nor greater.
+// Both records passed config_in_range (no NaN), so this is value equality; any change of the
+// rate or an LSB, however small, is a new stream.
+bool same_value(double x, double y) { return !(x < y) && !(x > y); }
+
+bool same_values(const hal::ConfigRecord& a, const hal::ConfigRecord& b) {
+  bool same = same_value(a.rate_hz, b.rate_hz);
+  for (std::size_t c = 0; c < kChannels; ++c) {
+    same = same && same_value(a.lsb[c], b.lsb[c]);
+  }
+  return same;
+}
+
 }  // namespace
+
+bool model_in_range(const ChannelModel& m) {
+  if (!in_range(m.n, kMinModelNoise, kMaxModelNoise) ||
+      !in_range(m.b, kMinModelNoise, kMaxModelNoise) || !in_range(m.tp_s, kMinTpS, kMaxTpS)) {
+    return false;
+  }
+  // The filter is built at the rate of each ConfigRecord: it must be valid at both ends of the
+  // accepted rates, so that no accepted ConfigRecord leaves a channel without a filter.
+  FirstOrderGm gm{};
+  ScalarBiasKf<float> kf;
+  for (const double rate_hz : {kMinRateHz, kMaxRateHz}) {
+    if (first_order_gm_from_asd(m.n, m.b, m.tp_s, rate_hz, gm) != ModelStatus::kOk ||
+        kf.configure(gm, 0.0) != KfStatus::kOk) {
+      return false;
+    }
+  }
+  return true;
+}
+
+bool config_in_range(const hal::ConfigRecord& c) {
+  bool valid = in_range(c.rate_hz, kMinRateHz, kMaxRateHz);
+  for (const double lsb : c.lsb) {
+    valid = valid && in_range(lsb, kMinLsb, kMaxLsb);
+  }
+  return valid;
+}
 
 NodeStatus Node::configure(const NodeConfig& cfg, hal::FrameSink& tx, hal::DigitalInput* static_in,
                            hal::DigitalOutput* alarm_out) {
@@ -19,9 +60,7 @@ NodeStatus Node::configure(const NodeConfig& cfg, hal::FrameSink& tx, hal::Digit
     return NodeStatus::kBadConfig;
   }
   for (const ChannelModel& m : cfg.model) {
-    FirstOrderGm gm{};
-    // The rate is not known yet; 100 Hz only checks that the parameters are valid.
-    if (first_order_gm_from_asd(m.n, m.b, m.tp_s, 100.0, gm) != ModelStatus::kOk) {
+    if (!model_in_range(m)) {
       return NodeStatus::kBadConfig;
     }
   }
@@ -39,6 +78,9 @@ NodeStatus Node::configure(const NodeConfig& cfg, hal::FrameSink& tx, hal::Digit
   since_status_ = 0;
   since_adev_ = 0;
   transfer_id_ = 0;
+  kernel_drops_ = 0;
+  peer_refused_ = 0;
+  tx_down_ = false;
   configured_ = true;
   restart_estimators();
   if (alarm_out_ != nullptr && alarm_out_->write(false) != hal::GpioStatus::kOk) {
@@ -63,6 +105,7 @@ void Node::on_frame(const hal::CanFrame& f, std::size_t nbytes, std::uint64_t rx
   if (!configured_) {
     return;
   }
+  tx_down_ = false;  // a frame arrived: there is a peer to send telemetry to again
   (void)rx_.push_drain(f, nbytes, rx_time_ns, [this](const hal::RxEvent& e) { on_event(e); });
 }
 
@@ -92,6 +135,7 @@ void Node::on_event(const hal::RxEvent& e) {
     case hal::RxEvent::Type::kBias:
     case hal::RxEvent::Type::kMonitor:
     case hal::RxEvent::Type::kStats:
+    case hal::RxEvent::Type::kRejects:
       break;  // another node's telemetry on a shared bus: not ours to process
   }
 }
@@ -101,12 +145,15 @@ void Node::on_config(const hal::ConfigRecord& c) {
   if (have_cfg_ && c.cfg_id == cfg_.cfg_id) {
     return;  // the periodic repeat
   }
-  bool valid = c.rate_hz > 0.0 && c.rate_hz < 1e6;
-  for (double lsb : c.lsb) {
-    valid = valid && lsb > 0.0 && lsb < 1e6;
-  }
-  if (!valid) {
+  if (!config_in_range(c)) {
     ++stats_.bad_config;
+    return;
+  }
+  if (have_cfg_ && same_values(c, cfg_)) {
+    // A new cfg_id with the values in use: nothing the estimators depend on changed, so the
+    // stream goes on (a sender restart or a forged frame must not wipe hours of ADEV).
+    cfg_.cfg_id = c.cfg_id;
+    ++stats_.config_same_values;
     return;
   }
   if (have_cfg_) {
@@ -125,7 +172,7 @@ void Node::on_config(const hal::ConfigRecord& c) {
     FirstOrderGm gm{};
     if (first_order_gm_from_asd(m.n, m.b, m.tp_s, c.rate_hz, gm) != ModelStatus::kOk ||
         kf_[c_i].configure(gm, 0.0) != KfStatus::kOk) {
-      ++stats_.bad_config;  // cannot happen for parameters checked in configure()
+      ++stats_.model_rejected;  // cannot happen: model_in_range() checked both rate limits
     }
   }
   restart_estimators();
@@ -190,12 +237,10 @@ void Node::apply_missing() {
   }
   pending_missing_ = 0;
   stats_.missing += n;
-  adev_.mark_missing(n);
+  adev_.mark_missing(n);  // O(levels), any n
   if (init_count_ >= cfg_node_.init_samples) {
-    for (std::uint64_t i = 0; i < n; ++i) {
-      for (auto& kf : kf_) {
-        (void)kf.step(0.0F, false);  // prediction only: no measurement
-      }
+    for (auto& kf : kf_) {
+      kf.predict(n);  // n predictions without a measurement, constant time for any n
     }
   }
 }
@@ -243,12 +288,17 @@ void Node::update_alarm() {
 
 void Node::send_frames(const hal::EncodedFrames& fr) {
   for (std::size_t i = 0; i < fr.count; ++i) {
+    if (tx_down_) {
+      ++stats_.telemetry_failures;  // not tried: the link was down at the last try
+      continue;
+    }
     const hal::IoStatus st = tx_->send(fr.frame[i], cfg_node_.send_timeout_ms);
     stats_.last_send_status = st;
     if (st == hal::IoStatus::kOk) {
       ++stats_.telemetry_frames;
     } else {
       ++stats_.telemetry_failures;
+      tx_down_ = st == hal::IoStatus::kLinkDown;
     }
   }
 }
@@ -270,7 +320,7 @@ void Node::send_status() {
   st.duplicates = sat_u32(rs.duplicates);
   st.truncated = sat_u32(rs.truncated);
   st.error_frames = sat_u32(rs.error_frames);
-  st.kernel_drops = 0;  // the transport's counter; the host loop reports it separately
+  st.kernel_drops = sat_u32(kernel_drops_);
   hal::EncodedFrames fr{};
   hal::encode(st, cfg_node_.layout, transfer_id_++, fr);
   send_frames(fr);
@@ -315,6 +365,25 @@ void Node::send_status() {
                                        (white_any ? hal::kMonitorWhiteness : 0U) |
                                        (alarm_ ? hal::kMonitorAlarmLine : 0U));
   hal::encode(m, cfg_node_.layout, transfer_id_++, fr);
+  send_frames(fr);
+
+  hal::RejectsRecord rj{};
+  rj.bad_config = sat_u32(stats_.bad_config);
+  rj.config_same_values = sat_u32(stats_.config_same_values);
+  rj.model_rejected = sat_u32(stats_.model_rejected);
+  rj.samples_before_config = sat_u32(stats_.samples_before_config);
+  rj.cfg_mismatch = sat_u32(rs.cfg_mismatch);
+  rj.late = sat_u32(rs.late);
+  rj.resyncs = sat_u32(rs.resyncs);
+  rj.remote_frames = sat_u32(rs.remote_frames);
+  rj.bad_fragment = sat_u32(rs.bad_fragment);
+  rj.orphan_fragments = sat_u32(rs.orphan_fragments);
+  rj.busy = sat_u32(rs.busy);
+  rj.telemetry_failures = sat_u32(stats_.telemetry_failures);
+  rj.gpio_errors = sat_u32(stats_.gpio_errors);
+  rj.peer_refused = sat_u32(peer_refused_);
+  rj.bad_record = sat_u32(rs.bad_record);
+  hal::encode(rj, cfg_node_.layout, transfer_id_++, fr);
   send_frames(fr);
   ++stats_.status_sets;
 }

@@ -87,6 +87,8 @@ class CanSocket final : public FrameSource, public FrameSink {
   bool fd_capable_ = false;
   bool kernel_ts_ = false;
   bool down_ = false;
+  bool tx_broken_ = false;  // loopback: a send met the closed peer; receive() drains, then closes
+  bool rx_eof_pending_ = false;  // loopback: a send closed the ended link; receive() reports it
   BusOptions opt_{};
   char name_[64] = {};
   char error_[160] = {};

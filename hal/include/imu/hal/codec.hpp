@@ -67,8 +67,10 @@ enum class Layout : std::uint8_t { kFd, kClassic };
 
 /// Record kinds. Each has an 11-bit identifier per layout (FD id even, classic id = FD id + 1);
 /// a lower identifier wins arbitration, so configuration beats samples beats telemetry.
-enum class RecordKind : std::uint8_t { kConfig, kSample, kAdev, kBias, kMonitor, kStats };
-inline constexpr std::size_t kRecordKinds = 6;
+/// kRejects was added after the first version: a receiver that predates it counts its frames as
+/// unknown_id and loses nothing else (no existing layout or identifier changed).
+enum class RecordKind : std::uint8_t { kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects };
+inline constexpr std::size_t kRecordKinds = 7;
 
 inline constexpr std::uint32_t kIdConfigFd = 0x080;
 inline constexpr std::uint32_t kIdSampleFd = 0x100;
@@ -76,6 +78,7 @@ inline constexpr std::uint32_t kIdAdevFd = 0x200;
 inline constexpr std::uint32_t kIdBiasFd = 0x210;
 inline constexpr std::uint32_t kIdMonitorFd = 0x220;
 inline constexpr std::uint32_t kIdStatsFd = 0x230;
+inline constexpr std::uint32_t kIdRejectsFd = 0x240;
 
 inline constexpr std::size_t kChannels = 6;  ///< ax, ay, az (accelerometer), gx, gy, gz (gyro)
 
@@ -159,6 +162,26 @@ struct StatsRecord {
   std::uint32_t kernel_drops;
 };
 
+/// Everything the sender refused or could not do, beyond StatsRecord (its own receiver, node and
+/// link). 64 bytes. Counters saturate. Sent after each StatsRecord/BiasRecord/MonitorRecord set.
+struct RejectsRecord {
+  std::uint32_t bad_config;             ///< ConfigRecords refused (values out of range)
+  std::uint32_t config_same_values;     ///< new cfg_id with unchanged values: kept, no restart
+  std::uint32_t model_rejected;         ///< channel filters that could not be configured
+  std::uint32_t samples_before_config;  ///< samples ignored: no ConfigRecord yet
+  std::uint32_t cfg_mismatch;           ///< samples whose cfg_id is not the last config's
+  std::uint32_t late;                   ///< samples after their slot was declared missing
+  std::uint32_t resyncs;                ///< sequence jumped back: sender restart assumed
+  std::uint32_t remote_frames;          ///< RTR frames
+  std::uint32_t bad_fragment;           ///< classic fragment index beyond the record
+  std::uint32_t orphan_fragments;       ///< classic fragment without its transfer start
+  std::uint32_t busy;                   ///< receiver push refused until events were read
+  std::uint32_t telemetry_failures;     ///< telemetry frames the link refused
+  std::uint32_t gpio_errors;            ///< static input / alarm output failures
+  std::uint32_t peer_refused;           ///< loopback peers refused (other user id)
+  std::uint32_t bad_record;             ///< CRC-valid records refused (Config channel count)
+};
+
 /// Record lengths in bytes on the wire, CRC included.
 inline constexpr std::size_t kConfigLen = 64;
 inline constexpr std::size_t kSampleLen = 42;
@@ -166,6 +189,7 @@ inline constexpr std::size_t kAdevLen = 28;
 inline constexpr std::size_t kBiasLen = 60;
 inline constexpr std::size_t kMonitorLen = 20;
 inline constexpr std::size_t kStatsLen = 44;
+inline constexpr std::size_t kRejectsLen = 64;
 
 /// Wire length of a record kind; FD identifier of a kind. Constant time.
 [[nodiscard]] std::size_t record_len(RecordKind k);
@@ -190,6 +214,7 @@ void encode(const AdevRecord& r, Layout layout, std::uint8_t transfer_id, Encode
 void encode(const BiasRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
 void encode(const MonitorRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
 void encode(const StatsRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
+void encode(const RejectsRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
 
 // ---- Record serialisation (used by the encoders and by Receiver) ------------------------------
 
@@ -200,6 +225,7 @@ void serialize(const AdevRecord& r, std::uint8_t* buf);
 void serialize(const BiasRecord& r, std::uint8_t* buf);
 void serialize(const MonitorRecord& r, std::uint8_t* buf);
 void serialize(const StatsRecord& r, std::uint8_t* buf);
+void serialize(const RejectsRecord& r, std::uint8_t* buf);
 
 /// True if the last 4 bytes of buf[0, len) are the CRC-32C of the bytes before them.
 [[nodiscard]] bool crc_ok(const std::uint8_t* buf, std::size_t len);
@@ -211,6 +237,7 @@ void parse(const std::uint8_t* buf, AdevRecord& r);
 void parse(const std::uint8_t* buf, BiasRecord& r);
 void parse(const std::uint8_t* buf, MonitorRecord& r);
 void parse(const std::uint8_t* buf, StatsRecord& r);
+void parse(const std::uint8_t* buf, RejectsRecord& r);
 
 }  // namespace imu::hal
 

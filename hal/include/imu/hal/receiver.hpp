@@ -36,6 +36,8 @@ struct RxStats {
   std::uint64_t bad_fragment = 0;      ///< classic fragment index beyond the record length
   std::uint64_t truncated = 0;         ///< classic transfer abandoned before its last fragment
   std::uint64_t orphan_fragments = 0;  ///< classic fragment whose transfer start was not seen
+  std::uint64_t bad_record = 0;        ///< CRC-valid record this version refuses: a Config
+                                       ///< record whose channel count is not kChannels
   std::uint64_t records[kRecordKinds] = {};
   std::uint64_t samples = 0;           ///< samples released (Sample events)
   std::uint64_t duplicates = 0;        ///< sample with a sequence number already received
@@ -59,13 +61,16 @@ enum class FrameVerdict : std::uint8_t {
   kRemoteFrame,
   kErrorFrame,
   kCrcError,
+  kBadRecord,       ///< CRC-valid but refused (RxStats::bad_record)
   kBadFragment,
   kOrphanFragment,
 };
 
 /// One output event. `rec` holds the member named by `type` (kMissing uses no member).
 struct RxEvent {
-  enum class Type : std::uint8_t { kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats };
+  enum class Type : std::uint8_t {
+    kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats, kRejects
+  };
   Type type;
   std::uint64_t rx_time_ns;           ///< receive time of the frame that completed the record
   std::uint32_t missing_first_seq;    ///< kMissing: first missing sequence number
@@ -79,6 +84,7 @@ struct RxEvent {
     BiasRecord bias;
     MonitorRecord monitor;
     StatsRecord stats;
+    RejectsRecord rejects;
   } rec;
 };
 
@@ -346,6 +352,10 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
     ++stats_.crc_errors;
     return FrameVerdict::kCrcError;
   }
+  if (k == RecordKind::kConfig && buf[1] != kChannels) {  // byte 1: the channel count
+    ++stats_.bad_record;  // counts[] and lsb[] would not mean what they say
+    return FrameVerdict::kBadRecord;
+  }
   ++stats_.records[static_cast<std::size_t>(k)];
   switch (k) {
     case RecordKind::kSample: {
@@ -370,6 +380,9 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
       break;
     case RecordKind::kStats:
       parse(buf, enqueue(RxEvent::Type::kStats, rx_time_ns).rec.stats);
+      break;
+    case RecordKind::kRejects:
+      parse(buf, enqueue(RxEvent::Type::kRejects, rx_time_ns).rec.rejects);
       break;
   }
   return FrameVerdict::kRecord;

@@ -5,7 +5,8 @@
 // filter per channel (imu::ScalarBiasKf<float>, the seed's first-order model) with its residual
 // monitors (imu::ResidualMonitors), drives the alarm output while any monitor fires, and sends
 // telemetry frames (hal codec records) to a FrameSink:
-//   every status_period_samples:  StatsRecord, BiasRecord, MonitorRecord (in that order);
+//   every status_period_samples:  StatsRecord, BiasRecord, MonitorRecord, RejectsRecord (in that
+//                                 order);
 //   every adev_period_samples:    the same, then the full ADEV curve of every channel;
 //   at on_idle() / finish():      the same full set if samples arrived since the last one.
 // A consumer that knows how many samples it sent recognises the final curves as the first
@@ -13,8 +14,11 @@
 //
 // Samples are interpreted with the last ConfigRecord (rate, LSB per channel); samples before
 // the first ConfigRecord are counted (stats.samples_before_config) and ignored. A ConfigRecord
-// with a new cfg_id restarts the estimators (a new stream). Missing samples reported by the
-// receiver go to MultiAdev::mark_missing and advance the filters by prediction only.
+// outside the accepted ranges (config_in_range) is refused and counted (bad_config). One with a
+// new cfg_id and different values restarts the estimators (a new stream); one with a new cfg_id
+// and the same values only adopts the id (config_same_values). Missing samples reported by the
+// receiver go to MultiAdev::mark_missing (O(levels)) and ScalarBiasKf::predict(n) (O(1)): a
+// forged sequence number 2^31 ahead costs the same as one lost sample.
 // Filter: the known signal of each channel (gravity + initial bias) is the mean of its first
 // init_samples samples; the filter then estimates the bias relative to it, updating only while
 // the static input is active (no input: always static). A channel whose counts have all been 0
@@ -56,6 +60,27 @@ struct ChannelModel {
   double tp_s;  ///< delay of the model's ADEV peak [s]
 };
 
+// Accepted ranges (both ends included). ConfigRecord: 0.1 Hz .. 100 kHz covers every IMU
+// output rate; an LSB of 1e-12 .. 1e3 channel units (m/s^2, rad/s) per count keeps every
+// count * LSB and its square normal in float (int32 full scale * 1e3 = 2e12; 1e-12^2 = 1e-24
+// > FLT_MIN) and is 6 orders below / above any real sensor. ChannelModel: N and B in
+// 1e-12 .. 1e3 channel units, Tp in 0.1 s .. 1e8 s (3 years); the model must also give a valid
+// filter at both rate limits.
+inline constexpr double kMinRateHz = 0.1;
+inline constexpr double kMaxRateHz = 1e5;
+inline constexpr double kMinLsb = 1e-12;
+inline constexpr double kMaxLsb = 1e3;
+inline constexpr double kMinModelNoise = 1e-12;
+inline constexpr double kMaxModelNoise = 1e3;
+inline constexpr double kMinTpS = 0.1;
+inline constexpr double kMaxTpS = 1e8;
+
+/// True if every parameter is in the ranges above and the first-order model and its filter
+/// are valid at kMinRateHz and kMaxRateHz. O(1) (two small matrix exponentials).
+[[nodiscard]] bool model_in_range(const ChannelModel& m);
+/// True if the rate and every LSB are in the ranges above. O(1).
+[[nodiscard]] bool config_in_range(const hal::ConfigRecord& c);
+
 /// Defaults: accelerometers the seed's model (N = 3.3e-3 m/s/sqrt(s), B = 9e-4 m/s^2,
 /// Tp = 300 s); gyros the ADIS16405 datasheet's typical angle random walk 2 deg/sqrt(h)
 /// (5.8e-4 rad/s/sqrt(Hz)) and in-run bias stability 0.007 deg/s (1.2e-4 rad/s), Tp = 300 s.
@@ -85,10 +110,12 @@ struct NodeStats {
   std::uint64_t samples_before_config = 0;  ///< ignored: no ConfigRecord yet
   std::uint64_t configs = 0;                ///< ConfigRecords received
   std::uint64_t restarts = 0;               ///< ConfigRecords with a new cfg_id after the first
-  std::uint64_t bad_config = 0;             ///< ConfigRecords rejected (rate or LSB not > 0)
+  std::uint64_t bad_config = 0;             ///< ConfigRecords refused (config_in_range)
+  std::uint64_t config_same_values = 0;     ///< new cfg_id, same values: id adopted, no restart
+  std::uint64_t model_rejected = 0;         ///< a channel filter not configurable (never expected)
   std::uint64_t saturated = 0;              ///< samples with a sat_mask bit set
   std::uint64_t telemetry_frames = 0;       ///< frames sent
-  std::uint64_t telemetry_failures = 0;     ///< frames the sink refused (send status not ok)
+  std::uint64_t telemetry_failures = 0;     ///< frames the sink refused or not tried (link down)
   std::uint64_t status_sets = 0;            ///< stats/bias/monitor triples sent
   std::uint64_t adev_sets = 0;              ///< full ADEV telemetry sets sent
   std::uint64_t gpio_errors = 0;            ///< static input read / alarm write failures
@@ -115,8 +142,17 @@ class Node {
   /// End of stream: same as on_idle(). Telemetry is not sent if the sink is gone (counted).
   void finish() { on_idle(); }
 
-  /// Send stats, bias and monitor records now. O(1) frames.
+  /// Send stats, bias, monitor and rejects records now. O(1) frames.
   void send_status();
+
+  /// Counters of the transport that the node core cannot read itself, passed in by the host
+  /// loop (node_loop) after each batch and sent in telemetry: the kernel's cumulative receive
+  /// queue drops (SO_RXQ_OVFL, StatsRecord::kernel_drops) and loopback peers refused
+  /// (RejectsRecord::peer_refused). O(1).
+  void set_link_counters(std::uint64_t kernel_drops, std::uint64_t peer_refused) {
+    kernel_drops_ = kernel_drops;
+    peer_refused_ = peer_refused;
+  }
   /// Send status and every channel's ADEV curve now.
   void send_full();
 
@@ -162,6 +198,11 @@ class Node {
   double init_sum_[kChannels] = {};
   std::uint32_t init_count_ = 0;
   std::uint64_t pending_missing_ = 0;  // reported missing, not yet applied
+  std::uint64_t kernel_drops_ = 0;     // from the host loop (set_link_counters)
+  std::uint64_t peer_refused_ = 0;
+  // The sink said kLinkDown: further telemetry is counted as failed without being tried (each
+  // try may wait send_timeout_ms) until the next received frame shows a peer again.
+  bool tx_down_ = false;
   double lsb_[kChannels] = {};
   hal::ConfigRecord cfg_{};
   bool have_cfg_ = false;

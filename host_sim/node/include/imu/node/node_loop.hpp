@@ -17,6 +17,9 @@ struct LoopOptions {
   int idle_ms = 200;       ///< no frame for this long: Node::on_idle() (flush + final telemetry)
   int exit_idle_ms = 0;    ///< stop after this long without frames once samples came (0: never)
   bool exit_on_link_down = true;  ///< the loopback peer closed after samples: stream ended
+  /// No frame from the peer for this long, whether it is connected and silent, gone, or never
+  /// came: kPeerTimeout (0: never). Counted from the start and from the last frame.
+  int peer_timeout_ms = 0;
   const std::atomic<bool>* stop = nullptr;  ///< polled between batches (e.g. set by SIGINT)
 };
 
@@ -25,11 +28,13 @@ enum class LoopEnd : std::uint8_t {
   kIdle,      ///< exit_idle_ms passed without frames after samples
   kStopped,   ///< *stop became true
   kError,     ///< a transport error other than timeout / link down; see the socket's error()
+  kPeerTimeout,  ///< peer_timeout_ms passed without a frame (the peer is gone)
 };
 
 [[nodiscard]] const char* to_string(LoopEnd e);
 
-/// Run until the stream ends. Calls node.finish() before returning (except for kError).
+/// Run until the stream ends. Calls node.finish() before returning (except for kError). After
+/// every batch it passes the socket's kernel_drops and peer_refused to node.set_link_counters.
 /// Cost: one poll + one recvmmsg per batch of up to 64 frames.
 [[nodiscard]] LoopEnd run_node_loop(Node& node, hal::CanSocket& bus, const LoopOptions& opt);
 
