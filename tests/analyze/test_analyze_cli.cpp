@@ -1,6 +1,8 @@
 // imu::analyze::cli_main on a synthetic MAT file: text report, JSON keys, plots, bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -76,6 +78,7 @@ TEST_F(AnalyzeCli, WritesJsonWithTheFixedKeys) {
   EXPECT_NE(j.find("\"samples\": 200000"), std::string::npos);
   // The 10 spikes of 0.4 (12 sigma of the white noise) are the only effect.
   EXPECT_NE(j.find("{\"type\": \"outliers\", \"count\": 10, \"times_s\": ["), std::string::npos) << j;
+  EXPECT_EQ(j.find("\"type\": \"bias_step\""), std::string::npos) << j;
   EXPECT_NE(j.find("LSB from the file"), std::string::npos);
 }
 
@@ -93,6 +96,65 @@ TEST_F(AnalyzeCli, BadInputGivesNonZeroExit) {
   EXPECT_NE(call({"analyze", tmp_path("missing.mat"), "--channel", "acc_x"}), 0);
   EXPECT_NE(call({"analyze", mat_, "--channel", "acc_x", "--fs", "-3"}), 0);
   EXPECT_NE(call({"analyze", mat_, "--channel", "acc_x", "--bogus"}), 0);
+}
+
+// Issue 11: a logger dropout (NaN samples) is a gap, counted and reported, not a refusal.
+TEST_F(AnalyzeCli, NanDropoutsAreGapsNotARefusal) {
+  imu::analyze::SynthSpec sp;
+  sp.samples = 200000;
+  sp.seed = 11;
+  sp.nan_gaps = 3;
+  sp.nan_gap_len = 500;
+  const std::vector<double> y = imu::analyze::synthesize(sp);
+  imu::mat::MatWriter w;
+  ASSERT_TRUE(w.add_column("acc_x", y).ok());
+  ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
+  const std::string mat = tmp_path("nan.mat");
+  {
+    std::ofstream f(mat, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(w.bytes().data()),
+            static_cast<std::streamsize>(w.bytes().size()));
+  }
+  const std::string json = tmp_path("nan.json");
+  ASSERT_EQ(call({"analyze", mat, "--channel", "acc_x", "--json", json}), 0);
+  const std::string j = slurp(json);
+  EXPECT_NE(j.find("\"gaps\": {\"samples\": 1500, \"runs\": 3}"), std::string::npos) << j;
+  EXPECT_NE(j.find("\"unexplained\": ["), std::string::npos);
+  EXPECT_NE(j.find("\"bias_instability\": {\"B\": "), std::string::npos);
+  EXPECT_NE(j.find("\"n_states\": "), std::string::npos);
+}
+
+// Issue 11: integrated delta-velocity differentiated back (multiples of one step up to
+// floating-point residue) gives that step, not 1e-9; an LSB that would overflow int32 counts
+// falls back and says so.
+TEST(AnalyzeInputs, LsbToleratesFloatingPointResidueAndNeverOverflows) {
+  constexpr double kStep = 0.0012345;  // m/s^2 per count after scaling
+  std::vector<double> v(20000);
+  double vel = 0.0;  // integrated delta-velocity, in steps
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const double prev = vel * kStep;
+    vel += static_cast<double>(static_cast<int>(i * 7919 % 13) - 6);
+    v[i] = (vel * kStep - prev) * 100.0 / 100.0;  // a difference of two scaled integrals
+  }
+  std::string note;
+  const double lsb = imu::analyze::derive_lsb(v, note);
+  EXPECT_NEAR(lsb, kStep, 1e-9 * kStep) << note;
+  EXPECT_NE(note.find("lattice"), std::string::npos) << note;
+
+  // 9.81 +- tiny noise on a 1e-12 grid: the span / 2^30 rule keeps the counts inside int32.
+  std::vector<double> g(5000);
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    g[i] = 9.81 + 1e-3 * static_cast<double>(static_cast<int>(i * 104729 % 2001) - 1000) / 1000.0;
+  }
+  const double lsb2 = imu::analyze::derive_lsb(g, note);
+  double lo = g[0];
+  double hi = g[0];
+  for (const double x : g) {
+    lo = std::min(lo, x);
+    hi = std::max(hi, x);
+  }
+  EXPECT_LT((hi - lo) / lsb2, 2147483647.0) << note;
+  EXPECT_GT(lsb2, 0.0);
 }
 
 }  // namespace

@@ -23,7 +23,7 @@ constexpr const char* kUsage =
     "  (also imu-analyze) residual of the first-order model against the measured ADEV and the\n"
     "  bias filter's innovations, effects found, augmented model. --fs (else the file's fs or\n"
     "  Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or lsb) in\n"
-    "  [1e-12, 1e6]. A channel holding NaN/Inf is refused (gaps are not analysed yet).\n"
+    "  [1e-12, 1e6]. NaN/Inf samples are gaps (counted in the report's `gaps`).\n"
     "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
     "processed, failed write, out of memory), 2 command-line error\n";
 
@@ -80,16 +80,6 @@ int analyze_file(const std::string& file, const std::string& channel, double fs,
   auto col = m.read_column(channel);
   if (!col) {
     return fail(col.error().message, kExitRuntime);
-  }
-  std::size_t non_finite = 0;
-  for (const double v : col.value()) {
-    non_finite += std::isfinite(v) ? 0U : 1U;
-  }
-  if (non_finite > 0) {
-    return fail(file + ": variable '" + channel + "': " + std::to_string(non_finite) +
-                    " non-finite samples (NaN/Inf): analyze does not handle gaps (imu-sim adev "
-                    "does)",
-                kExitRuntime);
   }
   Options o;
   std::string err;
