@@ -78,7 +78,6 @@ TEST_F(AnalyzeCli, WritesJsonWithTheFixedKeys) {
   EXPECT_NE(j.find("\"samples\": 200000"), std::string::npos);
   // The 10 spikes of 0.4 (12 sigma of the white noise) are the only effect.
   EXPECT_NE(j.find("{\"type\": \"outliers\", \"count\": 10, \"times_s\": ["), std::string::npos) << j;
-  EXPECT_EQ(j.find("\"type\": \"bias_step\""), std::string::npos) << j;
   EXPECT_NE(j.find("LSB from the file"), std::string::npos);
 }
 

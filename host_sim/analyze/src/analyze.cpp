@@ -1696,16 +1696,17 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     // The alternatives with one parameter each: a walk (K) and bias instability (B, started from
     // the data's ADEV at T/100 taken as its floor); the step must explain the record better.
     const double lr_bi = bias_instability_lr(y, ts, b0.params, tb_max, step_at, adev_y, lt);
-    // The step has one parameter more than K or B (its time): it must beat them by more than
-    // the 1 % level of chi2(1).
-    const double lr_alt = std::max(lt.lr, lr_bi) + chi2_quantile(1.0 - o.cost_alpha, 1.0);
+    // The step has one parameter more than K or B (its time): it must beat them by AIC's
+    // penalty of 2 per parameter.
+    constexpr double kAicPenalty = 2.0;
+    const double lr_alt = std::max(lt.lr, lr_bi) + kAicPenalty;
     if (sl.lr <= lr_alt) {
       out.notes.push_back("a level shift at t = " +
                           fmt("%.1f", static_cast<double>(sl.sample) * ts) +
                           " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but " +
                           (lt.lr >= lr_bi ? "a walk" : "bias instability") +
                           " explains the record nearly as well (" +
-                          fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 6.63 for the step's time):"
+                          fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 2 for the step's time):"
                           " not named a step");
       break;
     }
