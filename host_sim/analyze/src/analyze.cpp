@@ -1788,6 +1788,21 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       p.sin2_f0_hz = cur_p.sin2_f0_hz;
       cands.push_back(Cand{type, terms | t, p, residual(eval, p, o, ts, tau_max).cost, nullptr});
     };
+    // A sinusoid candidate: the linear terms refitted to the ADEV of the record without it, the
+    // sinusoids of `sines` added analytically.
+    const auto add_sine_cand = [&](const char* type, const SineCand& sc, const ModelParams& sines) {
+      const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
+      const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max);
+      if (f.status != FitStatus::kOk) {
+        return;
+      }
+      ModelParams p = f.params;
+      p.sin_a = sines.sin_a;
+      p.sin_f0_hz = sines.sin_f0_hz;
+      p.sin2_a = sines.sin2_a;
+      p.sin2_f0_hz = sines.sin2_f0_hz;
+      cands.push_back(Cand{type, terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
+    };
     try_term("quantization", kFitQuantization);
     try_term("rate_random_walk", kFitRrw);
     try_term("ramp", kFitRamp);
@@ -1836,16 +1851,10 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         if (!sc.fit.ok) {
           continue;
         }
-        const SineFit& s = sc.fit;
-        const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
-        const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max);
-        if (f.status != FitStatus::kOk) {
-          continue;
-        }
-        ModelParams p = f.params;
-        p.sin_a = s.amplitude;
-        p.sin_f0_hz = s.f_hz;
-        cands.push_back(Cand{"sinusoid", terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
+        ModelParams sines{};
+        sines.sin_a = sc.fit.amplitude;
+        sines.sin_f0_hz = sc.fit.f_hz;
+        add_sine_cand("sinusoid", sc, sines);
       }
     } else if (!have_sine2) {
       // Harmonics of the sinusoid found (a periodic disturbance that is not a pure tone, e.g.
@@ -1869,18 +1878,12 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         if (!sc.fit.ok || !(sc.fit.amplitude > 0.0)) {
           continue;
         }
-        const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
-        const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max);
-        if (f.status != FitStatus::kOk) {
-          continue;
-        }
-        ModelParams p = f.params;
-        p.sin_a = sine.amplitude;
-        p.sin_f0_hz = sine.f_hz;
-        p.sin2_a = sc.fit.amplitude;
-        p.sin2_f0_hz = sc.fit.f_hz;
-        cands.push_back(Cand{"sinusoid_harmonic", terms, p, residual(eval, p, o, ts, tau_max).cost,
-                             &sc});
+        ModelParams sines{};
+        sines.sin_a = sine.amplitude;
+        sines.sin_f0_hz = sine.f_hz;
+        sines.sin2_a = sc.fit.amplitude;
+        sines.sin2_f0_hz = sc.fit.f_hz;
+        add_sine_cand("sinusoid_harmonic", sc, sines);
       }
     }
     const Cand* best = nullptr;
