@@ -204,8 +204,8 @@ TEST(AnalyzeSynthetic, BiasInstabilityIsFoundWithBWithin30Percent) {
                       ? 1
                       : 0;
     if (!ok || r.effects.size() > 1) {
-      std::printf("bias instability seed %llu:\n%s",
-                  static_cast<unsigned long long>(kFirst11 + static_cast<std::uint64_t>(i)),
+      const std::uint64_t seed = kFirst11 + static_cast<std::uint64_t>(i);
+      std::printf("bias instability seed %llu:\n%s", static_cast<unsigned long long>(seed),
                   describe(r).c_str());
     }
   }
@@ -288,8 +288,8 @@ TEST(AnalyzeSynthetic, AnEffectWithoutATermIsUnexplainedNotAWrongName) {
     const bool ok = !named && !r.unexplained.empty();
     honest += ok ? 1 : 0;
     if (!ok) {
-      std::printf("drift walk seed %llu:\n%s",
-                  static_cast<unsigned long long>(kFirst11 + static_cast<std::uint64_t>(i)),
+      const std::uint64_t seed = kFirst11 + static_cast<std::uint64_t>(i);
+      std::printf("drift walk seed %llu:\n%s", static_cast<unsigned long long>(seed),
                   describe(r).c_str());
     }
   }
