@@ -163,7 +163,7 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
     double sb = 0.0;
     double tb = 0.0;
     if (!get_number(json, i, "sb", sb, err) || !get_number(json, i, "tb_s", tb, err)) {
-      err = "model_after.gm[]: " + err;
+      err.insert(0, "model_after.gm[]: ");
       return false;
     }
     rec.gm_sb[n_gm] = static_cast<float>(sb);

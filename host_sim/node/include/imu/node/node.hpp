@@ -18,7 +18,10 @@
 // new cfg_id and different values restarts the estimators (a new stream); one with a new cfg_id
 // and the same values only adopts the id (config_same_values). Missing samples reported by the
 // receiver go to MultiAdev::mark_missing (O(levels)) and ScalarBiasKf::predict(n) (O(1)): a
-// forged sequence number 2^31 ahead costs the same as one lost sample.
+// forged sequence number 2^31 ahead costs the same as one lost sample (a pushed model: at most
+// kMaxGapSteps predictions).
+// Pushed models (ModelRecord, issue 12): see on_model in node.cpp and host_sim/README.md; a
+// channel runs either the seed model (ScalarBiasKf) or its pushed KalmanFilter<float, 8>.
 // Filter: the known signal of each channel (gravity + initial bias) is the mean of its first
 // init_samples samples; the filter then estimates the bias relative to it, updating only while
 // the static input is active (no input: always static). A channel whose counts have all been 0
@@ -26,7 +29,8 @@
 // is never exactly zero, a channel absent from a recording is. The static input is read once per
 // status period, not per sample (one GPIO ioctl per period).
 //
-// Memory: sizeof(Node) is the whole state (46.0 kB on x86-64, mostly six OnlineAdev<8,22>); no
+// Memory: sizeof(Node) is the whole state (54.4 kB on x86-64, mostly six OnlineAdev<8,22> and
+// six KalmanFilter<float, 8> of 888 bytes for pushed models); no
 // heap, no exceptions, no OS calls: the library is compiled with fw/src/fw_prelude.hpp. Not
 // re-entrant on one instance. Cost per sample: 6 ADEV pushes (amortised ~12 multiply-adds each)
 // + 6 scalar filter steps + monitors; a full ADEV telemetry set is 6 snapshots (O(96 * 8)) and
