@@ -294,7 +294,8 @@ TEST(SimCli, PushedAnalysisModelRunsOnTheNodeOnTheDemoData) {
 // The criterion, kept and disabled because it fails today: the CUSUM (slack 0.5,
 // threshold 10, latched) alarms with the pushed model and even with the true model (seed GM +
 // RRW K = 1.4e-4, 2 states). Its in-control ARL is about 1.4e5 samples per side (Siegmund's
-// approximation), shorter than the 10^6-sample record: it is the CUSUM's sizing, not the model, that decides this alarm.
+// approximation), shorter than the 10^6-sample record: it is the CUSUM's sizing, not the
+// model, that decides this alarm.
 TEST(SimCli, DISABLED_PushedAnalysisModelGivesNoCusumAlarm) {
   simtest::TempDir dir;
   std::string seed_json;
