@@ -9,16 +9,18 @@
 #   fig1_adev.svg/.png, fig2_covariance.svg/.png   the seed's Fig. 1 and Fig. 2 (gnuplot)
 #   *.csv           the data behind each figure; *.gp the gnuplot scripts
 #   synth.mat       the synthesised recording; imu-fw.log the firmware node's own output
+#   analysis.json, pushed/   imu-sim analyze's model, and the run with it pushed to the node
+#   node_models.txt the node's filter with the seed's model and with the pushed one, side by side
 # Needs nothing outside the repository (no ../shared). Usage: bash host_sim/demo.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 t0=$(date +%s.%N)
 elapsed() { echo "$(date +%s.%N) $t0" | awk '{printf "%.1f", $1 - $2}'; }
 
-echo "== 1/4 dependencies (toolchains/install-deps.sh core)"
+echo "== 1/5 dependencies (toolchains/install-deps.sh core)"
 toolchains/install-deps.sh core
 
-echo "== 2/4 build (cmake --preset release; imu-sim, imu-fw)"
+echo "== 2/5 build (cmake --preset release; imu-sim, imu-fw)"
 cmake --preset release >/dev/null
 cmake --build --preset release --target imu-sim imu-fw -j"$(nproc)"
 t_build=$(elapsed)
@@ -26,12 +28,34 @@ bin=build/host_sim/app
 out=out/demo
 mkdir -p "$out"
 
-echo "== 3/4 synthesise the default data ($out/synth.mat)"
+echo "== 3/5 synthesise the default data ($out/synth.mat)"
 "$bin/imu-sim" synth --out "$out/synth.mat"
 
-echo "== 4/4 run: emulator -> loopback bus -> imu-fw (separate process) -> telemetry -> report"
+echo "== 4/5 run: emulator -> loopback bus -> imu-fw (separate process) -> telemetry -> report"
 "$bin/imu-sim" run "$out/synth.mat" --channel acc_z --bus loopback --rate max \
   --node spawn --fw "$bin/imu-fw" --out "$out" --N 3.3e-3 --B 9e-4 --Tp 300 --K 1.4e-4
+
+echo
+echo "== 5/5 analyze, push its model to the node (imu-sim run --model), compare (issue 12)"
+"$bin/imu-sim" analyze "$out/synth.mat" --channel acc_z --json "$out/analysis.json" >/dev/null
+"$bin/imu-sim" run "$out/synth.mat" --channel acc_z --bus loopback --rate max --node spawn \
+  --fw "$bin/imu-fw" --out "$out/pushed" --N 3.3e-3 --B 9e-4 --Tp 300 --K 1.4e-4 \
+  --model "$out/analysis.json" --no-plots --quiet --sim-windows 10 >/dev/null
+field() { grep -o "\"$2\": [^,}]*" "$1" | head -1 | sed 's/.*: //'; }
+{
+  printf '%-22s %-10s %-9s %-9s %-10s %s\n' "node filter (acc_z)" origin n_states nis_mean \
+    whiteness cusum_alarm
+  for f in "$out/report.json" "$out/pushed/report.json"; do
+    node=$(mktemp)
+    grep '"node":' "$f" | sed 's/.*"node": //' >"$node"
+    printf '%-22s %-10s %-9s %-9s %-10s %s\n' "$([ "$f" = "$out/report.json" ] && echo "seed's model" || echo "pushed (analyze)")" \
+      "$(field "$node" origin | tr -d '"')" "$(field "$node" n_states)" \
+      "$(field "$node" nis_mean)" "$(field "$node" whiteness_ratio)" "$(field "$node" cusum_alarm)"
+    rm -f "$node"
+  done
+  echo "(the CUSUM, slack 0.5 and threshold 10, latched, alarms on this 10^6-sample record with"
+  echo " the true model too: host_sim/README.md, 'Pushing the analysis' model to the node')"
+} | tee "$out/node_models.txt"
 
 echo
 echo "report folder: $(cd "$out" && pwd)"

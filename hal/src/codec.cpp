@@ -190,6 +190,8 @@ std::size_t record_len(RecordKind k) {
     case RecordKind::kMonitor: return kMonitorLen;
     case RecordKind::kStats: return kStatsLen;
     case RecordKind::kRejects: return kRejectsLen;
+    case RecordKind::kModel:
+    case RecordKind::kModelEcho: return kModelLen;
   }
   return 0;
 }
@@ -203,6 +205,8 @@ std::uint32_t fd_id(RecordKind k) {
     case RecordKind::kMonitor: return kIdMonitorFd;
     case RecordKind::kStats: return kIdStatsFd;
     case RecordKind::kRejects: return kIdRejectsFd;
+    case RecordKind::kModel: return kIdModelFd;
+    case RecordKind::kModelEcho: return kIdModelEchoFd;
   }
   return 0;
 }
@@ -213,7 +217,8 @@ bool kind_of_id(std::uint32_t can_id, RecordKind& kind, Layout& layout) {
   }
   constexpr RecordKind kAll[] = {RecordKind::kConfig, RecordKind::kSample, RecordKind::kAdev,
                                  RecordKind::kBias,   RecordKind::kMonitor, RecordKind::kStats,
-                                 RecordKind::kRejects};
+                                 RecordKind::kRejects, RecordKind::kModel,
+                                 RecordKind::kModelEcho};
   for (const RecordKind k : kAll) {
     const std::uint32_t id = fd_id(k);
     if (can_id == id || can_id == id + 1) {
@@ -325,6 +330,25 @@ void serialize(const RejectsRecord& r, std::uint8_t* buf) {
   w.crc();
 }
 
+void serialize(const ModelRecord& r, std::uint8_t* buf) {
+  Writer w(buf);
+  w.u8(r.version);
+  w.u8(r.channel);
+  w.u8(r.n_states);
+  w.u8(r.flags);
+  w.f32(r.n);
+  w.f32(r.q);
+  w.f32(r.gm_sb[0]);
+  w.f32(r.gm_tb_s[0]);
+  w.f32(r.gm_sb[1]);
+  w.f32(r.gm_tb_s[1]);
+  w.f32(r.k);
+  w.f32(r.bi);
+  w.f32(r.bi_tau_lo_s);
+  w.f32(r.bi_tau_hi_s);
+  w.crc();
+}
+
 // ---- parse -----------------------------------------------------------------------------------
 
 void parse(const std::uint8_t* buf, ConfigRecord& r) {
@@ -415,6 +439,24 @@ void parse(const std::uint8_t* buf, RejectsRecord& r) {
   r.bad_record = rd.u32();
 }
 
+void parse(const std::uint8_t* buf, ModelRecord& r) {
+  Reader rd(buf);
+  r.version = rd.u8();
+  r.channel = rd.u8();
+  r.n_states = rd.u8();
+  r.flags = rd.u8();
+  r.n = rd.f32();
+  r.q = rd.f32();
+  r.gm_sb[0] = rd.f32();
+  r.gm_tb_s[0] = rd.f32();
+  r.gm_sb[1] = rd.f32();
+  r.gm_tb_s[1] = rd.f32();
+  r.k = rd.f32();
+  r.bi = rd.f32();
+  r.bi_tau_lo_s = rd.f32();
+  r.bi_tau_hi_s = rd.f32();
+}
+
 // ---- encode ----------------------------------------------------------------------------------
 
 void encode(const ConfigRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out) {
@@ -460,6 +502,14 @@ void encode(const RejectsRecord& r, Layout layout, std::uint8_t transfer_id,
   std::uint8_t buf[kRejectsLen];
   serialize(r, buf);
   frame_record(buf, kRejectsLen, RecordKind::kRejects, layout, transfer_id, out);
+}
+
+void encode(const ModelRecord& r, bool echo, Layout layout, std::uint8_t transfer_id,
+            EncodedFrames& out) {
+  std::uint8_t buf[kModelLen];
+  serialize(r, buf);
+  frame_record(buf, kModelLen, echo ? RecordKind::kModelEcho : RecordKind::kModel, layout,
+               transfer_id, out);
 }
 
 }  // namespace imu::hal

@@ -315,3 +315,66 @@ TEST(Codec, FineLsbAddsLessThanOnePercentOfWhiteNoise) {
 }
 
 }  // namespace
+
+// ModelRecord (issue 12): 48 bytes, 0x090/0x091 as a push and 0x250/0x251 as the node's echo,
+// every field back bit-exact in both layouts; a wrong version or a channel >= 6 is refused as
+// bad_record even with a valid CRC.
+TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {
+  imu::hal::ModelRecord r{};
+  r.version = imu::hal::kModelVersion;
+  r.channel = 5;
+  r.n_states = 7;
+  r.flags = imu::hal::kModelPushed;
+  float* const fields[] = {&r.n,         &r.q,  &r.gm_sb[0], &r.gm_tb_s[0],    &r.gm_sb[1],
+                           &r.gm_tb_s[1], &r.k, &r.bi,       &r.bi_tau_lo_s, &r.bi_tau_hi_s};
+  float v = 1.25e-3F;
+  for (float* f : fields) {
+    *f = v;
+    v *= 3.5F;
+  }
+  for (const bool echo : {false, true}) {
+    for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+      EncodedFrames out{};
+      imu::hal::encode(r, echo, layout, 3, out);
+      const std::uint32_t id = (echo ? 0x250U : 0x090U) + (layout == Layout::kFd ? 0U : 1U);
+      ASSERT_EQ(out.count, layout == Layout::kFd ? 1U : 7U);
+      EXPECT_EQ(out.frame[0].can_id, id);
+      imu::hal::Receiver<8> rx;
+      std::size_t got = 0;
+      for (std::size_t i = 0; i < out.count; ++i) {
+        (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
+                            [&](const imu::hal::RxEvent& e) {
+                              ASSERT_EQ(e.type, echo ? imu::hal::RxEvent::Type::kModelEcho
+                                                     : imu::hal::RxEvent::Type::kModel);
+                              // Bit-exact: the wire bytes of what came back equal those sent.
+                              std::uint8_t a[imu::hal::kModelLen];
+                              std::uint8_t b[imu::hal::kModelLen];
+                              imu::hal::serialize(e.rec.model, a);
+                              imu::hal::serialize(r, b);
+                              EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
+                              EXPECT_EQ(e.rec.model.channel, 5U);
+                              EXPECT_EQ(e.rec.model.n_states, 7U);
+                              ++got;
+                            });
+      }
+      EXPECT_EQ(got, 1U);
+    }
+  }
+  for (const int bad : {0, 1}) {
+    imu::hal::ModelRecord b = r;
+    if (bad == 0) {
+      b.version = 2;
+    } else {
+      b.channel = 6;
+    }
+    EncodedFrames out{};
+    imu::hal::encode(b, false, Layout::kFd, 0, out);
+    imu::hal::Receiver<8> rx;
+    std::size_t got = 0;
+    (void)rx.push_drain(out.frame[0], imu::hal::wire_size(out.frame[0]), 0,
+                        [&](const imu::hal::RxEvent&) { ++got; });
+    EXPECT_EQ(got, 0U);
+    EXPECT_EQ(rx.stats().bad_record, 1U);
+    EXPECT_EQ(rx.stats().crc_errors, 0U);
+  }
+}

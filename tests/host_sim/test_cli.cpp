@@ -242,3 +242,81 @@ TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
 }
 
 }  // namespace
+
+/// Issue 12 items 2-3 on the demo's synthetic data (synth defaults: the seed's model + RRW):
+/// the seed's model on the node raises the CUSUM alarm, and the model `imu-sim analyze` finds,
+/// pushed with `run --model`, is the one the node reports it runs, with an NIS mean in
+/// [0.8, 1.25] (the issue's band). The issue's "no CUSUM alarm with the pushed model" does NOT
+/// hold yet: see DISABLED_PushedAnalysisModelGivesNoCusumAlarm.
+namespace {
+void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::string& push_json) {
+  const std::string mat = dir.file("synth.mat");
+  auto r = run({"synth", "--out", mat});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string analysis = dir.file("a.json");
+  r = run({"analyze", mat, "--channel", "acc_z", "--json", analysis});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::vector<std::string> common = {"--bus", "loopback", "--rate", "max", "--no-plots",
+                                           "--quiet", "--sim-windows", "10", "--N", "3.3e-3",
+                                           "--B", "9e-4", "--Tp", "300"};
+  std::vector<std::string> seed_args = {"run", mat, "--out", dir.file("seed")};
+  seed_args.insert(seed_args.end(), common.begin(), common.end());
+  r = run(seed_args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  seed_json = simtest::read_text(dir.file("seed") + "/report.json");
+  std::vector<std::string> push_args = {"run", mat, "--out", dir.file("push"), "--model",
+                                        analysis};
+  push_args.insert(push_args.end(), common.begin(), common.end());
+  r = run(push_args);
+  ASSERT_EQ(r.status, 0) << r.err;
+  push_json = simtest::read_text(dir.file("push") + "/report.json");
+}
+}  // namespace
+
+TEST(SimCli, PushedAnalysisModelRunsOnTheNodeOnTheDemoData) {
+  SKIP_IF_EMULATED();
+  simtest::TempDir dir;
+  std::string seed_json;
+  std::string push_json;
+  run_seed_and_pushed(dir, seed_json, push_json);
+  EXPECT_NE(seed_json.find("\"origin\": \"seed\""), std::string::npos) << seed_json;
+  EXPECT_NE(seed_json.find("\"cusum_alarm\": true"), std::string::npos)
+      << "the seed's model raises the CUSUM alarm on the demo data";
+  EXPECT_NE(push_json.find("\"origin\": \"pushed\""), std::string::npos) << push_json;
+  EXPECT_NE(push_json.find("\"model_pushed\": true"), std::string::npos);
+  const double nis = simtest::json_number_in(push_json, "node", "nis_mean");
+  EXPECT_GE(nis, 0.8);
+  EXPECT_LE(nis, 1.25);
+  EXPECT_EQ(simtest::json_number_in(push_json, "node", "model_rejected"), 0.0);
+  EXPECT_GE(simtest::json_number_in(push_json, "node", "n_states"), 1.0);
+}
+
+// The issue's criterion, kept and disabled because it fails today: the CUSUM (slack 0.5,
+// threshold 10, latched) alarms with the pushed model and even with the true model (seed GM +
+// RRW K = 1.4e-4, 2 states). Its in-control ARL is about 1.4e5 samples per side (Siegmund's
+// approximation), shorter than the 10^6-sample record: it is the CUSUM's sizing, not the
+// model, that decides this alarm.
+TEST(SimCli, DISABLED_PushedAnalysisModelGivesNoCusumAlarm) {
+  simtest::TempDir dir;
+  std::string seed_json;
+  std::string push_json;
+  run_seed_and_pushed(dir, seed_json, push_json);
+  EXPECT_NE(push_json.find("\"cusum_alarm\": false"), std::string::npos);
+}
+
+/// A malformed or missing model file is a one-line error, exit 1.
+TEST(SimCli, RunModelFileErrors) {
+  simtest::TempDir dir;
+  const std::string mat = dir.file("synth.mat");
+  auto r = run({"synth", "--out", mat, "--duration", "100"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string bad = dir.file("bad.json");
+  {
+    std::ofstream(bad) << "{\"channel\": \"acc_z\", \"model_before\": {}}";
+  }
+  for (const std::string& f : {bad, dir.file("absent.json")}) {
+    r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--out", dir.file("o")});
+    EXPECT_EQ(r.status, 1) << f;
+    EXPECT_EQ(simtest::count_lines(r.err), 1U) << r.err;
+  }
+}

@@ -417,3 +417,77 @@ TEST_F(NodeTest, TelemetryIsNotRetriedPerFrameWhileTheLinkIsDown) {
 }
 
 }  // namespace
+
+namespace {
+
+imu::hal::ModelRecord echo_of(const std::vector<imu::hal::RxEvent>& ev, std::size_t chan) {
+  imu::hal::ModelRecord last{};
+  for (const auto& e : ev) {
+    if (e.type == imu::hal::RxEvent::Type::kModelEcho && e.rec.model.channel == chan) {
+      last = e.rec.model;
+    }
+  }
+  return last;
+}
+
+}  // namespace
+
+// Issue 12 item 2: a pushed model is validated completely before it is swapped in; a refused
+// one keeps the old model and is counted; the echo says what runs.
+TEST_F(NodeTest, PushedModelIsValidatedSwappedAndEchoed) {
+  send_config(100.0, 1e-4);
+  auto push_model = [this](const imu::hal::ModelRecord& m) {
+    EncodedFrames fr{};
+    imu::hal::encode(m, false, imu::hal::Layout::kFd, 0, fr);
+    push(fr);
+  };
+  imu::hal::ModelRecord good{};
+  good.version = imu::hal::kModelVersion;
+  good.channel = 2;
+  good.n = 3.3e-3F;
+  good.gm_sb[0] = 2.68e-8F;
+  good.gm_tb_s[0] = 158.7F;
+  good.k = 1.4e-4F;  // GM + RRW: 2 states
+  push_model(good);
+  auto ev = sink_.events();
+  imu::hal::ModelRecord e = echo_of(ev, 2);
+  EXPECT_EQ(e.flags & imu::hal::kModelPushed, imu::hal::kModelPushed);
+  EXPECT_EQ(e.n_states, 2U);
+  EXPECT_EQ(node_->stats().model_rejected, 0U);
+  EXPECT_EQ(echo_of(ev, 1).n_states, 1U) << "other channels keep the seed's one-state model";
+  EXPECT_EQ(echo_of(ev, 1).flags, 0U);
+
+  imu::hal::ModelRecord nan_rec = good;
+  nan_rec.k = std::numeric_limits<float>::quiet_NaN();
+  imu::hal::ModelRecord too_big = good;  // 2 GM + RRW + a flicker bank over 7 decades > 8
+  too_big.gm_sb[1] = 1e-6F;
+  too_big.gm_tb_s[1] = 0.2F;
+  too_big.bi = 1e-3F;
+  too_big.bi_tau_lo_s = 0.01F;
+  too_big.bi_tau_hi_s = 1e5F;
+  imu::hal::ModelRecord no_white = good;
+  no_white.n = 0.0F;
+  imu::hal::ModelRecord neg_tb = good;
+  neg_tb.gm_tb_s[0] = -1.0F;
+  std::uint64_t refused = 0;
+  for (const auto& bad : {nan_rec, too_big, no_white, neg_tb}) {
+    push_model(bad);
+    ++refused;
+    EXPECT_EQ(node_->stats().model_rejected, refused);
+    e = echo_of(sink_.events(), 2);
+    EXPECT_EQ(e.n_states, 2U) << "the old model stays";
+    EXPECT_NEAR(e.k, 1.4e-4F, 1e-9F);  // the record travels as float32: bit-exact here
+  }
+  // The filter runs: 2000 samples of white noise give a finite bias and variance.
+  imu::GaussianRng rng(5);
+  for (std::uint32_t k = 0; k < 2000; ++k) {
+    const std::int32_t c[6] = {0, 0, static_cast<std::int32_t>(std::lround(0.033 * rng.normal() / 1e-4)),
+                               0, 0, 0};
+    send_sample(k, c);
+  }
+  EXPECT_TRUE(std::isfinite(node_->bias(2)));
+  EXPECT_GT(node_->bias_var(2), 0.0F);
+  std::printf("RAM: sizeof(KalmanFilter<float, %zu>) = %zu bytes per channel, sizeof(Node) = %zu\n",
+              imu::node::kNodeStates, sizeof(imu::KalmanFilter<float, imu::node::kNodeStates>),
+              sizeof(Node));
+}

@@ -51,7 +51,7 @@ constexpr const char* kUsageRun =
     "      [--node inproc|spawn|external] [--out DIR] [--json FILE] [--N --B --Tp [--K]]\n"
     "      [--no-plots] [--quiet] [--T-avg 10] [--T-int 20] [--sim-windows 1000] [--seed 2]\n"
     "      [--timeout 30] [--window 4096|256] [--layout auto|fd|classic] [--only-channel]\n"
-    "      [--fw PATH] [--lsb X] [--fs X]      (--mat FILE is an alias of FILE)\n"
+    "      [--fw PATH] [--lsb X] [--fs X] [--model A.json]  (--mat FILE: alias of FILE)\n"
     "  sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON, CSV, SVG/PNG\n"
     "  plots in DIR, default out/run). A sample with NaN/Inf in a channel sent is not sent (the\n"
     "  node counts it missing). LSB and rate rules as for adev. Ranges: --T-avg + --T-int at\n"

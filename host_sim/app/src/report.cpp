@@ -626,7 +626,11 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
     }
     j += "}";
   }
-  j += "\n  },\n  \"timing_s\": {";
+  j += "\n  },\n";
+  if (!in.node_json.empty()) {
+    j += "  \"node\": " + in.node_json + ",\n";
+  }
+  j += "  \"timing_s\": {";
   for (std::size_t k = 0; k < in.timing_s.size(); ++k) {
     j += (k == 0 ? "" : ", ") + json_str(in.timing_s[k].first) + ": " +
          json_num(in.timing_s[k].second);

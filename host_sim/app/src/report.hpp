@@ -65,6 +65,7 @@ struct ReportInput {
   std::vector<StatGroup> stats;    ///< frame statistics
   std::vector<std::pair<std::string, double>> timing_s;
   std::vector<std::string> notes;  ///< printed at the end
+  std::string node_json;           ///< the run JSON's "node" object (empty: left out)
 };
 
 /// Compute model, fit, simulation and covariance check; write out_dir/report.txt, the JSON,

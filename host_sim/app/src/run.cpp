@@ -17,6 +17,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <memory>
 #include <string>
 #include <thread>
@@ -29,6 +31,7 @@
 #include "imu/hal/gpio_line.hpp"
 #include "imu/node/node.hpp"
 #include "imu/node/node_loop.hpp"
+#include "model_json.hpp"
 #include "report.hpp"
 #include "run.hpp"
 
@@ -48,6 +51,8 @@ struct Telemetry {
   bool have_monitor = false;
   hal::MonitorRecord monitor{};
   hal::RejectsRecord rejects{};
+  hal::ModelRecord model_echo[hal::kChannels] = {};  // what the node runs, per channel
+  bool have_model_echo[hal::kChannels] = {};
   hal::AdevRecord curve[kNumChannels][node::kMaxAdevPoints] = {};
   std::uint8_t n_points[kNumChannels] = {};
   std::bitset<node::kMaxAdevPoints> got[kNumChannels];
@@ -108,6 +113,11 @@ struct Telemetry {
       case hal::RxEvent::Type::kRejects:
         rejects = e.rec.rejects;
         break;
+      case hal::RxEvent::Type::kModelEcho:
+        model_echo[e.rec.model.channel] = e.rec.model;  // channel < 6: checked by the receiver
+        have_model_echo[e.rec.model.channel] = true;
+        break;
+      case hal::RxEvent::Type::kModel:
       case hal::RxEvent::Type::kSample:
       case hal::RxEvent::Type::kMissing:
       case hal::RxEvent::Type::kConfig:
@@ -278,6 +288,9 @@ struct RunOptions {
   double fs_opt = 0.0;
   bool quiet = false;
   bool only_channel = false;
+  std::string model_path;       ///< --model: analysis JSON whose model_after is pushed
+  hal::ModelRecord model{};     ///< read from model_path
+  bool push_model = false;
 };
 
 // Work limits of the covariance check: simulated windows, and samples simulated in all.
@@ -317,6 +330,8 @@ bool parse_run_names(const Args& a, RunOptions& o, std::string& err) {
   o.fw = a.get("--fw", "");
   o.quiet = a.has("--quiet");
   o.only_channel = a.has("--only-channel");
+  o.model_path = a.get("--model", "");
+  o.push_model = !o.model_path.empty();
   return err.empty();
 }
 
@@ -363,6 +378,7 @@ bool parse_run(int argc, char** argv, RunOptions& o, std::string& err) {
       {"--no-plots", false}, {"--quiet", false},  {"--T-avg", true},     {"--T-int", true},
       {"--sim-windows", true}, {"--seed", true},  {"--timeout", true},   {"--window", true},
       {"--lsb", true},     {"--fs", true},        {"--layout", true},    {"--only-channel", false},
+      {"--model", true},
   };
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
     return false;
@@ -663,7 +679,11 @@ int send_samples(const SensorData& sd, const std::vector<std::int32_t> (&counts)
     const std::uint64_t q = k - plan.lo;  // sequence number
     if (q % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
       hal::encode(tx.cfg, tx.s.layout, tx.cfg_tid++, tx.fr);
-      const int st = tx.send_frames(q == 0, q == 0 && tx.o.node_mode != "inproc");
+      int st = tx.send_frames(q == 0, q == 0 && tx.o.node_mode != "inproc");
+      if (st == kExitOk && q == 0 && tx.o.push_model) {
+        hal::encode(tx.o.model, false, tx.s.layout, tx.cfg_tid++, tx.fr);  // after the config
+        st = tx.send_frames(false, false);
+      }
       if (st != kExitOk) {
         return st;
       }
@@ -880,6 +900,49 @@ std::vector<std::string> report_notes(const RunOptions& o, const SensorData& sd,
   return notes;
 }
 
+// The run JSON's "node" object: the model the node reports it runs for the channel, its
+// residual monitors and its fault counters.
+std::string node_json(const RunOptions& o, const Telemetry& tel) {
+  const auto f = [](float v) { return json_num(static_cast<double>(v)); };
+  std::string j = "{\"model\": ";
+  if (tel.have_model_echo[o.chan]) {
+    const hal::ModelRecord& m = tel.model_echo[o.chan];
+    j += std::string("{\"origin\": ") + ((m.flags & hal::kModelPushed) != 0 ? "\"pushed\"" : "\"seed\"") +
+         ", \"n_states\": " + std::to_string(m.n_states) + ", \"n\": " + f(m.n) +
+         ", \"q\": " + f(m.q) + ", \"gm\": [";
+    bool first = true;
+    for (std::size_t i = 0; i < 2; ++i) {
+      if (m.gm_sb[i] > 0.0F) {
+        j += std::string(first ? "" : ", ") + "{\"sb\": " + f(m.gm_sb[i]) + ", \"tb_s\": " +
+             f(m.gm_tb_s[i]) + "}";
+        first = false;
+      }
+    }
+    j += "], \"k\": " + f(m.k) + ", \"bias_instability\": {\"B\": " + f(m.bi) +
+         ", \"tau_lo_s\": " + f(m.bi_tau_lo_s) + ", \"tau_hi_s\": " + f(m.bi_tau_hi_s) + "}}";
+  } else {
+    j += "null";
+  }
+  j += ", \"model_pushed\": " + std::string(o.push_model ? "true" : "false");
+  j += ", \"nis_mean\": " + (tel.have_monitor ? f(tel.monitor.nis_mean) : std::string("null"));
+  j += ", \"whiteness_ratio\": " +
+       (tel.have_monitor ? f(tel.monitor.whiteness) : std::string("null"));
+  j += ", \"cusum_alarm\": " +
+       std::string(tel.have_monitor && (tel.monitor.cusum_mask & (1U << o.chan)) != 0 ? "true"
+                                                                                      : "false");
+  const hal::RejectsRecord& r = tel.rejects;
+  j += ", \"faults\": {\"model_rejected\": " + std::to_string(r.model_rejected) +
+       ", \"bad_config\": " + std::to_string(r.bad_config) +
+       ", \"bad_record\": " + std::to_string(r.bad_record) +
+       ", \"cfg_mismatch\": " + std::to_string(r.cfg_mismatch) +
+       ", \"late\": " + std::to_string(r.late) + ", \"busy\": " + std::to_string(r.busy) +
+       ", \"telemetry_failures\": " + std::to_string(r.telemetry_failures) +
+       ", \"gpio_errors\": " + std::to_string(r.gpio_errors) +
+       ", \"missing\": " + std::to_string(tel.stats.missing) +
+       ", \"crc_errors\": " + std::to_string(tel.stats.crc_errors) + "}}";
+  return j;
+}
+
 }  // namespace
 
 int cmd_run(int argc, char** argv) {
@@ -890,6 +953,18 @@ int cmd_run(int argc, char** argv) {
   }
   if (o.help) {
     return print_help("run");
+  }
+  std::string model_note;
+  if (o.push_model) {
+    std::ifstream in(o.model_path, std::ios::binary);
+    std::stringstream buf;
+    buf << in.rdbuf();
+    if (!in) {
+      return fail(kCmd, o.model_path + ": cannot read");
+    }
+    if (!model_from_analysis_json(buf.str(), o.chan_name, o.chan, o.model, model_note, err)) {
+      return fail(kCmd, o.model_path + ": " + err);
+    }
   }
   const double t0 = now_s();
   SensorData sd;
@@ -954,6 +1029,10 @@ int cmd_run(int argc, char** argv) {
                  {"send all samples (" + o.rate + ")", t_sent},
                  {"until final telemetry", t_total}};
   ri.notes = report_notes(o, sd, plan, s, tel);
+  if (!model_note.empty()) {
+    ri.notes.push_back(model_note);
+  }
+  ri.node_json = node_json(o, tel);
   std::string text;
   if (!write_report(ri, o.ro, text, err)) {
     return fail(kCmd, err);

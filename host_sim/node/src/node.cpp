@@ -25,7 +25,85 @@ bool same_values(const hal::ConfigRecord& a, const hal::ConfigRecord& b) {
   return same;
 }
 
+bool finite_f(float v) { return std::isfinite(v); }
+// 0 (term absent) or in [lo, hi].
+bool zero_or(float v, float lo, float hi) { return !(v > 0.0F) ? !(v < 0.0F) : (v >= lo && v <= hi); }
+
 }  // namespace
+
+bool model_record_valid(const hal::ModelRecord& r, ModelParams& out) {
+  const float vals[] = {r.n, r.q, r.gm_sb[0], r.gm_tb_s[0], r.gm_sb[1], r.gm_tb_s[1],
+                        r.k, r.bi, r.bi_tau_lo_s, r.bi_tau_hi_s};
+  for (const float v : vals) {
+    if (!finite_f(v)) {
+      return false;
+    }
+  }
+  if (r.version != hal::kModelVersion || r.channel >= kChannels ||
+      !(r.n >= 1e-12F && r.n <= 1e3F) || !zero_or(r.q, 1e-15F, 1e3F) ||
+      !zero_or(r.k, 1e-15F, 1e3F) || !zero_or(r.bi, 1e-15F, 1e3F)) {
+    return false;
+  }
+  ModelParams p{};
+  p.n = static_cast<double>(r.n);
+  p.q = static_cast<double>(r.q);
+  p.k = static_cast<double>(r.k);
+  for (std::size_t i = 0; i < 2; ++i) {
+    if (!zero_or(r.gm_sb[i], 1e-30F, 1e6F)) {
+      return false;
+    }
+    if (r.gm_sb[i] > 0.0F) {
+      if (!(r.gm_tb_s[i] >= kMinPushedTbS && r.gm_tb_s[i] <= kMaxPushedTbS)) {
+        return false;
+      }
+      p.gm[p.n_gm].sb = static_cast<double>(r.gm_sb[i]);
+      p.gm[p.n_gm].tb_s = static_cast<double>(r.gm_tb_s[i]);
+      ++p.n_gm;
+    }
+  }
+  std::size_t states = p.n_gm + (r.k > 0.0F ? 1U : 0U);
+  if (r.bi > 0.0F) {
+    if (!(r.bi_tau_lo_s >= kMinPushedTbS && r.bi_tau_hi_s <= kMaxPushedTbS &&
+          r.bi_tau_lo_s < r.bi_tau_hi_s)) {
+      return false;
+    }
+    p.bi = static_cast<double>(r.bi);
+    p.bi_tau_lo_s = static_cast<double>(r.bi_tau_lo_s);
+    p.bi_tau_hi_s = static_cast<double>(r.bi_tau_hi_s);
+    GmParam bank[kMaxFlickerGm] = {};
+    const std::size_t nb = flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank);
+    if (nb == 0) {
+      return false;
+    }
+    states += nb;
+  }
+  if (states == 0 || states > kNodeStates) {
+    return false;  // no bias state to estimate, or more than the node's filter holds
+  }
+  out = p;
+  return true;
+}
+
+bool discretize_pushed(const ModelParams& p, double rate_hz, DiscreteModel<kNodeStates>& out,
+                       std::size_t& n_states) {
+  ContinuousModel<kNodeStates> cm{};
+  if (!(rate_hz > 0.0) || build_model(p, cm) != ModelStatus::kOk || cm.n_states == 0 ||
+      discretize(cm, 1.0 / rate_hz, out) != ModelStatus::kOk) {
+    return false;
+  }
+  n_states = out.n_states;
+  // Pad to kNodeStates with inert states: Phi = Qd = P0 = H = 0 keeps them at x = 0, P = 0.
+  for (std::size_t i = out.n_states; i < kNodeStates; ++i) {
+    for (std::size_t j = 0; j < kNodeStates; ++j) {
+      out.phi(i, j) = out.phi(j, i) = 0.0;
+      out.qd(i, j) = out.qd(j, i) = 0.0;
+      out.p0(i, j) = out.p0(j, i) = 0.0;
+    }
+    out.h(0, i) = 0.0;
+  }
+  out.n_states = kNodeStates;
+  return true;
+}
 
 bool model_in_range(const ChannelModel& m) {
   if (!in_range(m.n, kMinModelNoise, kMaxModelNoise) ||
@@ -131,6 +209,10 @@ void Node::on_event(const hal::RxEvent& e) {
     case hal::RxEvent::Type::kMissing:
       on_missing(e.missing_count);
       break;
+    case hal::RxEvent::Type::kModel:
+      on_model(e.rec.model);
+      break;
+    case hal::RxEvent::Type::kModelEcho:
     case hal::RxEvent::Type::kAdev:
     case hal::RxEvent::Type::kBias:
     case hal::RxEvent::Type::kMonitor:
@@ -174,8 +256,91 @@ void Node::on_config(const hal::ConfigRecord& c) {
         kf_[c_i].configure(gm, 0.0) != KfStatus::kOk) {
       ++stats_.model_rejected;  // cannot happen: model_in_range() checked both rate limits
     }
+    if (pushed_[c_i] && !build_pushed(c_i)) {
+      pushed_[c_i] = false;  // valid at the old rate, not at this one: back to the seed's
+      ++stats_.model_rejected;
+    }
   }
   restart_estimators();
+}
+
+bool Node::build_pushed(std::size_t c) {
+  std::size_t n = 0;
+  if (!discretize_pushed(model_par_[c], cfg_.rate_hz, scratch_dm_, n)) {
+    return false;
+  }
+  KalmanFilter<float, kNodeStates> kf;
+  if (kf.configure(scratch_dm_, static_cast<double>(known_[c])) != KfStatus::kOk) {
+    return false;
+  }
+  kfn_[c] = kf;  // only now: a refused model leaves the running filter untouched
+  model_states_[c] = n;
+  return true;
+}
+
+void Node::on_model(const hal::ModelRecord& r) {
+  ModelParams p{};
+  if (!model_record_valid(r, p)) {
+    ++stats_.model_rejected;
+    send_models();
+    return;
+  }
+  const std::size_t c = r.channel;
+  // Validate the discretisation at the rate in use, or at both rate limits before a config.
+  std::size_t n = 0;
+  bool ok = true;
+  if (have_cfg_) {
+    ok = discretize_pushed(p, cfg_.rate_hz, scratch_dm_, n);
+  } else {
+    for (const double rate_hz : {kMinRateHz, kMaxRateHz}) {
+      ok = ok && discretize_pushed(p, rate_hz, scratch_dm_, n);
+    }
+  }
+  const ModelParams old_par = model_par_[c];
+  model_par_[c] = p;
+  if (!ok || (have_cfg_ && !build_pushed(c))) {
+    model_par_[c] = old_par;
+    ++stats_.model_rejected;
+    send_models();
+    return;
+  }
+  model_rec_[c] = r;
+  model_states_[c] = n;
+  pushed_[c] = true;
+  ++stats_.models_accepted;
+  (void)mon_[c].configure(cfg_node_.monitor_window);  // innovations of a new filter
+  send_models();
+}
+
+hal::ModelRecord Node::model_echo(std::size_t c) const {
+  hal::ModelRecord e{};
+  if (pushed_[c]) {
+    e = model_rec_[c];
+    e.n_states = static_cast<std::uint8_t>(model_states_[c]);
+    e.flags = hal::kModelPushed;
+  } else {
+    const ChannelModel& m = cfg_node_.model[c];
+    FirstOrderGm gm{};
+    (void)first_order_gm_from_asd(m.n, m.b, m.tp_s, have_cfg_ ? cfg_.rate_hz : 100.0, gm);
+    e.n = to_f32(m.n);
+    e.gm_sb[0] = to_f32(gm.sb);
+    e.gm_tb_s[0] = to_f32(gm.tb_s);
+    e.n_states = 1;
+  }
+  e.version = hal::kModelVersion;
+  e.channel = static_cast<std::uint8_t>(c);
+  return e;
+}
+
+void Node::send_models() {
+  if (!cfg_node_.telemetry) {
+    return;
+  }
+  hal::EncodedFrames fr{};
+  for (std::size_t c = 0; c < kChannels; ++c) {
+    hal::encode(model_echo(c), true, cfg_node_.layout, transfer_id_++, fr);
+    send_frames(fr);
+  }
 }
 
 void Node::on_sample(const hal::SampleRecord& s) {
@@ -201,6 +366,7 @@ void Node::on_sample(const hal::SampleRecord& s) {
       for (std::size_t c = 0; c < kChannels; ++c) {
         known_[c] = to_f32(init_sum_[c] / static_cast<double>(init_count_));
         kf_[c].set_known_signal(known_[c]);
+        kfn_[c].set_known_signal(known_[c]);
       }
     }
   } else {
@@ -209,7 +375,7 @@ void Node::on_sample(const hal::SampleRecord& s) {
         continue;  // never carried data (e.g. a one-channel recording): no filter, no alarm
       }
       const auto z = to_f32(static_cast<double>(s.counts[c]) * lsb_[c]);
-      const KfStep<float> st = kf_[c].step(z, static_);
+      const KfStep<float> st = pushed_[c] ? kfn_[c].step(z, static_) : kf_[c].step(z, static_);
       if (st.updated) {
         mon_[c].push(st.innovation, st.innovation_var);
       }
@@ -241,6 +407,12 @@ void Node::apply_missing() {
   if (init_count_ >= cfg_node_.init_samples) {
     for (auto& kf : kf_) {
       kf.predict(n);  // n predictions without a measurement, constant time for any n
+    }
+    const std::uint64_t steps = n < kMaxGapSteps ? n : kMaxGapSteps;
+    for (std::size_t c = 0; c < kChannels; ++c) {
+      for (std::uint64_t i = 0; pushed_[c] && i < steps; ++i) {
+        (void)kfn_[c].step(0.0F, false);
+      }
     }
   }
 }
@@ -328,8 +500,8 @@ void Node::send_status() {
   hal::BiasRecord b{};
   b.seq = last_seq_;
   for (std::size_t c = 0; c < kChannels; ++c) {
-    b.bias[c] = kf_[c].bias();
-    b.var[c] = kf_[c].variance();
+    b.bias[c] = bias(c);
+    b.var[c] = bias_var(c);
   }
   b.flags = static_ ? hal::kBiasStatic : std::uint8_t{0};
   hal::encode(b, cfg_node_.layout, transfer_id_++, fr);
@@ -416,6 +588,7 @@ void Node::send_adev() {
 
 void Node::send_full() {
   send_status();
+  send_models();
   send_adev();
 }
 

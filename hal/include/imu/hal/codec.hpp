@@ -69,8 +69,11 @@ enum class Layout : std::uint8_t { kFd, kClassic };
 /// a lower identifier wins arbitration, so configuration beats samples beats telemetry.
 /// kRejects was added after the first version: a receiver that predates it counts its frames as
 /// unknown_id and loses nothing else (no existing layout or identifier changed).
-enum class RecordKind : std::uint8_t { kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects };
-inline constexpr std::size_t kRecordKinds = 7;
+/// kModel (host -> node) and kModelEcho (node -> host) came later in the same way.
+enum class RecordKind : std::uint8_t {
+  kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho
+};
+inline constexpr std::size_t kRecordKinds = 9;
 
 inline constexpr std::uint32_t kIdConfigFd = 0x080;
 inline constexpr std::uint32_t kIdSampleFd = 0x100;
@@ -79,6 +82,8 @@ inline constexpr std::uint32_t kIdBiasFd = 0x210;
 inline constexpr std::uint32_t kIdMonitorFd = 0x220;
 inline constexpr std::uint32_t kIdStatsFd = 0x230;
 inline constexpr std::uint32_t kIdRejectsFd = 0x240;
+inline constexpr std::uint32_t kIdModelFd = 0x090;      ///< after config, before samples
+inline constexpr std::uint32_t kIdModelEchoFd = 0x250;
 
 inline constexpr std::size_t kChannels = 6;  ///< ax, ay, az (accelerometer), gx, gy, gz (gyro)
 
@@ -182,6 +187,29 @@ struct RejectsRecord {
   std::uint32_t bad_record;             ///< CRC-valid records refused (Config channel count)
 };
 
+/// ModelRecord::version this code writes and accepts (others: RxStats::bad_record).
+inline constexpr std::uint8_t kModelVersion = 1;
+/// ModelRecord::flags bits (echo only).
+inline constexpr std::uint8_t kModelPushed = 1U << 0;  ///< the node runs a pushed model (else seed)
+/// Stochastic error model of one channel (imu::ModelParams without the deterministic terms:
+/// ramp and sinusoids are not filter states on the node). 48 bytes. Sent by the host as kModel
+/// (n_states and flags 0); echoed by the node as kModelEcho with what it runs. A zero parameter
+/// means the term is absent; gm_sb = 0 drops that GM; bi = 0 drops the flicker bank.
+struct ModelRecord {
+  std::uint8_t version;          ///< kModelVersion
+  std::uint8_t channel;          ///< 0..5
+  std::uint8_t n_states;         ///< echo: filter states the node runs (0 in a push)
+  std::uint8_t flags;            ///< echo: kModelPushed
+  float n;                       ///< white N [unit/sqrt(Hz)]
+  float q;                       ///< quantization Q [unit s]
+  float gm_sb[2];                ///< GM drive PSD [unit^2/s]
+  float gm_tb_s[2];              ///< GM correlation time [s]
+  float k;                       ///< rate random walk K [unit/sqrt(s)]
+  float bi;                      ///< bias instability B [unit] (node rebuilds the flicker bank)
+  float bi_tau_lo_s;
+  float bi_tau_hi_s;
+};
+
 /// Record lengths in bytes on the wire, CRC included.
 inline constexpr std::size_t kConfigLen = 64;
 inline constexpr std::size_t kSampleLen = 42;
@@ -190,6 +218,7 @@ inline constexpr std::size_t kBiasLen = 60;
 inline constexpr std::size_t kMonitorLen = 20;
 inline constexpr std::size_t kStatsLen = 44;
 inline constexpr std::size_t kRejectsLen = 64;
+inline constexpr std::size_t kModelLen = 48;
 
 /// Wire length of a record kind; FD identifier of a kind. Constant time.
 [[nodiscard]] std::size_t record_len(RecordKind k);
@@ -215,6 +244,9 @@ void encode(const BiasRecord& r, Layout layout, std::uint8_t transfer_id, Encode
 void encode(const MonitorRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
 void encode(const StatsRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
 void encode(const RejectsRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
+/// echo = true: kModelEcho (node telemetry), else kModel (host -> node).
+void encode(const ModelRecord& r, bool echo, Layout layout, std::uint8_t transfer_id,
+            EncodedFrames& out);
 
 // ---- Record serialisation (used by the encoders and by Receiver) ------------------------------
 
@@ -226,6 +258,7 @@ void serialize(const BiasRecord& r, std::uint8_t* buf);
 void serialize(const MonitorRecord& r, std::uint8_t* buf);
 void serialize(const StatsRecord& r, std::uint8_t* buf);
 void serialize(const RejectsRecord& r, std::uint8_t* buf);
+void serialize(const ModelRecord& r, std::uint8_t* buf);
 
 /// True if the last 4 bytes of buf[0, len) are the CRC-32C of the bytes before them.
 [[nodiscard]] bool crc_ok(const std::uint8_t* buf, std::size_t len);
@@ -238,6 +271,7 @@ void parse(const std::uint8_t* buf, BiasRecord& r);
 void parse(const std::uint8_t* buf, MonitorRecord& r);
 void parse(const std::uint8_t* buf, StatsRecord& r);
 void parse(const std::uint8_t* buf, RejectsRecord& r);
+void parse(const std::uint8_t* buf, ModelRecord& r);
 
 }  // namespace imu::hal
 

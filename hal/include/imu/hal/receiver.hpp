@@ -69,7 +69,7 @@ enum class FrameVerdict : std::uint8_t {
 /// One output event. `rec` holds the member named by `type` (kMissing uses no member).
 struct RxEvent {
   enum class Type : std::uint8_t {
-    kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats, kRejects
+    kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho
   };
   Type type;
   std::uint64_t rx_time_ns;           ///< receive time of the frame that completed the record
@@ -85,6 +85,7 @@ struct RxEvent {
     MonitorRecord monitor;
     StatsRecord stats;
     RejectsRecord rejects;
+    ModelRecord model;                ///< kModel and kModelEcho
   } rec;
 };
 
@@ -356,6 +357,11 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
     ++stats_.bad_record;  // counts[] and lsb[] would not mean what they say
     return FrameVerdict::kBadRecord;
   }
+  if ((k == RecordKind::kModel || k == RecordKind::kModelEcho) &&
+      (buf[0] != kModelVersion || buf[1] >= kChannels)) {  // bytes 0, 1: version, channel
+    ++stats_.bad_record;
+    return FrameVerdict::kBadRecord;
+  }
   ++stats_.records[static_cast<std::size_t>(k)];
   switch (k) {
     case RecordKind::kSample: {
@@ -383,6 +389,12 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
       break;
     case RecordKind::kRejects:
       parse(buf, enqueue(RxEvent::Type::kRejects, rx_time_ns).rec.rejects);
+      break;
+    case RecordKind::kModel:
+      parse(buf, enqueue(RxEvent::Type::kModel, rx_time_ns).rec.model);
+      break;
+    case RecordKind::kModelEcho:
+      parse(buf, enqueue(RxEvent::Type::kModelEcho, rx_time_ns).rec.model);
       break;
   }
   return FrameVerdict::kRecord;

@@ -18,7 +18,10 @@
 // new cfg_id and different values restarts the estimators (a new stream); one with a new cfg_id
 // and the same values only adopts the id (config_same_values). Missing samples reported by the
 // receiver go to MultiAdev::mark_missing (O(levels)) and ScalarBiasKf::predict(n) (O(1)): a
-// forged sequence number 2^31 ahead costs the same as one lost sample.
+// forged sequence number 2^31 ahead costs the same as one lost sample (a pushed model: at most
+// kMaxGapSteps predictions).
+// Pushed models (ModelRecord, issue 12): see on_model in node.cpp and host_sim/README.md; a
+// channel runs either the seed model (ScalarBiasKf) or its pushed KalmanFilter<float, 8>.
 // Filter: the known signal of each channel (gravity + initial bias) is the mean of its first
 // init_samples samples; the filter then estimates the bias relative to it, updating only while
 // the static input is active (no input: always static). A channel whose counts have all been 0
@@ -26,7 +29,8 @@
 // is never exactly zero, a channel absent from a recording is. The static input is read once per
 // status period, not per sample (one GPIO ioctl per period).
 //
-// Memory: sizeof(Node) is the whole state (46.0 kB on x86-64, mostly six OnlineAdev<8,22>); no
+// Memory: sizeof(Node) is the whole state (54.4 kB on x86-64, mostly six OnlineAdev<8,22> and
+// six KalmanFilter<float, 8> of 888 bytes for pushed models); no
 // heap, no exceptions, no OS calls: the library is compiled with fw/src/fw_prelude.hpp. Not
 // re-entrant on one instance. Cost per sample: 6 ADEV pushes (amortised ~12 multiply-adds each)
 // + 6 scalar filter steps + monitors; a full ADEV telemetry set is 6 snapshots (O(96 * 8)) and
@@ -78,6 +82,30 @@ inline constexpr double kMaxTpS = 1e8;
 /// True if every parameter is in the ranges above and the first-order model and its filter
 /// are valid at kMinRateHz and kMaxRateHz. O(1) (two small matrix exponentials).
 [[nodiscard]] bool model_in_range(const ChannelModel& m);
+/// Largest pushed model the node runs: states of its filter (2 GM + RRW + a flicker bank of at
+/// most 5 decades). Filters are KalmanFilter<float, kNodeStates>; a model with fewer states is
+/// padded with inert states (Phi = Qd = P0 = H = 0), so the per-sample cost is that of 8 states.
+inline constexpr std::size_t kNodeStates = 8;
+/// Accepted ranges of a pushed ModelRecord (both ends included, zero = term absent where noted):
+/// N in 1e-12 .. 1e3 (required: the filter needs measurement noise); Q, K, B in 0 or
+/// 1e-15 .. 1e3; a GM's Sb in 0 or 1e-30 .. 1e6 with Tb in 1e-3 .. 1e8 s; the flicker range
+/// 1e-3 .. 1e8 s with lo < hi. Ramp and sinusoids are deterministic and are not filter states
+/// (the record has no field for them).
+inline constexpr float kMaxPushedTbS = 1e8F;
+inline constexpr float kMinPushedTbS = 1e-3F;
+/// Missing samples beyond this are predicted as this many steps (the GM states have forgotten
+/// everything long before; RRW variance is capped by the filter): a 2^31 jump stays O(1).
+inline constexpr std::uint64_t kMaxGapSteps = 4096;
+
+/// Validate a pushed model record and build its parameters: every field finite and in the
+/// ranges above, and the model (flicker bank rebuilt by imu::flicker_bank) has at most
+/// kNodeStates states. Does not discretise. O(1).
+[[nodiscard]] bool model_record_valid(const hal::ModelRecord& r, ModelParams& out);
+/// Build, discretise at rate_hz (Van Loan) and pad a pushed model to kNodeStates; false if any
+/// step fails. O(kNodeStates^3) (matrix exponential of 2 * kNodeStates).
+[[nodiscard]] bool discretize_pushed(const ModelParams& p, double rate_hz,
+                                     DiscreteModel<kNodeStates>& out, std::size_t& n_states);
+
 /// True if the rate and every LSB are in the ranges above. O(1).
 [[nodiscard]] bool config_in_range(const hal::ConfigRecord& c);
 
@@ -112,7 +140,8 @@ struct NodeStats {
   std::uint64_t restarts = 0;               ///< ConfigRecords with a new cfg_id after the first
   std::uint64_t bad_config = 0;             ///< ConfigRecords refused (config_in_range)
   std::uint64_t config_same_values = 0;     ///< new cfg_id, same values: id adopted, no restart
-  std::uint64_t model_rejected = 0;         ///< a channel filter not configurable (never expected)
+  std::uint64_t model_rejected = 0;         ///< pushed models refused (old model kept)
+  std::uint64_t models_accepted = 0;        ///< pushed models swapped in
   std::uint64_t saturated = 0;              ///< samples with a sat_mask bit set
   std::uint64_t telemetry_frames = 0;       ///< frames sent
   std::uint64_t telemetry_failures = 0;     ///< frames the sink refused or not tried (link down)
@@ -162,8 +191,14 @@ class Node {
   [[nodiscard]] bool have_config() const { return have_cfg_; }
   [[nodiscard]] const hal::ConfigRecord& sensor_config() const { return cfg_; }
   /// Bias estimate (channel units, relative to the known signal) and its variance.
-  [[nodiscard]] float bias(std::size_t c) const { return kf_[c].bias(); }
-  [[nodiscard]] float bias_var(std::size_t c) const { return kf_[c].variance(); }
+  [[nodiscard]] float bias(std::size_t c) const {
+    return pushed_[c] ? kfn_[c].bias() : kf_[c].bias();
+  }
+  [[nodiscard]] float bias_var(std::size_t c) const {
+    return pushed_[c] ? kfn_[c].bias_variance() : kf_[c].variance();
+  }
+  /// What channel c runs: the seed's one-state model (flags 0, n_states 1) or a pushed one.
+  [[nodiscard]] hal::ModelRecord model_echo(std::size_t c) const;
   [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
   [[nodiscard]] const ResidualMonitors<4>& monitors(std::size_t c) const { return mon_[c]; }
   /// The channel has carried a non-zero count since the stream (re)started. Inactive channels
@@ -177,6 +212,9 @@ class Node {
   void on_config(const hal::ConfigRecord& c);
   void on_sample(const hal::SampleRecord& s);
   void on_missing(std::uint32_t n);
+  void on_model(const hal::ModelRecord& r);
+  void send_models();
+  bool build_pushed(std::size_t c);
   void apply_missing();
   void after_sample();
   void restart_estimators();
@@ -192,6 +230,15 @@ class Node {
   hal::Receiver<8> rx_;
   NodeAdev adev_;
   ScalarBiasKf<float> kf_[kChannels];
+  // Pushed models (issue 12): per channel the record, its parameters, and its filter; pushed_
+  // selects kfn_ over kf_. RAM per channel: sizeof(KalmanFilter<float, 8>) (printed by the test)
+  // + the record and ModelParams.
+  KalmanFilter<float, kNodeStates> kfn_[kChannels];
+  hal::ModelRecord model_rec_[kChannels] = {};
+  ModelParams model_par_[kChannels] = {};
+  std::size_t model_states_[kChannels] = {};
+  bool pushed_[kChannels] = {};
+  DiscreteModel<kNodeStates> scratch_dm_{};  // discretisation workspace (not on the stack)
   ResidualMonitors<4> mon_[kChannels];
   float known_[kChannels] = {};
   bool active_[kChannels] = {};  // a non-zero count was seen since the stream started

@@ -1,0 +1,197 @@
+// See model_json.hpp. A minimal, depth-aware scanner: enough JSON for the analysis file
+// (objects, arrays, strings without escapes that matter here, numbers); no new dependency.
+#include "model_json.hpp"
+
+#include <cmath>
+#include <cstdlib>
+
+namespace imu::sim {
+namespace {
+
+// Index one past the value starting at i (object, array, string or scalar); npos if unclosed.
+std::size_t skip_value(const std::string& s, std::size_t i) {
+  if (i >= s.size()) {
+    return std::string::npos;
+  }
+  if (s[i] == '"') {
+    for (std::size_t k = i + 1; k < s.size(); ++k) {
+      if (s[k] == '\\') {
+        ++k;
+      } else if (s[k] == '"') {
+        return k + 1;
+      }
+    }
+    return std::string::npos;
+  }
+  if (s[i] == '{' || s[i] == '[') {
+    int depth = 0;
+    for (std::size_t k = i; k < s.size(); ++k) {
+      const char c = s[k];
+      if (c == '"') {
+        k = skip_value(s, k);
+        if (k == std::string::npos) {
+          return k;
+        }
+        --k;
+      } else if (c == '{' || c == '[') {
+        ++depth;
+      } else if (c == '}' || c == ']') {
+        if (--depth == 0) {
+          return k + 1;
+        }
+      }
+    }
+    return std::string::npos;
+  }
+  std::size_t k = i;
+  while (k < s.size() && s[k] != ',' && s[k] != '}' && s[k] != ']') {
+    ++k;
+  }
+  return k;
+}
+
+std::size_t skip_ws(const std::string& s, std::size_t i) {
+  while (i < s.size() && (s[i] == ' ' || s[i] == '\n' || s[i] == '\r' || s[i] == '\t')) {
+    ++i;
+  }
+  return i;
+}
+
+// Position of the value of `key` among the members of the object starting at obj ('{'), npos
+// if absent or malformed.
+std::size_t member(const std::string& s, std::size_t obj, const std::string& key) {
+  if (obj >= s.size() || s[obj] != '{') {
+    return std::string::npos;
+  }
+  std::size_t i = skip_ws(s, obj + 1);
+  while (i < s.size() && s[i] == '"') {
+    const std::size_t key_end = skip_value(s, i);
+    if (key_end == std::string::npos) {
+      return key_end;
+    }
+    const std::string k = s.substr(i + 1, key_end - i - 2);
+    i = skip_ws(s, key_end);
+    if (i >= s.size() || s[i] != ':') {
+      return std::string::npos;
+    }
+    i = skip_ws(s, i + 1);
+    if (k == key) {
+      return i;
+    }
+    i = skip_value(s, i);
+    if (i == std::string::npos) {
+      return i;
+    }
+    i = skip_ws(s, i);
+    if (i < s.size() && s[i] == ',') {
+      i = skip_ws(s, i + 1);
+    }
+  }
+  return std::string::npos;
+}
+
+bool number_at(const std::string& s, std::size_t i, double& v) {
+  if (i >= s.size()) {
+    return false;
+  }
+  const char* b = s.c_str() + i;
+  char* e = nullptr;
+  v = std::strtod(b, &e);
+  return e != b && std::isfinite(v);
+}
+
+bool get_number(const std::string& s, std::size_t obj, const std::string& key, double& v,
+                std::string& err) {
+  if (!number_at(s, member(s, obj, key), v)) {
+    err = "model_after." + key + " missing or not a finite number";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
+                              std::size_t channel_index, hal::ModelRecord& out,
+                              std::string& dropped, std::string& err) {
+  const std::size_t root = skip_ws(json, 0);
+  if (root >= json.size() || json[root] != '{' || skip_value(json, root) == std::string::npos) {
+    err = "not a JSON object";
+    return false;
+  }
+  const std::size_t ch = member(json, root, "channel");
+  const std::size_t ch_end = skip_value(json, ch);
+  if (ch == std::string::npos || ch_end == std::string::npos || json[ch] != '"' ||
+      json.substr(ch + 1, ch_end - ch - 2) != channel_name) {
+    err = "its \"channel\" is not " + channel_name + " (the analysis of another channel?)";
+    return false;
+  }
+  const std::size_t m = member(json, root, "model_after");
+  if (m == std::string::npos || json[m] != '{') {
+    err = "no \"model_after\" object (write it with imu-sim analyze FILE --channel C --json OUT)";
+    return false;
+  }
+  double n = 0.0;
+  double q = 0.0;
+  double k = 0.0;
+  double r = 0.0;
+  double sin_a = 0.0;
+  double sin2_a = 0.0;
+  if (!get_number(json, m, "n", n, err) || !get_number(json, m, "q", q, err) ||
+      !get_number(json, m, "k", k, err) || !get_number(json, m, "r", r, err) ||
+      !get_number(json, m, "sin_a", sin_a, err) || !get_number(json, m, "sin2_a", sin2_a, err)) {
+    return false;
+  }
+  hal::ModelRecord rec{};
+  rec.version = hal::kModelVersion;
+  rec.channel = static_cast<std::uint8_t>(channel_index);
+  rec.n = static_cast<float>(n);
+  rec.q = static_cast<float>(q);
+  rec.k = static_cast<float>(k);
+  const std::size_t gm = member(json, m, "gm");
+  if (gm == std::string::npos || json[gm] != '[') {
+    err = "model_after.gm missing or not a list";
+    return false;
+  }
+  std::size_t i = skip_ws(json, gm + 1);
+  std::size_t n_gm = 0;
+  while (i < json.size() && json[i] == '{') {
+    if (n_gm == 2) {
+      err = "model_after.gm has more than the 2 GM terms the node's model record holds";
+      return false;
+    }
+    double sb = 0.0;
+    double tb = 0.0;
+    if (!get_number(json, i, "sb", sb, err) || !get_number(json, i, "tb_s", tb, err)) {
+      err.insert(0, "model_after.gm[]: ");
+      return false;
+    }
+    rec.gm_sb[n_gm] = static_cast<float>(sb);
+    rec.gm_tb_s[n_gm] = static_cast<float>(tb);
+    ++n_gm;
+    i = skip_ws(json, skip_value(json, i));
+    if (i < json.size() && json[i] == ',') {
+      i = skip_ws(json, i + 1);
+    }
+  }
+  const std::size_t bi = member(json, m, "bias_instability");
+  double b = 0.0;
+  double lo = 0.0;
+  double hi = 0.0;
+  if (bi == std::string::npos || !get_number(json, bi, "B", b, err) ||
+      !get_number(json, bi, "tau_lo_s", lo, err) || !get_number(json, bi, "tau_hi_s", hi, err)) {
+    err = "model_after.bias_instability {B, tau_lo_s, tau_hi_s} missing or malformed";
+    return false;
+  }
+  rec.bi = static_cast<float>(b);
+  rec.bi_tau_lo_s = static_cast<float>(lo);
+  rec.bi_tau_hi_s = static_cast<float>(hi);
+  dropped.clear();
+  if (r > 0.0 || sin_a > 0.0 || sin2_a > 0.0) {
+    dropped = "ramp/sinusoid of model_after not sent: deterministic, not filter states";
+  }
+  out = rec;
+  return true;
+}
+
+}  // namespace imu::sim

@@ -1,0 +1,21 @@
+// Reader of the model that `imu-sim analyze --json` writes, for `imu-sim run --model A.json`.
+#ifndef IMU_SIM_MODEL_JSON_HPP
+#define IMU_SIM_MODEL_JSON_HPP
+
+#include <string>
+
+#include "imu/hal/codec.hpp"
+
+namespace imu::sim {
+
+/// Read `model_after` of the analysis JSON text into a ModelRecord for channel_index. The
+/// file's top-level "channel" must equal channel_name. Ramp and sinusoids are deterministic and
+/// not sent (noted in `dropped`). A third GM or more would not fit the record: an error. Returns
+/// false with a one-line err (missing key, malformed number, wrong channel). O(text length).
+[[nodiscard]] bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
+                                            std::size_t channel_index, hal::ModelRecord& out,
+                                            std::string& dropped, std::string& err);
+
+}  // namespace imu::sim
+
+#endif  // IMU_SIM_MODEL_JSON_HPP
