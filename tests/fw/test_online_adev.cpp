@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <random>
 #include <vector>
@@ -339,7 +340,77 @@ TEST(OnlineAdev, SnapshotRespectsCapacity) {
 TEST(OnlineAdev, StateIsSmallAndFixed) {
   // Issue 2 budget: at most 6 KiB per channel for L = 24, M = 8.
   EXPECT_LE(sizeof(imu::OnlineAdev<8, 24>), 6U * 1024U);
-  EXPECT_EQ(sizeof(imu::MultiAdev<6, 8, 22>), 6 * sizeof(imu::OnlineAdev<8, 22>));
+  // Six channels plus push_frame's buffer of kFrames frames and its count.
+  constexpr std::size_t kBuffer = imu::OnlineAdev<8, 22>::kFrames * 6 * 4 + 8;
+  EXPECT_EQ(sizeof(imu::MultiAdev<6, 8, 22>), 6 * sizeof(imu::OnlineAdev<8, 22>) + kBuffer);
+}
+
+std::uint64_t bits_of(double v) {
+  std::uint64_t b = 0;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+
+// Every field of every tau, bit for bit.
+void expect_identical(const imu::OnlineAdev<8, 22>& a, const imu::OnlineAdev<8, 22>& b) {
+  EXPECT_EQ(a.samples(), b.samples());
+  EXPECT_EQ(a.missing_samples(), b.missing_samples());
+  EXPECT_EQ(a.gaps(), b.gaps());
+  const auto pa = snap(a);
+  const auto pb = snap(b);
+  ASSERT_EQ(pa.size(), pb.size());
+  for (std::size_t i = 0; i < pa.size(); ++i) {
+    SCOPED_TRACE(pa[i].af);
+    EXPECT_EQ(pa[i].af, pb[i].af);
+    EXPECT_EQ(pa[i].n_terms, pb[i].n_terms);
+    EXPECT_EQ(bits_of(pa[i].avar), bits_of(pb[i].avar));
+    EXPECT_EQ(bits_of(pa[i].edf), bits_of(pb[i].edf));
+    EXPECT_EQ(bits_of(pa[i].ci_lo), bits_of(pb[i].ci_lo));
+    EXPECT_EQ(bits_of(pa[i].ci_hi), bits_of(pb[i].ci_hi));
+  }
+}
+
+// MultiAdev::push_frame (buffered, channels summed together) against six independent channels
+// fed one sample at a time with push(): bit-identical, with gaps of random lengths at random
+// places, snapshots in between (which flush a partial buffer), more than 2^16 samples (block
+// sums closed inside a batch), small and full-scale samples, and one channel pushed on its own
+// (the fallback for channels out of step).
+TEST(MultiAdev, PushFrameIsBitIdenticalToPerChannelPush) {
+  constexpr std::size_t kCh = 6;
+  imu::MultiAdev<kCh, 8, 22> multi;
+  Adev ref[kCh];
+  std::mt19937_64 rng(2024);
+  std::uniform_int_distribution<std::int32_t> small(-3000, 3000);
+  std::uniform_int_distribution<std::int32_t> full(std::numeric_limits<std::int32_t>::min(),
+                                                   std::numeric_limits<std::int32_t>::max());
+  std::uniform_int_distribution<int> event(0, 19999);
+  std::int32_t frame[kCh];
+  for (std::size_t f = 0; f < 300000U; ++f) {
+    const bool big = f >= 150000U && f < 160000U;
+    for (std::size_t c = 0; c < kCh; ++c) {
+      frame[c] = big ? full(rng) : small(rng) + static_cast<std::int32_t>(100 * c);
+      ref[c].push(frame[c]);
+    }
+    multi.push_frame(frame);
+    const int e = event(rng);
+    if (e < 3) {  // a gap of 1 .. ~5000 samples
+      const std::uint64_t n = 1U + rng() % (e == 0 ? 5000U : 7U);
+      multi.mark_missing(n);
+      for (auto& r : ref) {
+        r.mark_missing(n);
+      }
+    } else if (e == 3) {
+      expect_identical(multi.channel(f % kCh), ref[f % kCh]);  // flushes a partial buffer
+    }
+    if (f == 200000U) {  // channel 2 alone gets an extra sample: channels out of step
+      multi.channel(2).push(17);
+      ref[2].push(17);
+    }
+  }
+  for (std::size_t c = 0; c < kCh; ++c) {
+    SCOPED_TRACE(c);
+    expect_identical(multi.channel(c), ref[c]);
+  }
 }
 
 TEST(Quantize, RoundsAndSaturates) {

@@ -38,6 +38,21 @@ def walk_doubles(n, seed):
     return b"".join(struct.pack("<d", (-305 + r.randint(-3, 3)) * lsb) for _ in range(n))
 
 
+def skewed_bytes(n, seed):
+    """Byte frequencies in a Fibonacci ratio: the Huffman code lengths reach deflate's 15-bit
+    limit, so the decoder's second-level (sub-)tables and long distance codes are exercised."""
+    r = random.Random(seed)
+    weights = [1, 1]
+    while len(weights) < 24:
+        weights.append(weights[-1] + weights[-2])
+    symbols = list(range(24))
+    out = bytearray(r.choices(symbols, weights=weights[::-1], k=n))
+    for i in range(0, n - 64, 997):  # scattered copies at many distances
+        j = r.randrange(0, i + 1)
+        out[i:i + 40] = out[j:j + 40]
+    return bytes(out)
+
+
 def deflate(data, level, strategy=zlib.Z_DEFAULT_STRATEGY, wbits=15, memlevel=8):
     c = zlib.compressobj(level, zlib.DEFLATED, wbits, memlevel, strategy)
     return c.compress(data) + c.flush()
@@ -73,6 +88,9 @@ def main(out_dir):
     cases.append(("full_flush_text", "zlib", txt, flushed))
     cases.append(("raw_text_l6", "raw", txt, deflate(txt, 6, wbits=-15)))
     cases.append(("raw_random_l9", "raw", rnd, deflate(rnd, 9, wbits=-15)))
+    skew = skewed_bytes(300000, 5)
+    cases.append(("skewed_l9", "zlib", skew, deflate(skew, 9)))
+    cases.append(("skewed_huffman_only", "zlib", skew, deflate(skew, 6, zlib.Z_HUFFMAN_ONLY)))
     with open(os.path.join(out_dir, "manifest.txt"), "w") as m:
         for name, kind, raw, stream in cases:
             # Self-check with the independent implementation before committing anything.

@@ -177,6 +177,61 @@ TEST(Zlib, EveryTruncationIsDetected) {
   }
 }
 
+// The long vectors (skewed_*: 14-bit codes through the decoder's sub-tables) are cut at a sample
+// of places, and at each of their last 64 bytes, where the decoder leaves its fast loop.
+TEST(Zlib, LongStreamTruncationIsDetected) {
+  for (const Vector& v : load_vectors()) {
+    if (v.raw || v.stream.size() <= 5000U) {
+      continue;
+    }
+    SCOPED_TRACE(v.name);
+    for (std::size_t cut = 0; cut < v.stream.size(); cut += cut + 64U < v.stream.size() ? 997U : 1U) {
+      Bytes out;
+      const auto r = imu::mat::inflate_zlib(v.stream.data(), cut, v.size, InflateMode::whole, out);
+      ASSERT_EQ(r.status, InflateStatus::truncated_input) << "cut at " << cut;
+    }
+  }
+}
+
+// A reused output vector (longer than the result, holding other bytes) gives the same output:
+// the inflater overwrites it instead of clearing it first.
+TEST(Zlib, ReusedOutputVectorIsReplaced) {
+  Bytes out(1U << 20U, 0xA5);
+  for (const Vector& v : load_vectors()) {
+    SCOPED_TRACE(v.name);
+    const auto r = inflate(v, v.size, InflateMode::whole, out);
+    ASSERT_EQ(r.status, InflateStatus::ok) << imu::mat::describe(r.status);
+    EXPECT_EQ(out.size(), v.size);
+    EXPECT_EQ(crc32(out), v.crc);
+  }
+}
+
+// Matches at every distance 1..40 (the copy loop has separate cases for d = 1, 2..7, 8..15,
+// 16..31 and >= 32, each copying whole chunks past the match end) and lengths up to 258.
+TEST(Zlib, MatchCopiesAtEveryShortDistance) {
+  std::uint32_t x = 777U;
+  for (std::size_t d = 1; d <= 40U; ++d) {
+    SCOPED_TRACE(d);
+    Bytes in;
+    for (std::size_t rep = 0; rep < 30U; ++rep) {
+      Bytes period(d);
+      for (auto& b : period) {
+        x = x * 1664525U + 1013904223U;
+        b = static_cast<std::uint8_t>(x >> 24U);
+      }
+      const std::size_t len = 3U + (rep * 37U) % 600U;  // runs shorter and longer than 258
+      for (std::size_t i = 0; i < d + len; ++i) {
+        in.push_back(period[i % d]);
+      }
+    }
+    const Bytes z = imu::mat::zlib_compress_fixed(in.data(), in.size(), 1U);
+    Bytes out;
+    const auto r = imu::mat::inflate_zlib(z.data(), z.size(), in.size(), InflateMode::whole, out);
+    ASSERT_EQ(r.status, InflateStatus::ok) << imu::mat::describe(r.status);
+    EXPECT_EQ(out, in);
+  }
+}
+
 TEST(Zlib, TrailerMismatchIsDetected) {
   for (const Vector& v : load_vectors()) {
     if (v.raw) {

@@ -91,6 +91,7 @@ class OnlineAdev {
   static constexpr std::size_t kMaxPoints = M + L * kUpperTaus;
   static constexpr std::uint64_t kBlockMask = 0xFFFF;  // block of 2^16 terms per partial sum
   static constexpr std::size_t kBatch = 256;            // samples per push_block batch
+  static constexpr std::size_t kFrames = 64;            // frames per push_frames call, at most
 
   /// sample_period_s: Ts (> 0); lsb: physical value of one count (> 0).
   explicit OnlineAdev(double sample_period_s = 0.01, double lsb = 1.0)
@@ -154,6 +155,71 @@ class OnlineAdev {
       }
       counts += b;
       n -= b;
+    }
+  }
+
+  /// Push n <= kFrames frames into the C channels `ch` (frames[f][c] is sample f of channel c).
+  /// Bit-identical to pushing frame after frame with push() on each channel: every term is formed
+  /// exactly (as in push_block) and added to its tau's partial sum in the same order, flushed
+  /// into the block total at the same points. Faster: per level, the taus' terms are summed over
+  /// the batch with the channels as the inner loop (contiguous, so the compiler vectorises across
+  /// channels), once the level's ring is full and the batch has >= 4 of its points; other levels
+  /// take push()'s per-point path. Channels whose sample counts differ (pushed separately) or
+  /// n > kFrames fall back to push() frame by frame. Stack: (2M + 2 kFrames) C doubles
+  /// (7.7 kB for M = 8, C = 6). Cost: ~1.5 M multiply-adds per sample per channel, as push().
+  template <std::size_t C>
+  static void push_frames(OnlineAdev (&ch)[C], const std::int32_t (*frames)[C], std::size_t n) {
+    static_assert(C >= 1, "at least one channel");
+    bool same = n <= kFrames;
+    for (std::size_t c = 1; c < C; ++c) {
+      same = same && ch[c].n_ == ch[0].n_;
+    }
+    if (!same) {
+      for (std::size_t f = 0; f < n; ++f) {
+        for (std::size_t c = 0; c < C; ++c) {
+          ch[c].push(frames[f][c]);
+        }
+      }
+      return;
+    }
+    double xs[kFrames * C];  // phase after frame f of channel c, relative to base[c]: exact
+    std::uint64_t base[C];
+    std::int64_t rel[C];
+    for (std::size_t c = 0; c < C; ++c) {
+      base[c] = ch[c].x_;
+      rel[c] = 0;
+    }
+    for (std::size_t f = 0; f < n; ++f) {
+      for (std::size_t c = 0; c < C; ++c) {
+        rel[c] += frames[f][c];  // |rel| <= kFrames 2^31 = 2^37
+        xs[f * C + c] = static_cast<double>(rel[c]);
+      }
+    }
+    const std::uint64_t first = ch[0].n_ + 1;  // sample (= point) index of frame 0
+    for (std::size_t c = 0; c < C; ++c) {
+      ch[c].x_ = base[c] + static_cast<std::uint64_t>(rel[c]);
+      ch[c].n_ += n;
+    }
+    {
+      Level<M, 0>* lv[C];
+      for (std::size_t c = 0; c < C; ++c) {
+        lv[c] = &ch[c].level0_;
+      }
+      push_frames_level(lv, first, xs, base, 1, n);
+    }
+    for (std::size_t k = 1; k <= L; ++k) {
+      const std::uint64_t q0 = (first + (std::uint64_t{1} << k) - 1) >> k;
+      const std::uint64_t q1 = (first + n - 1) >> k;
+      if (q1 < q0) {
+        break;  // no multiple of 2^k among the frames, hence none of 2^(k+1) either
+      }
+      Level<kUpperTaus, M / 2>* lv[C];
+      for (std::size_t c = 0; c < C; ++c) {
+        lv[c] = &ch[c].upper_[k - 1];
+      }
+      const auto off = static_cast<std::size_t>((q0 << k) - first);
+      push_frames_level(lv, q0, xs + off * C, base, std::size_t{1} << k,
+                        static_cast<std::size_t>(q1 - q0 + 1));
     }
   }
 
@@ -328,6 +394,88 @@ class OnlineAdev {
     lv.seg_points += cnt;
   }
 
+  // One level of push_frames: cnt points from p0 on, point j of channel c being
+  // xs[j stride C + c] relative to base[c]. Each (tau, channel) partial sum gets its terms in
+  // point order, as push_point adds them, so the sums are bit-identical; the terms themselves
+  // are exact (relative phases < 2^51, see push_batch), hence equal to push_point's.
+  template <std::size_t kTaus, std::size_t kMLo, std::size_t C>
+  static void push_frames_level(Level<kTaus, kMLo>* const (&lv)[C], std::uint64_t p0,
+                                const double* xs, const std::uint64_t (&base)[C],
+                                std::size_t stride, std::size_t cnt) {
+    // Exact in double: the points span at most (2M + cnt) stride samples of at most 2^31
+    // counts around base, below 2^51 under this bound. Under 4 points, push_point is as fast.
+    bool batched = cnt >= 4 && (kRing + cnt) * stride <= (std::size_t{1} << 20U);
+    for (std::size_t c = 0; c < C; ++c) {
+      batched = batched && lv[c]->seg_points >= kRing;
+    }
+    if (!batched) {
+      for (std::size_t c = 0; c < C; ++c) {
+        for (std::size_t j = 0; j < cnt; ++j) {
+          push_point(*lv[c], p0 + j, absolute_phase(xs[j * stride * C + c], base[c]));
+        }
+      }
+      return;
+    }
+    double arr[(kRing + kFrames) * C];  // ring history, then the new points; channels inner
+    for (std::size_t i = 0; i < kRing; ++i) {
+      for (std::size_t c = 0; c < C; ++c) {
+        arr[i * C + c] = exact_relative(lv[c]->ring[(p0 - kRing + i) % kRing], base[c]);
+      }
+    }
+    for (std::size_t j = 0; j < cnt; ++j) {
+      for (std::size_t c = 0; c < C; ++c) {
+        arr[(kRing + j) * C + c] = xs[j * stride * C + c];
+      }
+    }
+    // push_point closes a block after the term of a point p with p % 2^16 == 0: at most one
+    // such point among cnt <= kFrames < 2^16.
+    const std::uint64_t pb = (p0 + kBlockMask) & ~kBlockMask;  // first multiple of 2^16 >= p0
+    const bool closes = pb - p0 < cnt;
+    const std::size_t split = closes ? static_cast<std::size_t>(pb - p0) + 1 : cnt;
+    sum_frame_terms(lv, arr, kRing, kRing + split);
+    if (closes) {
+      for (std::size_t c = 0; c < C; ++c) {
+        for (std::size_t i = 0; i < kTaus; ++i) {
+          lv[c]->total[i] += lv[c]->partial[i];
+          lv[c]->partial[i] = 0.0;
+        }
+      }
+    }
+    sum_frame_terms(lv, arr, kRing + split, kRing + cnt);
+    const std::size_t keep = cnt < kRing ? cnt : kRing;
+    for (std::size_t c = 0; c < C; ++c) {
+      for (std::size_t q = cnt - keep; q < cnt; ++q) {
+        lv[c]->ring[(p0 + q) % kRing] = absolute_phase(xs[q * stride * C + c], base[c]);
+      }
+      lv[c]->seg_points += cnt;
+    }
+  }
+
+  // Terms of points arr[j0..j1) (rows of C channels) added in point order to every partial sum.
+  template <std::size_t kTaus, std::size_t kMLo, std::size_t C>
+  static void sum_frame_terms(Level<kTaus, kMLo>* const (&lv)[C], const double* arr,
+                              std::size_t j0, std::size_t j1) {
+    for (std::size_t i = 0; i < kTaus; ++i) {
+      const std::size_t m = kMLo + 1 + i;
+      double acc[C];
+      for (std::size_t c = 0; c < C; ++c) {
+        acc[c] = lv[c]->partial[i];
+      }
+      for (std::size_t j = j0; j < j1; ++j) {
+        const double* x = arr + j * C;
+        const double* a = arr + (j - m) * C;
+        const double* b = arr + (j - 2 * m) * C;
+        for (std::size_t c = 0; c < C; ++c) {
+          const double d = x[c] - (a[c] + a[c]) + b[c];
+          acc[c] += d * d;
+        }
+      }
+      for (std::size_t c = 0; c < C; ++c) {
+        lv[c]->partial[i] = acc[c];
+      }
+    }
+  }
+
   template <std::size_t kTaus, std::size_t kMLo>
   static void close_segment(Level<kTaus, kMLo>& lv) {
     for (std::size_t i = 0; i < kTaus; ++i) {
@@ -390,34 +538,68 @@ class OnlineAdev {
 };
 
 /// The online ADEV of every channel of an IMU (6 by default), one estimator per channel.
+/// push_frame() is the fast way to feed it one frame at a time: it buffers Channel::kFrames
+/// frames (kChannels x 256 bytes) and pushes them through OnlineAdev::push_frames, with results
+/// bit-identical to push(). Buffered frames are pushed before anything reads or changes the
+/// channels: channel() (also the const one: the buffer and channels are `mutable`, the estimate
+/// is logically unchanged), push(), mark_missing(), reset(), flush().
 template <std::size_t kChannels = 6, std::size_t M = 8, std::size_t L = 22>
 class MultiAdev {
  public:
   using Channel = OnlineAdev<M, L>;
   static constexpr std::size_t kNumChannels = kChannels;
 
-  /// Push one sample of every channel.
+  /// Push one sample of every channel, now, channel by channel (~13 ns per sample per channel
+  /// on the host). Same results as push_frame().
   void push(const std::int32_t (&counts)[kChannels]) {
+    flush();
     for (std::size_t c = 0; c < kChannels; ++c) {
       ch_[c].push(counts[c]);
     }
   }
+  /// Push one sample of every channel, buffered (see the class comment). O(kChannels) per call,
+  /// plus one push_frames() every Channel::kFrames calls.
+  void push_frame(const std::int32_t (&counts)[kChannels]) {
+    for (std::size_t c = 0; c < kChannels; ++c) {
+      pending_[n_pending_][c] = counts[c];
+    }
+    if (++n_pending_ == Channel::kFrames) {
+      flush();
+    }
+  }
+  /// Push the buffered frames now. O(frames buffered x kChannels).
+  void flush() const {
+    if (n_pending_ > 0) {
+      Channel::push_frames(ch_, pending_, n_pending_);
+      n_pending_ = 0;
+    }
+  }
   /// Mark n consecutive samples missing on every channel.
   void mark_missing(std::uint64_t n_samples) {
+    flush();
     for (auto& c : ch_) {
       c.mark_missing(n_samples);
     }
   }
   void reset() {
+    n_pending_ = 0;
     for (auto& c : ch_) {
       c.reset();
     }
   }
-  Channel& channel(std::size_t c) { return ch_[c]; }
-  const Channel& channel(std::size_t c) const { return ch_[c]; }
+  Channel& channel(std::size_t c) {
+    flush();
+    return ch_[c];
+  }
+  const Channel& channel(std::size_t c) const {
+    flush();
+    return ch_[c];
+  }
 
  private:
-  Channel ch_[kChannels];
+  mutable Channel ch_[kChannels];
+  mutable std::int32_t pending_[Channel::kFrames][kChannels] = {};
+  mutable std::size_t n_pending_ = 0;
 };
 
 }  // namespace imu

@@ -32,10 +32,19 @@ void append_adler32(std::vector<std::uint8_t>& z, const std::uint8_t* data, std:
 }
 
 constexpr unsigned kMaxBits = 15U;   // longest deflate code
-constexpr unsigned kFastBits = 10U;  // first-level table index width
-constexpr std::size_t kFastSize = std::size_t{1} << kFastBits;
+constexpr unsigned kLitBits = 10U;   // primary table index width, literal/length codes
+constexpr unsigned kDistBits = 8U;   // primary table index width, distance codes
 constexpr std::size_t kMaxLitLen = 288U;
 constexpr std::size_t kMaxDist = 32U;
+// Entries of a table: the primary table (2^root) plus every sub-table. A sub-table of width w
+// sits under a complete subtree holding at least w + 1 codes, so the sub-tables of n codes hold
+// at most n * max(2^w / (w + 1)) entries: 288 * 32 / 6 = 1536 (w <= 5) for literal/length,
+// 32 * 128 / 8 = 512 (w <= 7) for distances. build() checks the bound anyway.
+constexpr std::size_t kLitTableSize = (std::size_t{1} << kLitBits) + 1536U;
+constexpr std::size_t kDistTableSize = (std::size_t{1} << kDistBits) + 512U;
+// The fast loop runs while this much output room is left: the longest match (258) plus the
+// overshoot of its chunked copy (< 32), plus two literals.
+constexpr std::size_t kFastRoom = 320U;
 
 // Length symbols 257..285: base length and extra bits (RFC 1951 3.2.5).
 constexpr std::array<std::uint16_t, 29> kLenBase = {3,  4,  5,  6,  7,  8,  9,  10, 11, 13,
@@ -53,26 +62,79 @@ constexpr std::array<std::uint8_t, 30> kDistExtra = {0, 0, 0, 0, 1, 1, 2,  2,  3
 constexpr std::array<std::uint8_t, 19> kClOrder = {16, 17, 18, 0, 8,  7, 9,  6, 10, 5,
                                                    11, 4,  12, 3, 13, 2, 14, 1, 15};
 
-// Canonical Huffman code with a first-level lookup table.
-// fast[i] = symbol << 4 | length for codes of length <= kFastBits whose bit-reversed code is the
-// low bits of i; 0 means "longer code or not a code": use the canonical slow path.
-struct Huffman {
-  std::array<std::uint16_t, kFastSize> fast{};
-  std::array<std::uint16_t, kMaxBits + 1> count{};
-  std::array<std::uint16_t, kMaxLitLen> symbol{};
-};
+// A decoding table entry (32 bits), indexed by the next bits of the stream (LSB first):
+//   bits 0-3   length of the code in bits (1..15); 0: the bits are not a code of the set
+//   bits 4-7   extra bits that follow the code (kBase), or the index width of a sub-table (kLink)
+//   bits 8-10  kind
+//   bits 16-31 value: the literal byte or code-length symbol, the base length or distance, or
+//              the offset of the sub-table
+// One lookup gives everything the decoder needs for a symbol: no symbol-to-base indirection.
+constexpr std::uint32_t kKindMask = 7U << 8U;
+constexpr std::uint32_t kNotCode = 0U;
+constexpr std::uint32_t kLiteral = 1U << 8U;    // also a code-length symbol (0..18)
+constexpr std::uint32_t kBase = 2U << 8U;       // length 3..258 or distance 1..32768
+constexpr std::uint32_t kEnd = 3U << 8U;        // end of block (256)
+constexpr std::uint32_t kLink = 4U << 8U;       // codes longer than the root: a sub-table
+constexpr std::uint32_t kBadSymbol = 5U << 8U;  // a code for length 286/287 or distance 30/31
 
-// Build from code lengths. Rejects over-subscribed sets and incomplete sets of more than one code.
-[[nodiscard]] bool build(Huffman& h, const std::uint8_t* lengths, std::size_t n) {
-  h.count.fill(0);
-  for (std::size_t s = 0; s < n; ++s) {
-    ++h.count[lengths[s]];
+constexpr std::uint32_t make_entry(std::uint32_t kind, std::uint32_t value, unsigned code_bits,
+                                   unsigned extra_bits) {
+  return (value << 16U) | kind | (extra_bits << 4U) | code_bits;
+}
+constexpr unsigned code_bits(std::uint32_t e) { return e & 15U; }
+constexpr unsigned extra_bits(std::uint32_t e) { return (e >> 4U) & 15U; }
+constexpr std::uint32_t value_of(std::uint32_t e) { return e >> 16U; }
+constexpr std::uint64_t low_bits(std::uint64_t v, unsigned n) {
+  return v & ((std::uint64_t{1} << n) - 1U);
+}
+
+enum class Alphabet : std::uint8_t { code_lengths, lit_len, distance };
+
+std::uint32_t symbol_entry(Alphabet alphabet, std::size_t s, unsigned len) {
+  const auto sym = static_cast<std::uint32_t>(s);
+  switch (alphabet) {
+    case Alphabet::code_lengths:
+      return make_entry(kLiteral, sym, len, 0);
+    case Alphabet::lit_len:
+      if (s < 256U) {
+        return make_entry(kLiteral, sym, len, 0);
+      }
+      if (s == 256U) {
+        return make_entry(kEnd, 0, len, 0);
+      }
+      if (s - 257U < kLenBase.size()) {
+        return make_entry(kBase, kLenBase[s - 257U], len, kLenExtra[s - 257U]);
+      }
+      return make_entry(kBadSymbol, sym, len, 0);
+    case Alphabet::distance:
+      if (s < kDistBase.size()) {
+        return make_entry(kBase, kDistBase[s], len, kDistExtra[s]);
+      }
+      return make_entry(kBadSymbol, sym, len, 0);
   }
-  const std::size_t n_codes = n - h.count[0];
+  return kNotCode;
+}
+
+template <std::size_t N>
+using Table = std::array<std::uint32_t, N>;
+using LitTable = Table<kLitTableSize>;
+using DistTable = Table<kDistTableSize>;
+
+// Build the table of a canonical Huffman code from its code lengths, with `root` index bits.
+// Rejects over-subscribed sets and incomplete sets of more than one code (as zlib). Cost:
+// O(2^root + n + sub-table entries).
+template <std::size_t N>
+[[nodiscard]] bool build(Table<N>& t, unsigned root, Alphabet alphabet,
+                         const std::uint8_t* lengths, std::size_t n) {
+  std::array<std::uint16_t, kMaxBits + 1> count{};
+  for (std::size_t s = 0; s < n; ++s) {
+    ++count[lengths[s]];
+  }
+  const std::size_t n_codes = n - count[0];
   int left = 1;
   for (unsigned len = 1; len <= kMaxBits; ++len) {
     left *= 2;
-    left -= h.count[len];
+    left -= count[len];
     if (left < 0) {
       return false;  // over-subscribed
     }
@@ -80,40 +142,84 @@ struct Huffman {
   if (left > 0 && n_codes > 1U) {
     return false;  // incomplete: only a single code (or none) may leave the set incomplete
   }
-  std::array<std::uint16_t, kMaxBits + 2> offs{};
-  for (unsigned len = 1; len <= kMaxBits; ++len) {
-    offs[len + 1] = static_cast<std::uint16_t>(offs[len] + h.count[len]);
-  }
-  for (std::size_t s = 0; s < n; ++s) {
-    if (lengths[s] != 0U) {
-      h.symbol[offs[lengths[s]]++] = static_cast<std::uint16_t>(s);
-    }
-  }
-  // Canonical codes, then the bit-reversed fast table.
-  h.fast.fill(0);
-  std::array<unsigned, kMaxBits + 1> next{};
+  // First canonical code of each length (RFC 1951 3.2.2).
+  std::array<unsigned, kMaxBits + 1> first{};
   unsigned code = 0;
   for (unsigned len = 1; len <= kMaxBits; ++len) {
-    code = (code + (len == 1U ? 0U : h.count[len - 1U])) << 1U;  // count[0]: unused symbols
-    next[len] = code;
+    code = (code + (len == 1U ? 0U : count[len - 1U])) << 1U;
+    first[len] = code;
   }
-  next[0] = 0;
+  const std::size_t root_size = std::size_t{1} << root;
+  const std::size_t root_mask = root_size - 1U;
+  std::fill(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(root_size), kNotCode);
+  // Sub-table width of each root slot: its longest code less the root bits.
+  std::array<std::uint8_t, std::size_t{1} << kLitBits> width{};
+  std::array<unsigned, kMaxBits + 1> next = first;
+  for (std::size_t s = 0; s < n; ++s) {
+    const unsigned len = lengths[s];
+    if (len > root) {
+      const std::size_t slot = reverse_bits(next[len], len) & root_mask;
+      width[slot] = static_cast<std::uint8_t>(std::max<unsigned>(width[slot], len - root));
+    }
+    ++next[len];
+  }
+  std::size_t used = root_size;
+  for (std::size_t slot = 0; slot < root_size; ++slot) {
+    if (width[slot] == 0U) {
+      continue;
+    }
+    const std::size_t size = std::size_t{1} << width[slot];
+    if (size > N - used) {
+      return false;  // cannot happen for a valid set (see the size comment); defensive
+    }
+    t[slot] = make_entry(kLink, static_cast<std::uint32_t>(used), 0, width[slot]);
+    std::fill(t.begin() + static_cast<std::ptrdiff_t>(used),
+              t.begin() + static_cast<std::ptrdiff_t>(used + size), kNotCode);
+    used += size;
+  }
+  next = first;
   for (std::size_t s = 0; s < n; ++s) {
     const unsigned len = lengths[s];
     if (len == 0U) {
       continue;
     }
-    const unsigned c = next[len]++;
-    if (len > kFastBits) {
-      continue;
-    }
-    const std::uint32_t rev = reverse_bits(c, len);
-    const auto entry = static_cast<std::uint16_t>((s << 4U) | len);
-    for (std::size_t i = rev; i < kFastSize; i += std::size_t{1} << len) {
-      h.fast[i] = entry;
+    const std::size_t rev = reverse_bits(next[len]++, len);
+    const std::uint32_t e = symbol_entry(alphabet, s, len);
+    if (len <= root) {
+      for (std::size_t i = rev; i < root_size; i += std::size_t{1} << len) {
+        t[i] = e;
+      }
+    } else {
+      const std::uint32_t link = t[rev & root_mask];
+      const std::size_t base = value_of(link);
+      const std::size_t sub_size = std::size_t{1} << extra_bits(link);
+      for (std::size_t i = rev >> root; i < sub_size; i += std::size_t{1} << (len - root)) {
+        t[base + i] = e;
+      }
     }
   }
   return true;
+}
+
+// The entry for the code at the head of `bits` (sub-table resolved).
+template <std::size_t N>
+std::uint32_t lookup(const Table<N>& t, unsigned root, std::uint64_t bits) {
+  std::uint32_t e = t[static_cast<std::size_t>(low_bits(bits, root))];
+  if ((e & kKindMask) == kLink) {
+    e = t[value_of(e) + static_cast<std::size_t>(low_bits(bits >> root, extra_bits(e)))];
+  }
+  return e;
+}
+
+// 8 bytes, little-endian, from any alignment: one unaligned load (g++ 12 does not merge the
+// shift-or byte loop into one load here, which cost ~15 % of the decode time).
+std::uint64_t load_le64(const std::uint8_t* p) {
+  std::uint64_t w = 0;
+  std::memcpy(&w, p, sizeof w);
+#if defined(__BYTE_ORDER__) && __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+  w = __builtin_bswap64(w);  // the stream is little-endian; every host target is too
+#endif
+  return w;
 }
 
 class Inflater {
@@ -121,7 +227,8 @@ class Inflater {
   Inflater(const std::uint8_t* in, std::size_t in_size, std::size_t max_out, InflateMode mode,
            std::vector<std::uint8_t>& out, std::size_t size_hint)
       : in_(in), in_size_(in_size), max_out_(max_out), mode_(mode), out_(out) {
-    out_.clear();
+    // No clear() first: a reused vector keeps its bytes, so resize() does not zero them again
+    // (they are overwritten; finish() cuts the vector to what was produced).
     cap_ = std::min(max_out_, std::max<std::size_t>(size_hint, 1U << 16U));
     out_.resize(cap_);
   }
@@ -168,14 +275,12 @@ class Inflater {
   [[nodiscard]] bool full() const { return full_; }
 
  private:
+  // Bits of bitbuf_ at and above bitcnt_ are zero or the input's next bits (the 8-byte load
+  // puts whole bytes there that a later refill ORs in again at the same place).
   void refill() {
     if (in_size_ - pos_ >= 8U) {
       // Fast path: one 8-byte little-endian load; take the whole bytes that fit in the buffer.
-      std::uint64_t w = 0;
-      for (unsigned i = 8; i-- > 0U;) {
-        w = (w << 8U) | in_[pos_ + i];
-      }
-      bitbuf_ |= w << bitcnt_;
+      bitbuf_ |= load_le64(in_ + pos_) << bitcnt_;
       pos_ += (63U - bitcnt_) >> 3U;
       bitcnt_ |= 56U;  // bitcnt_ + 8 * ((63 - bitcnt_) / 8) for bitcnt_ < 64
       return;
@@ -193,7 +298,7 @@ class Inflater {
   }
   // Precondition: need(n) returned true, n <= 32.
   unsigned bits(unsigned n) {
-    const auto v = static_cast<unsigned>(bitbuf_ & ((std::uint64_t{1} << n) - 1U));
+    const auto v = static_cast<unsigned>(low_bits(bitbuf_, n));
     drop(n);
     return v;
   }
@@ -202,41 +307,24 @@ class Inflater {
     bitcnt_ -= n;
   }
 
-  // Decode one symbol; -1 truncated, -2 not a code.
-  int decode(const Huffman& h) {
+  // Decode one code: its entry in `e` and its bits dropped. A bit string that is not a code is
+  // `not_code` if 15 bits were available, else truncated_input (the stream may end inside it).
+  template <std::size_t N>
+  [[nodiscard]] InflateStatus decode(const Table<N>& t, unsigned root, InflateStatus not_code,
+                                     std::uint32_t& e) {
     if (bitcnt_ < kMaxBits) {
       refill();
     }
-    const std::uint16_t e = h.fast[bitbuf_ & (kFastSize - 1U)];
-    if (e != 0U) {
-      const unsigned len = e & 15U;
-      if (len > bitcnt_) {
-        return -1;
-      }
-      drop(len);
-      return e >> 4U;
+    e = lookup(t, root, bitbuf_);
+    const unsigned len = code_bits(e);
+    if (len == 0U) {
+      return bitcnt_ < kMaxBits ? InflateStatus::truncated_input : not_code;
     }
-    // Canonical slow path (codes longer than kFastBits, or invalid codes).
-    int code = 0;
-    int first = 0;
-    int index = 0;
-    for (unsigned len = 1; len <= kMaxBits; ++len) {
-      if (len > bitcnt_) {
-        return -1;
-      }
-      code |= static_cast<int>((bitbuf_ >> (len - 1U)) & 1U);
-      const int count = h.count[len];
-      if (code - count < first) {
-        drop(len);
-        const int k = index + (code - first);  // first <= code < first + count
-        return h.symbol[static_cast<std::size_t>(k)];
-      }
-      index += count;
-      first += count;
-      first <<= 1;
-      code <<= 1;
+    if (len > bitcnt_) {
+      return InflateStatus::truncated_input;
     }
-    return -2;
+    drop(len);
+    return InflateStatus::ok;
   }
 
   // Make room for n more output bytes. Returns false if that passes max_out (then, in prefix
@@ -302,8 +390,8 @@ class Inflater {
       std::array<std::uint8_t, kMaxDist> d{};
       d.fill(5);
       // The fixed sets are complete or (distance: 32 codes of 5 bits) exactly full.
-      static_cast<void>(build(fixed_lit_, l.data(), l.size()));
-      static_cast<void>(build(fixed_dist_, d.data(), d.size()));
+      static_cast<void>(build(fixed_lit_, kLitBits, Alphabet::lit_len, l.data(), l.size()));
+      static_cast<void>(build(fixed_dist_, kDistBits, Alphabet::distance, d.data(), d.size()));
       fixed_built_ = true;
     }
     return codes(fixed_lit_, fixed_dist_);
@@ -326,23 +414,25 @@ class Inflater {
       }
       cl[kClOrder[i]] = static_cast<std::uint8_t>(bits(3));
     }
-    if (!build(lit_, cl.data(), cl.size())) {
+    if (!build(lit_, kLitBits, Alphabet::code_lengths, cl.data(), cl.size())) {
       return InflateStatus::bad_code_lengths;
     }
     std::array<std::uint8_t, kMaxLitLen + kMaxDist> lengths{};
     unsigned index = 0;
     while (index < nlen + ndist) {
-      const int sym = decode(lit_);
-      if (sym < 0) {
-        return sym == -1 ? InflateStatus::truncated_input : InflateStatus::bad_code_lengths;
+      std::uint32_t e = 0;
+      const InflateStatus st = decode(lit_, kLitBits, InflateStatus::bad_code_lengths, e);
+      if (st != InflateStatus::ok) {
+        return st;
       }
-      if (sym < 16) {
+      const std::uint32_t sym = value_of(e);
+      if (sym < 16U) {
         lengths[index++] = static_cast<std::uint8_t>(sym);
         continue;
       }
       std::uint8_t value = 0;
       unsigned repeat = 0;
-      if (sym == 16) {
+      if (sym == 16U) {
         if (index == 0U) {
           return InflateStatus::bad_code_lengths;  // nothing to repeat
         }
@@ -351,7 +441,7 @@ class Inflater {
           return InflateStatus::truncated_input;
         }
         repeat = 3U + bits(2);
-      } else if (sym == 17) {
+      } else if (sym == 17U) {
         if (!need(3)) {
           return InflateStatus::truncated_input;
         }
@@ -372,57 +462,170 @@ class Inflater {
     if (lengths[256] == 0U) {
       return InflateStatus::bad_code_lengths;  // no end-of-block code
     }
-    if (!build(lit_, lengths.data(), nlen) || !build(dist_, lengths.data() + nlen, ndist)) {
+    if (!build(lit_, kLitBits, Alphabet::lit_len, lengths.data(), nlen) ||
+        !build(dist_, kDistBits, Alphabet::distance, lengths.data() + nlen, ndist)) {
       return InflateStatus::bad_code_lengths;
     }
     return codes(lit_, dist_);
   }
 
-  InflateStatus codes(const Huffman& lit, const Huffman& dist) {
-    std::uint8_t* out = out_.data();
-    for (;;) {
-      int sym = decode(lit);
-      if (sym < 0) {
-        return sym == -1 ? InflateStatus::truncated_input : InflateStatus::bad_symbol;
-      }
-      if (sym < 256) {
-        if (n_out_ == cap_) {
-          if (!room(1)) {
-            if (mode_ == InflateMode::whole) {
-              return InflateStatus::output_limit;
-            }
-            full_ = true;
-            return InflateStatus::ok;
-          }
-          out = out_.data();
+  // Fast loop, while at least 8 input bytes remain (for the refill) and kFastRoom bytes of
+  // output room: one branch-free refill per step gives >= 56 bits, enough for a length code,
+  // its extra bits, a distance code and its extra bits (15 + 5 + 15 + 13) or two literals; no
+  // per-byte bound checks; match copies in 32-, 16- or 8-byte chunks that may write up to 31 bytes
+  // past the match (inside the room, overwritten later or cut by finish()). Returns true at the
+  // end of the block. Anything else (a bit string that is not a code, symbols 286/287 or 30/31,
+  // a distance before the start of the output) returns false with the state at the start of
+  // that symbol: the careful path decodes it again and reports the error as it always did.
+  bool fast(const LitTable& lit, const DistTable& dist) {
+    if (in_size_ - pos_ < 8U || cap_ - n_out_ < kFastRoom) {
+      return false;
+    }
+    const std::size_t in_last = in_size_ - 8U;  // last position an 8-byte load may start at
+    const std::size_t out_last = cap_ - kFastRoom;
+    std::uint8_t* const out = out_.data();
+    std::uint64_t bb = bitbuf_;
+    unsigned bc = bitcnt_;
+    std::size_t pos = pos_;
+    std::size_t n = n_out_;
+    bool end = false;
+    while (pos <= in_last && n <= out_last) {
+      bb |= load_le64(in_ + pos) << bc;
+      pos += (63U - bc) >> 3U;
+      bc |= 56U;
+      std::uint32_t e = lookup(lit, kLitBits, bb);
+      std::uint32_t kind = e & kKindMask;
+      if (kind == kLiteral) {
+        bb >>= code_bits(e);
+        bc -= code_bits(e);
+        out[n++] = static_cast<std::uint8_t>(value_of(e));
+        e = lookup(lit, kLitBits, bb);  // >= 41 bits left: a second literal needs no refill
+        if ((e & kKindMask) == kLiteral) {
+          bb >>= code_bits(e);
+          bc -= code_bits(e);
+          out[n++] = static_cast<std::uint8_t>(value_of(e));
         }
-        out[n_out_++] = static_cast<std::uint8_t>(sym);
         continue;
       }
-      if (sym == 256) {
+      if (kind != kBase) {
+        if (kind == kEnd) {
+          bb >>= code_bits(e);
+          bc -= code_bits(e);
+          end = true;
+        }
+        break;  // end of block, or an error for the careful path
+      }
+      const unsigned len_bits = code_bits(e) + extra_bits(e);
+      const std::size_t len = value_of(e) + static_cast<std::size_t>(low_bits(bb >> code_bits(e), extra_bits(e)));
+      const std::uint64_t bd = bb >> len_bits;
+      const std::uint32_t de = lookup(dist, kDistBits, bd);
+      kind = de & kKindMask;
+      if (kind != kBase) {
+        break;
+      }
+      const std::size_t d = value_of(de) + static_cast<std::size_t>(low_bits(bd >> code_bits(de), extra_bits(de)));
+      if (d > n) {
+        break;
+      }
+      const unsigned used = len_bits + code_bits(de) + extra_bits(de);
+      bb >>= used;
+      bc -= used;
+      copy_match(out + n, d, len);
+      n += len;
+    }
+    bitbuf_ = bb;
+    bitcnt_ = bc;
+    pos_ = pos;
+    n_out_ = n;
+    return end;
+  }
+
+  // dst[i] = dst[i - d] for i < len, writing up to 31 bytes past len. Precondition: d >= 1 and
+  // d bytes precede dst, len + 31 bytes of room after it.
+  static void copy_match(std::uint8_t* dst, std::size_t d, std::size_t len) {
+    std::uint8_t* const stop = dst + len;
+    if (d >= 32U) {
+      const std::uint8_t* src = dst - d;
+      do {
+        std::memcpy(dst, src, 32);  // src + 32 <= dst: no overlap
+        dst += 32;
+        src += 32;
+      } while (dst < stop);
+    } else if (d >= 16U) {
+      const std::uint8_t* src = dst - d;
+      do {
+        std::memcpy(dst, src, 16);  // src + 16 <= dst: no overlap
+        dst += 16;
+        src += 16;
+      } while (dst < stop);
+    } else if (d >= 8U) {
+      const std::uint8_t* src = dst - d;
+      do {
+        std::memcpy(dst, src, 8);
+        dst += 8;
+        src += 8;
+      } while (dst < stop);
+    } else if (d == 1U) {
+      std::memset(dst, dst[-1], len);
+    } else {
+      // Period d < 8: the first d * ceil(8 / d) bytes one at a time, then 8-byte chunks from a
+      // whole number of periods back (>= 8, so no overlap).
+      const std::size_t period = d * ((8U + d - 1U) / d);
+      std::size_t i = 0;
+      for (; i < period && i < len; ++i) {
+        dst[i] = dst[i - d];
+      }
+      for (; i < len; i += 8U) {
+        std::memcpy(dst + i, dst + i - period, 8);
+      }
+    }
+  }
+
+  InflateStatus codes(const LitTable& lit, const DistTable& dist) {
+    for (;;) {
+      if (fast(lit, dist)) {
         return InflateStatus::ok;
       }
-      sym -= 257;
-      if (sym >= 29) {
-        return InflateStatus::bad_symbol;
+      // Careful path: one symbol with every check (near the end of the input or of the
+      // output buffer, and for every error).
+      std::uint32_t e = 0;
+      InflateStatus st = decode(lit, kLitBits, InflateStatus::bad_symbol, e);
+      if (st != InflateStatus::ok) {
+        return st;
       }
-      const auto ls = static_cast<std::size_t>(sym);
-      if (!need(kLenExtra[ls])) {
+      const std::uint32_t kind = e & kKindMask;
+      if (kind == kLiteral) {
+        if (n_out_ == cap_ && !room(1)) {
+          if (mode_ == InflateMode::whole) {
+            return InflateStatus::output_limit;
+          }
+          full_ = true;
+          return InflateStatus::ok;
+        }
+        out_[n_out_++] = static_cast<std::uint8_t>(value_of(e));
+        continue;
+      }
+      if (kind == kEnd) {
+        return InflateStatus::ok;
+      }
+      if (kind != kBase) {
+        return InflateStatus::bad_symbol;  // length symbol 286 or 287
+      }
+      if (!need(extra_bits(e))) {
         return InflateStatus::truncated_input;
       }
-      std::size_t len = kLenBase[ls] + bits(kLenExtra[ls]);
-      const int dsym = decode(dist);
-      if (dsym < 0) {
-        return dsym == -1 ? InflateStatus::truncated_input : InflateStatus::bad_symbol;
+      std::size_t len = value_of(e) + bits(extra_bits(e));
+      st = decode(dist, kDistBits, InflateStatus::bad_symbol, e);
+      if (st != InflateStatus::ok) {
+        return st;
       }
-      if (dsym >= 30) {
-        return InflateStatus::bad_symbol;
+      if ((e & kKindMask) != kBase) {
+        return InflateStatus::bad_symbol;  // distance symbol 30 or 31
       }
-      const auto ds = static_cast<std::size_t>(dsym);
-      if (!need(kDistExtra[ds])) {
+      if (!need(extra_bits(e))) {
         return InflateStatus::truncated_input;
       }
-      const std::size_t d = kDistBase[ds] + bits(kDistExtra[ds]);
+      const std::size_t d = value_of(e) + bits(extra_bits(e));
       if (d > n_out_) {
         return InflateStatus::bad_distance;
       }
@@ -433,24 +636,9 @@ class Inflater {
         len = cap_ - n_out_;
         full_ = true;
       }
-      out = out_.data();
-      std::uint8_t* dst = out + n_out_;
-      const std::uint8_t* src = dst - d;
-      if (d >= len) {
-        std::memcpy(dst, src, len);
-      } else if (d >= 8U) {
-        // Overlapping, but each 8-byte chunk reads bytes already written (d >= 8).
-        std::size_t i = 0;
-        for (; i + 8U <= len; i += 8U) {
-          std::memcpy(dst + i, src + i, 8);
-        }
-        for (; i < len; ++i) {
-          dst[i] = src[i];
-        }
-      } else {
-        for (std::size_t i = 0; i < len; ++i) {
-          dst[i] = src[i];  // overlapping copy repeats the last d bytes
-        }
+      std::uint8_t* dst = out_.data() + n_out_;
+      for (std::size_t i = 0; i < len; ++i) {
+        dst[i] = dst[i - d];  // byte by byte: an overlapping copy repeats the last d bytes
       }
       n_out_ += len;
       if (full_) {
@@ -471,10 +659,10 @@ class Inflater {
   std::size_t n_out_ = 0;
   bool full_ = false;
   bool fixed_built_ = false;
-  Huffman lit_{};
-  Huffman dist_{};
-  Huffman fixed_lit_{};
-  Huffman fixed_dist_{};
+  LitTable lit_{};
+  DistTable dist_{};
+  LitTable fixed_lit_{};
+  DistTable fixed_dist_{};
 };
 
 }  // namespace
@@ -542,16 +730,18 @@ InflateResult inflate_raw(const std::uint8_t* in, std::size_t in_size, std::size
 
 InflateResult inflate_zlib(const std::uint8_t* in, std::size_t in_size, std::size_t max_out,
                            InflateMode mode, std::vector<std::uint8_t>& out, std::size_t size_hint) {
-  out.clear();
   if (in_size < 2U) {
+    out.clear();
     return InflateResult{InflateStatus::truncated_input, in_size};
   }
   const unsigned cmf = in[0];
   const unsigned flg = in[1];
   if ((cmf & 0x0FU) != 8U || (cmf >> 4U) > 7U || ((cmf << 8U) | flg) % 31U != 0U) {
+    out.clear();
     return InflateResult{InflateStatus::bad_zlib_header, 0};
   }
   if ((flg & 0x20U) != 0U) {
+    out.clear();
     return InflateResult{InflateStatus::preset_dictionary, 0};
   }
   Inflater inf(in + 2, in_size - 2U, max_out, mode, out, size_hint);

@@ -353,7 +353,7 @@ void Node::on_sample(const hal::SampleRecord& s) {
     ++stats_.saturated;
   }
   last_seq_ = s.seq;
-  adev_.push(s.counts);
+  adev_.push_frame(s.counts);  // buffered, bit-identical to push(); flushed by every read
   for (std::size_t c = 0; c < kChannels; ++c) {
     active_[c] = active_[c] || s.counts[c] != 0;
   }

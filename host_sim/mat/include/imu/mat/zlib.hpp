@@ -1,13 +1,19 @@
 // RFC 1951 inflate (stored, fixed and dynamic Huffman blocks) with the RFC 1950 zlib wrapper,
 // and two small zlib writers: stored blocks (level 0) and one fixed-Huffman block with LZ77. Standard library only, host code.
 //
-// Decoding is table-driven: a 10-bit first-level lookup resolves almost every literal/length and
-// distance code in one step; longer codes fall back to canonical (count/symbol) decoding.
+// Decoding is table-driven: one lookup in a 10-bit (literal/length) or 8-bit (distance) primary
+// table, or a second one in a sub-table for longer codes, gives a symbol's code length and its
+// literal byte or base length/distance with the count of extra bits. A fast loop runs while 8
+// input bytes and 320 bytes of output room remain: a 64-bit bit buffer refilled by one 8-byte
+// load per symbol (>= 56 bits: a whole length/distance pair), no per-byte bound checks, match
+// copies in 8/16/32-byte chunks. Near the ends of the input and of the output buffer, and for
+// every error, a careful path decodes one symbol at a time with every check.
 // Validation follows zlib: over-subscribed code sets are rejected, incomplete sets are accepted
 // only when they have at most one code, a symbol outside the set, a distance before the start of
 // the output, length symbols 286/287 and distance symbols 30/31 are errors.
 //
-// Output is bounded: never more than `max_out` bytes are produced or allocated (the buffer
+// Output is bounded (a memory budget): never more than `max_out` bytes are produced or allocated
+// (a stream that would inflate to more is InflateStatus::output_limit in whole mode; the buffer
 // grows geometrically up to min(max_out, what the stream actually produces), starting from
 // `size_hint` when the caller knows the expected size).
 //
