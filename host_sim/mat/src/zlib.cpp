@@ -572,8 +572,9 @@ class Inflater {
       // whole number of periods back (>= 8, so no overlap).
       const std::size_t period = d * ((8U + d - 1U) / d);
       std::size_t i = 0;
+      const std::uint8_t* back = dst - d;  // (dst[i - d] would wrap i - d as size_t: UB)
       for (; i < period && i < len; ++i) {
-        dst[i] = dst[i - d];
+        dst[i] = back[i];
       }
       for (; i < len; i += 8U) {
         std::memcpy(dst + i, dst + i - period, 8);
@@ -637,8 +638,9 @@ class Inflater {
         full_ = true;
       }
       std::uint8_t* dst = out_.data() + n_out_;
+      const std::uint8_t* back = dst - d;
       for (std::size_t i = 0; i < len; ++i) {
-        dst[i] = dst[i - d];  // byte by byte: an overlapping copy repeats the last d bytes
+        dst[i] = back[i];  // byte by byte: an overlapping copy repeats the last d bytes
       }
       n_out_ += len;
       if (full_) {
