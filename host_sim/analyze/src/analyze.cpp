@@ -177,6 +177,15 @@ double flicker_tau_lo(double tau_min, double tau_max, const Points& pts) {
   return std::min(lo, 0.1 * tau_max);
 }
 
+// p with the sinusoids of `from` (the fit's linear terms never hold them).
+ModelParams with_sines(ModelParams p, const ModelParams& from) {
+  p.sin_a = from.sin_a;
+  p.sin_f0_hz = from.sin_f0_hz;
+  p.sin2_a = from.sin2_a;
+  p.sin2_f0_hz = from.sin2_f0_hz;
+  return p;
+}
+
 // tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max).
 FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
                     double tb_max_s = 0.0) {
@@ -1002,13 +1011,7 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
         }
         AfterChoice ch;
         ch.terms = terms & ~zeroed;
-        ch.p = q;
-        if (keep_sines) {
-          ch.p.sin_a = sines.sin_a;
-          ch.p.sin_f0_hz = sines.sin_f0_hz;
-          ch.p.sin2_a = sines.sin2_a;
-          ch.p.sin2_f0_hz = sines.sin2_f0_hz;
-        }
+        ch.p = keep_sines ? with_sines(q, sines) : q;
         fill_errors(points_for_model(c.clean, ch.p), ch.p, c.o, c.ts, c.tau_max, ch.e);
         ch.ok = true;
         if (preferred(ch, best, c.before)) {
@@ -1781,11 +1784,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       if (f.status != FitStatus::kOk) {
         return;
       }
-      ModelParams p = f.params;
-      p.sin_a = cur_p.sin_a;
-      p.sin_f0_hz = cur_p.sin_f0_hz;
-      p.sin2_a = cur_p.sin2_a;
-      p.sin2_f0_hz = cur_p.sin2_f0_hz;
+      const ModelParams p = with_sines(f.params, cur_p);
       cands.push_back(Cand{type, terms | t, p, residual(eval, p, o, ts, tau_max).cost, nullptr});
     };
     // A sinusoid candidate: the linear terms refitted to the ADEV of the record without it, the
@@ -1796,11 +1795,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       if (f.status != FitStatus::kOk) {
         return;
       }
-      ModelParams p = f.params;
-      p.sin_a = sines.sin_a;
-      p.sin_f0_hz = sines.sin_f0_hz;
-      p.sin2_a = sines.sin2_a;
-      p.sin2_f0_hz = sines.sin2_f0_hz;
+      const ModelParams p = with_sines(f.params, sines);
       cands.push_back(Cand{type, terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
     };
     try_term("quantization", kFitQuantization);
@@ -1982,12 +1977,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
             fmt("%.3g", lt.block_s) + " s; GM alone, tb <= " + fmt("%.0f", tb_max) +
             " s, vs GM + K = " + fmt("%.3g", lt.h1.model.k) + ")");
         terms |= kFitRrw;
-        const ModelParams prev = cur_p;
-        cur_p = f.params;
-        cur_p.sin_a = prev.sin_a;
-        cur_p.sin_f0_hz = prev.sin_f0_hz;
-        cur_p.sin2_a = prev.sin2_a;
-        cur_p.sin2_f0_hz = prev.sin2_f0_hz;
+        cur_p = with_sines(f.params, cur_p);
       }
     } else if (lt.ok) {
       out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
