@@ -374,10 +374,11 @@ void expect_identical(const imu::OnlineAdev<8, 22>& a, const imu::OnlineAdev<8, 
 // fed one sample at a time with push(): bit-identical, with gaps of random lengths at random
 // places, snapshots in between (which flush a partial buffer), more than 2^16 samples (block
 // sums closed inside a batch), small and full-scale samples, and one channel pushed on its own
-// (the fallback for channels out of step).
-TEST(MultiAdev, PushFrameIsBitIdenticalToPerChannelPush) {
+// (the fallback for channels out of step). kBuf: the push_frame buffer (frames per batch).
+template <std::size_t kBuf>
+void check_push_frame_against_push(std::size_t n_frames) {
   constexpr std::size_t kCh = 6;
-  imu::MultiAdev<kCh, 8, 22> multi;
+  imu::MultiAdev<kCh, 8, 22, kBuf> multi;
   Adev ref[kCh];
   std::mt19937_64 rng(2024);
   std::uniform_int_distribution<std::int32_t> small(-3000, 3000);
@@ -385,8 +386,8 @@ TEST(MultiAdev, PushFrameIsBitIdenticalToPerChannelPush) {
                                                    std::numeric_limits<std::int32_t>::max());
   std::uniform_int_distribution<int> event(0, 19999);
   std::int32_t frame[kCh];
-  for (std::size_t f = 0; f < 300000U; ++f) {
-    const bool big = f >= 150000U && f < 160000U;
+  for (std::size_t f = 0; f < n_frames; ++f) {
+    const bool big = f >= n_frames / 2U && f < n_frames / 2U + 10000U;
     for (std::size_t c = 0; c < kCh; ++c) {
       frame[c] = big ? full(rng) : small(rng) + static_cast<std::int32_t>(100 * c);
       ref[c].push(frame[c]);
@@ -402,7 +403,7 @@ TEST(MultiAdev, PushFrameIsBitIdenticalToPerChannelPush) {
     } else if (e == 3) {
       expect_identical(multi.channel(f % kCh), ref[f % kCh]);  // flushes a partial buffer
     }
-    if (f == 200000U) {  // channel 2 alone gets an extra sample: channels out of step
+    if (f == n_frames * 2U / 3U) {  // channel 2 alone gets an extra sample: channels out of step
       multi.channel(2).push(17);
       ref[2].push(17);
     }
@@ -411,6 +412,15 @@ TEST(MultiAdev, PushFrameIsBitIdenticalToPerChannelPush) {
     SCOPED_TRACE(c);
     expect_identical(multi.channel(c), ref[c]);
   }
+}
+
+TEST(MultiAdev, PushFrameIsBitIdenticalToPerChannelPush) {
+  check_push_frame_against_push<imu::OnlineAdev<8, 22>::kFrames>(300000U);
+}
+
+TEST(MultiAdev, PushFrameWithSmallBuffersIsBitIdenticalToo) {
+  check_push_frame_against_push<7>(80000U);  // batches of 7: levels 0 and 1 batched
+  check_push_frame_against_push<1>(20000U);  // no batching: every frame by push_point
 }
 
 TEST(Quantize, RoundsAndSaturates) {

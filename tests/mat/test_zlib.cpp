@@ -185,7 +185,8 @@ TEST(Zlib, LongStreamTruncationIsDetected) {
       continue;
     }
     SCOPED_TRACE(v.name);
-    for (std::size_t cut = 0; cut < v.stream.size(); cut += cut + 64U < v.stream.size() ? 997U : 1U) {
+    const std::size_t n = v.stream.size();
+    for (std::size_t cut = 0; cut < n; cut += cut + 64U < n ? 997U : 1U) {
       Bytes out;
       const auto r = imu::mat::inflate_zlib(v.stream.data(), cut, v.size, InflateMode::whole, out);
       ASSERT_EQ(r.status, InflateStatus::truncated_input) << "cut at " << cut;

@@ -158,19 +158,23 @@ class OnlineAdev {
     }
   }
 
-  /// Push n <= kFrames frames into the C channels `ch` (frames[f][c] is sample f of channel c).
+  /// Push the first n <= F frames of `frames` (frames[f][c]: sample f of channel c; F <= kFrames)
+  /// into the C channels `ch`.
   /// Bit-identical to pushing frame after frame with push() on each channel: every term is formed
   /// exactly (as in push_block) and added to its tau's partial sum in the same order, flushed
   /// into the block total at the same points. Faster: per level, the taus' terms are summed over
   /// the batch with the channels as the inner loop (contiguous, so the compiler vectorises across
   /// channels), once the level's ring is full and the batch has >= 4 of its points; other levels
   /// take push()'s per-point path. Channels whose sample counts differ (pushed separately) or
-  /// n > kFrames fall back to push() frame by frame. Stack: (2M + 2 kFrames) C doubles
-  /// (7.7 kB for M = 8, C = 6). Cost: ~1.5 M multiply-adds per sample per channel, as push().
-  template <std::size_t C>
-  static void push_frames(OnlineAdev (&ch)[C], const std::int32_t (*frames)[C], std::size_t n) {
+  /// n > F fall back to push() frame by frame. Cost: ~1.5 M multiply-adds per sample per
+  /// channel, as push(). Stack: (2M + 2F) C doubles (6.9 kB for M = 8, F = 64, C = 6): a host /
+  /// application-processor path, not for the M4's 4 KiB stack (where doubles are soft-float and
+  /// nothing vectorises anyway: use push(), or F = 1).
+  template <std::size_t C, std::size_t F>
+  static void push_frames(OnlineAdev (&ch)[C], const std::int32_t (&frames)[F][C], std::size_t n) {
     static_assert(C >= 1, "at least one channel");
-    bool same = n <= kFrames;
+    static_assert(F >= 1 && F <= kFrames, "F must be 1..kFrames");
+    bool same = n <= F;
     for (std::size_t c = 1; c < C; ++c) {
       same = same && ch[c].n_ == ch[0].n_;
     }
@@ -182,7 +186,7 @@ class OnlineAdev {
       }
       return;
     }
-    double xs[kFrames * C];  // phase after frame f of channel c, relative to base[c]: exact
+    double xs[F * C];  // phase after frame f of channel c, relative to base[c]: exact
     std::uint64_t base[C];
     std::int64_t rel[C];
     for (std::size_t c = 0; c < C; ++c) {
@@ -205,7 +209,7 @@ class OnlineAdev {
       for (std::size_t c = 0; c < C; ++c) {
         lv[c] = &ch[c].level0_;
       }
-      push_frames_level(lv, first, xs, base, 1, n);
+      push_frames_level<F>(lv, first, xs, base, 1, n);
     }
     for (std::size_t k = 1; k <= L; ++k) {
       const std::uint64_t q0 = (first + (std::uint64_t{1} << k) - 1) >> k;
@@ -218,7 +222,7 @@ class OnlineAdev {
         lv[c] = &ch[c].upper_[k - 1];
       }
       const auto off = static_cast<std::size_t>((q0 << k) - first);
-      push_frames_level(lv, q0, xs + off * C, base, std::size_t{1} << k,
+      push_frames_level<F>(lv, q0, xs + off * C, base, std::size_t{1} << k,
                         static_cast<std::size_t>(q1 - q0 + 1));
     }
   }
@@ -398,13 +402,15 @@ class OnlineAdev {
   // xs[j stride C + c] relative to base[c]. Each (tau, channel) partial sum gets its terms in
   // point order, as push_point adds them, so the sums are bit-identical; the terms themselves
   // are exact (relative phases < 2^51, see push_batch), hence equal to push_point's.
-  template <std::size_t kTaus, std::size_t kMLo, std::size_t C>
+  template <std::size_t F, std::size_t kTaus, std::size_t kMLo, std::size_t C>
   static void push_frames_level(Level<kTaus, kMLo>* const (&lv)[C], std::uint64_t p0,
                                 const double* xs, const std::uint64_t (&base)[C],
                                 std::size_t stride, std::size_t cnt) {
     // Exact in double: the points span at most (2M + cnt) stride samples of at most 2^31
     // counts around base, below 2^51 under this bound. Under 4 points, push_point is as fast.
-    bool batched = cnt >= 4 && (kRing + cnt) * stride <= (std::size_t{1} << 20U);
+    // (cnt <= F always; said here so the compiler sees arr's bound, F < 4 compiles it out.)
+    bool batched =
+        F >= 4 && cnt >= 4 && cnt <= F && (kRing + cnt) * stride <= (std::size_t{1} << 20U);
     for (std::size_t c = 0; c < C; ++c) {
       batched = batched && lv[c]->seg_points >= kRing;
     }
@@ -416,7 +422,7 @@ class OnlineAdev {
       }
       return;
     }
-    double arr[(kRing + kFrames) * C];  // ring history, then the new points; channels inner
+    double arr[(kRing + F) * C];  // ring history, then the new points; channels inner
     for (std::size_t i = 0; i < kRing; ++i) {
       for (std::size_t c = 0; c < C; ++c) {
         arr[i * C + c] = exact_relative(lv[c]->ring[(p0 - kRing + i) % kRing], base[c]);
@@ -428,7 +434,7 @@ class OnlineAdev {
       }
     }
     // push_point closes a block after the term of a point p with p % 2^16 == 0: at most one
-    // such point among cnt <= kFrames < 2^16.
+    // such point among cnt <= F < 2^16.
     const std::uint64_t pb = (p0 + kBlockMask) & ~kBlockMask;  // first multiple of 2^16 >= p0
     const bool closes = pb - p0 < cnt;
     const std::size_t split = closes ? static_cast<std::size_t>(pb - p0) + 1 : cnt;
@@ -538,16 +544,20 @@ class OnlineAdev {
 };
 
 /// The online ADEV of every channel of an IMU (6 by default), one estimator per channel.
-/// push_frame() is the fast way to feed it one frame at a time: it buffers Channel::kFrames
-/// frames (kChannels x 256 bytes) and pushes them through OnlineAdev::push_frames, with results
-/// bit-identical to push(). Buffered frames are pushed before anything reads or changes the
-/// channels: channel() (also the const one: the buffer and channels are `mutable`, the estimate
-/// is logically unchanged), push(), mark_missing(), reset(), flush().
-template <std::size_t kChannels = 6, std::size_t M = 8, std::size_t L = 22>
+/// push_frame() is the fast way to feed it one frame at a time: it buffers kFrameBuffer frames
+/// (kChannels x 4 x kFrameBuffer bytes; at most Channel::kFrames, 1 for no buffer worth the name,
+/// e.g. on the M4) and pushes them through OnlineAdev::push_frames, with results bit-identical to
+/// push(). Buffered frames are pushed before anything reads or changes the channels: channel()
+/// (also the const one: the buffer and channels are `mutable`, the estimate is logically
+/// unchanged), push(), mark_missing(), reset(), flush().
+template <std::size_t kChannels = 6, std::size_t M = 8, std::size_t L = 22,
+          std::size_t kFrameBuffer = OnlineAdev<M, L>::kFrames>
 class MultiAdev {
  public:
   using Channel = OnlineAdev<M, L>;
   static constexpr std::size_t kNumChannels = kChannels;
+  static_assert(kFrameBuffer >= 1 && kFrameBuffer <= Channel::kFrames,
+                "kFrameBuffer must be 1..OnlineAdev::kFrames");
 
   /// Push one sample of every channel, now, channel by channel (~13 ns per sample per channel
   /// on the host). Same results as push_frame().
@@ -558,12 +568,12 @@ class MultiAdev {
     }
   }
   /// Push one sample of every channel, buffered (see the class comment). O(kChannels) per call,
-  /// plus one push_frames() every Channel::kFrames calls.
+  /// plus one push_frames() every kFrameBuffer calls.
   void push_frame(const std::int32_t (&counts)[kChannels]) {
     for (std::size_t c = 0; c < kChannels; ++c) {
       pending_[n_pending_][c] = counts[c];
     }
-    if (++n_pending_ == Channel::kFrames) {
+    if (++n_pending_ == kFrameBuffer) {
       flush();
     }
   }
@@ -598,7 +608,7 @@ class MultiAdev {
 
  private:
   mutable Channel ch_[kChannels];
-  mutable std::int32_t pending_[Channel::kFrames][kChannels] = {};
+  mutable std::int32_t pending_[kFrameBuffer][kChannels] = {};
   mutable std::size_t n_pending_ = 0;
 };
 

@@ -516,14 +516,16 @@ class Inflater {
         break;  // end of block, or an error for the careful path
       }
       const unsigned len_bits = code_bits(e) + extra_bits(e);
-      const std::size_t len = value_of(e) + static_cast<std::size_t>(low_bits(bb >> code_bits(e), extra_bits(e)));
+      const std::size_t len =
+          value_of(e) + static_cast<std::size_t>(low_bits(bb >> code_bits(e), extra_bits(e)));
       const std::uint64_t bd = bb >> len_bits;
       const std::uint32_t de = lookup(dist, kDistBits, bd);
       kind = de & kKindMask;
       if (kind != kBase) {
         break;
       }
-      const std::size_t d = value_of(de) + static_cast<std::size_t>(low_bits(bd >> code_bits(de), extra_bits(de)));
+      const std::size_t d =
+          value_of(de) + static_cast<std::size_t>(low_bits(bd >> code_bits(de), extra_bits(de)));
       if (d > n) {
         break;
       }

@@ -9,7 +9,9 @@
 namespace imu::m4 {
 namespace {
 
-using Adev = MultiAdev<kChannels, kAdevM, kAdevL>;
+// A one-frame push_frame buffer: the demo feeds push(), and the batched path is for hosts with
+// double-precision vectors (its stack would not fit the 4 KiB here).
+using Adev = MultiAdev<kChannels, kAdevM, kAdevL, 1>;
 
 // Static, not on the stack: the estimator is the bulk of the image's RAM and must show in .bss.
 Adev g_adev;
