@@ -93,16 +93,14 @@ TEST(AnalyzeSynthetic, Quantization) {
 }
 
 TEST(AnalyzeSynthetic, RateRandomWalk) {
-  // Found on 10/10; K within 25 % on 7/10 (seeds 101..110): over a 10^4 s record K itself
-  // scatters (the walk's wander over T is a few independent samples; the three outside are
-  // realisations that wander less, K -38 % to -51 %). The README states the limit.
-  int named = 0;
-  const Tally t = tally("rate_random_walk", "rate_random_walk", [&named](const ia::Effect& e) {
-    ++named;
+  // The issue: K within 25 % on >= 9 of 10 (seeds 101..110). Before the slow-GM check
+  // (analyze.cpp drop_unneeded_slow_gm) it was 7/10: the joint ADEV fit gave part of the walk's
+  // power to a slow GM (K -38 % to -51 %); the record's likelihood with the walk alone now
+  // gives K within 5 % on all ten.
+  const Tally t = tally("rate_random_walk", "rate_random_walk", [](const ia::Effect& e) {
     return std::fabs(e.k - tc::kK) <= 0.25 * tc::kK;
   });
-  EXPECT_GE(named, 9);
-  EXPECT_GE(t.found, 7);
+  EXPECT_GE(t.found, 9);
   EXPECT_LE(t.extra, 1);
 }
 
