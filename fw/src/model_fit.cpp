@@ -8,7 +8,7 @@
 namespace imu {
 namespace {
 
-constexpr std::size_t kP = 7;  // slots: white, quantization, gm1, gm2, rrw, ramp, flicker
+constexpr std::size_t kP = 8;  // slots: white, quantization, gm1, gm2, rrw, ramp, flicker, osc
 constexpr std::size_t kSlotWhite = 0;
 constexpr std::size_t kSlotQuant = 1;
 constexpr std::size_t kSlotGm1 = 2;
@@ -16,6 +16,7 @@ constexpr std::size_t kSlotGm2 = 3;
 constexpr std::size_t kSlotRrw = 4;
 constexpr std::size_t kSlotRamp = 5;
 constexpr std::size_t kSlotFlicker = 6;
+constexpr std::size_t kSlotOsc = 7;
 constexpr std::size_t kGridPoints = 24;
 constexpr int kGoldenIterations = 40;
 constexpr int kCoordinateRounds = 3;
@@ -27,6 +28,9 @@ struct Problem {
   double edf[kMaxFitPoints] = {};
   double w[kMaxFitPoints] = {};
   double flicker[kMaxFitPoints] = {};  // flicker bank AVAR at B = 1 (independent of Tb)
+  double osc[kMaxFitPoints] = {};      // oscillation AVAR at sigma = 1 (shape fixed)
+  double osc_f0_hz = 0.0;
+  double osc_beta_per_s = 0.0;
   double flicker_lo_s = 0.0;
   double flicker_hi_s = 0.0;
   bool used[kP] = {};
@@ -41,9 +45,9 @@ struct Solution {
   bool ok = false;
 };
 
-// Each term's AVAR at unit parameter (the fit is linear in N^2, Q^2, Sb, K^2, R^2, B^2);
-// flicker: the bank's AVAR at B = 1, computed once per point.
-void basis(double tau, double tb1, double tb2, double flicker, double (&f)[kP]) {
+// Each term's AVAR at unit parameter (the fit is linear in N^2, Q^2, Sb, K^2, R^2, B^2,
+// sigma^2); flicker and oscillation: their AVAR at unit parameter, computed once per point.
+void basis(double tau, double tb1, double tb2, double flicker, double osc, double (&f)[kP]) {
   f[kSlotWhite] = avar_white(1.0, tau);
   f[kSlotQuant] = avar_quantization(1.0, tau);
   f[kSlotGm1] = tb1 > 0.0 ? avar_gauss_markov(1.0, tb1, tau) : 0.0;
@@ -51,6 +55,7 @@ void basis(double tau, double tb1, double tb2, double flicker, double (&f)[kP]) 
   f[kSlotRrw] = avar_rrw(1.0, tau);
   f[kSlotRamp] = avar_ramp(1.0, tau);
   f[kSlotFlicker] = flicker;
+  f[kSlotOsc] = osc;
 }
 
 // Lawson-Hanson NNLS on the normal equations G x = h (G symmetric PSD, already scaled to unit
@@ -159,7 +164,7 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
   double h[kP] = {};
   for (std::size_t i = 0; i < pb.n; ++i) {
     double f[kP];
-    basis(pb.tau[i], tb1, tb2, pb.flicker[i], f);
+    basis(pb.tau[i], tb1, tb2, pb.flicker[i], pb.osc[i], f);
     const double w = pb.w[i];
     for (std::size_t a = 0; a < kP; ++a) {
       if (!pb.used[a]) {
@@ -202,11 +207,11 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
     s.theta[a] = cols[a] ? x[a] / d[a] : 0.0;
   }
   // The basis is evaluated again rather than kept from the first loop: keeping it would add
-  // kMaxFitPoints x kP doubles (7 kB) of stack, and the fit runs on small targets.
+  // kMaxFitPoints x kP doubles (8 kB) of stack, and the fit runs on small targets.
   double cost = 0.0;
   for (std::size_t i = 0; i < pb.n; ++i) {
     double f[kP];
-    basis(pb.tau[i], tb1, tb2, pb.flicker[i], f);
+    basis(pb.tau[i], tb1, tb2, pb.flicker[i], pb.osc[i], f);
     double m = 0.0;
     for (std::size_t a = 0; a < kP; ++a) {
       m += s.theta[a] * f[a];
@@ -309,6 +314,11 @@ ModelParams to_params(const Problem& pb, const Solution& s) {
     p.bi_tau_lo_s = pb.flicker_lo_s;
     p.bi_tau_hi_s = pb.flicker_hi_s;
   }
+  if (s.theta[kSlotOsc] > 0.0) {
+    p.osc_sigma = std::sqrt(s.theta[kSlotOsc]);
+    p.osc_f0_hz = pb.osc_f0_hz;
+    p.osc_beta_per_s = pb.osc_beta_per_s;
+  }
   p.n = std::sqrt(s.theta[kSlotWhite]);
   p.q = std::sqrt(s.theta[kSlotQuant]);
   p.k = std::sqrt(s.theta[kSlotRrw]);
@@ -335,7 +345,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   const bool range_ok = std::isfinite(o.tau_min_s) && std::isfinite(o.tau_max_s) &&
                         o.tau_min_s > 0.0 && o.tau_max_s > o.tau_min_s;
   const std::uint32_t known = kFitWhite | kFitQuantization | kFitGm1 | kFitGm2 | kFitRrw |
-                              kFitRamp | kFitFlicker;
+                              kFitRamp | kFitFlicker | kFitOscillation;
   if (!range_ok || (o.terms & known) == 0 || (o.terms & ~known) != 0 ||
       ((o.terms & kFitGm2) != 0 && (o.terms & kFitGm1) == 0) || o.weight_iterations < 0 ||
       o.weight_iterations > 10 || (points == nullptr && n > 0) || !(o.edf_cap >= 0.0)) {
@@ -356,6 +366,14 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   pb.used[kSlotRrw] = (o.terms & kFitRrw) != 0;
   pb.used[kSlotRamp] = (o.terms & kFitRamp) != 0;
   pb.used[kSlotFlicker] = (o.terms & kFitFlicker) != 0;
+  pb.used[kSlotOsc] = (o.terms & kFitOscillation) != 0;
+  pb.osc_f0_hz = o.osc_f0_hz;
+  pb.osc_beta_per_s = o.osc_beta_per_s;
+  if (pb.used[kSlotOsc] && !(std::isfinite(o.osc_f0_hz) && o.osc_f0_hz >= 0.0 &&
+                             std::isfinite(o.osc_beta_per_s) && o.osc_beta_per_s > 0.0)) {
+    res.status = FitStatus::kBadOptions;
+    return res;
+  }
   pb.flicker_lo_s = o.flicker_tau_lo_s > 0.0 ? o.flicker_tau_lo_s : o.tau_min_s;
   pb.flicker_hi_s = o.flicker_tau_hi_s > 0.0 ? o.flicker_tau_hi_s : o.tau_max_s;
   if (pb.used[kSlotFlicker]) {
@@ -389,6 +407,9 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
     pb.flicker[pb.n] = pb.used[kSlotFlicker]
                            ? avar_flicker_bank(1.0, pb.flicker_lo_s, pb.flicker_hi_s, p.tau_s)
                            : 0.0;
+    pb.osc[pb.n] = pb.used[kSlotOsc]
+                       ? avar_oscillation(1.0, pb.osc_f0_hz, pb.osc_beta_per_s, p.tau_s)
+                       : 0.0;
     ++pb.n;
   }
   res.n_points = pb.n;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -258,4 +259,89 @@ TEST(ErrorModel, FlickerBankIsOneStatePerMemberAndDiscretises) {
   // Too many states for the capacity: refused, model unchanged.
   imu::ContinuousModel<4> small;
   EXPECT_EQ(imu::build_model(p, small), imu::ModelStatus::kCapacity);
+}
+
+// Narrowband oscillation: the closed form against a direct numerical evaluation of
+// AVAR = Var(mean over tau) - Cov(consecutive means) from R(t) = s^2 e^-b|t| cos(w t)
+// (written here: AVAR(tau) = (1/tau^2) [int_0^tau 2 (tau - u) R du - int_0^2tau min(u, 2tau - u)
+// R du]), and its two limits: f0 = 0 is a first-order GM with Tb = 1/beta and Sb Tb / 2 =
+// sigma^2; beta -> 0 is a sinusoid with A^2 / 2 = sigma^2.
+double osc_avar_numeric(double sigma, double f0, double beta, double tau) {
+  const auto r = [&](double u) {
+    return sigma * sigma * std::exp(-beta * u) * std::cos(2.0 * kPi * f0 * u);
+  };
+  const int n = 200000;  // Simpson on [0, 2 tau]: error ~ (h^4) R'''' << 1e-9 relative here
+  const double h = 2.0 * tau / n;
+  double var = 0.0;
+  double cov = 0.0;
+  for (int i = 0; i <= n; ++i) {
+    const double u = i * h;
+    const double wgt = (i == 0 || i == n) ? 1.0 : (i % 2 == 1 ? 4.0 : 2.0);
+    const double ru = r(u);
+    var += wgt * (u <= tau ? 2.0 * (tau - u) * ru : 0.0);
+    cov += wgt * std::min(u, 2.0 * tau - u) * ru;
+  }
+  return (var - cov) * h / 3.0 / (tau * tau);
+}
+
+TEST(ErrorModel, OscillationAvarMatchesNumericAndItsLimits) {
+  for (const double tau : {0.003, 0.01, 0.02, 0.05, 0.3, 2.0}) {
+    const double exact = imu::avar_oscillation(2e-3, 19.6, 3.3, tau);
+    const double num = osc_avar_numeric(2e-3, 19.6, 3.3, tau);
+    // Simpson with 2e5 intervals over at most 80 periods: 1e-6 relative is ample margin.
+    EXPECT_NEAR(exact, num, 1e-6 * num + 1e-18) << "tau " << tau;
+  }
+  // The series branch agrees with the closed form across the switch (|x| = 0.5): the two
+  // sides 1e-6 apart in tau differ by the curve's own slope (~1e-6) plus rounding.
+  const double t_switch = 0.5 / std::hypot(3.3, 2.0 * kPi * 19.6);
+  EXPECT_NEAR(imu::avar_oscillation(1.0, 19.6, 3.3, t_switch * (1.0 - 1e-6)),
+              imu::avar_oscillation(1.0, 19.6, 3.3, t_switch * (1.0 + 1e-6)),
+              1e-5 * imu::avar_oscillation(1.0, 19.6, 3.3, t_switch));
+  // f0 = 0: a GM with Tb = 1/beta, Sb = 2 sigma^2 beta. 1e-9: the GM's expm1 form itself
+  // loses ~eps/x^2 (6e-11 relative at tau/Tb = 2e-3).
+  for (const double tau : {0.01, 1.0, 30.0}) {
+    EXPECT_NEAR(imu::avar_oscillation(1.5, 0.0, 0.2, tau),
+                imu::avar_gauss_markov(2.0 * 1.5 * 1.5 * 0.2, 5.0, tau),
+                1e-9 * imu::avar_gauss_markov(2.0 * 1.5 * 1.5 * 0.2, 5.0, tau));
+  }
+  // beta -> 0: a sinusoid of amplitude sqrt(2) sigma (tau well below 1/beta).
+  for (const double tau : {0.013, 0.1, 0.37}) {
+    const double sine = imu::avar_sinusoid(std::sqrt(2.0) * 0.7, 2.0, tau);
+    EXPECT_NEAR(imu::avar_oscillation(0.7, 2.0, 1e-7, tau), sine, 1e-5 * sine + 1e-15);
+  }
+  imu::ModelParams p;
+  p.osc_sigma = 2e-3;
+  p.osc_f0_hz = 19.6;
+  p.osc_beta_per_s = 3.3;
+  EXPECT_DOUBLE_EQ(imu::model_avar(p, 0.02), imu::avar_oscillation(2e-3, 19.6, 3.3, 0.02));
+}
+
+TEST(ErrorModel, OscillationIsTwoStatesAndDiscretisesToADampedRotation) {
+  imu::ModelParams p;
+  p.n = 6.8e-4;
+  p.osc_sigma = 4.7e-3;
+  p.osc_f0_hz = 19.6;
+  p.osc_beta_per_s = 3.3;
+  imu::ContinuousModel<4> c;
+  ASSERT_EQ(imu::build_model(p, c), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.n_states, 2U);
+  imu::DiscreteModel<4> d;
+  ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
+  // Exact: Phi = e^(-beta Ts) [[cos, -sin], [sin, cos]](w Ts), Qd = sigma^2 (1 - e^(-2 beta Ts)) I
+  // (the stationary covariance sigma^2 I is kept: P = Phi P Phi^T + Qd).
+  const double rho = std::exp(-3.3 * 0.01);
+  const double th = 2.0 * kPi * 19.6 * 0.01;
+  EXPECT_NEAR(d.phi(0, 0), rho * std::cos(th), 1e-12);
+  EXPECT_NEAR(d.phi(0, 1), -rho * std::sin(th), 1e-12);
+  EXPECT_NEAR(d.phi(1, 0), rho * std::sin(th), 1e-12);
+  const double qd = 4.7e-3 * 4.7e-3 * (1.0 - rho * rho);
+  EXPECT_NEAR(d.qd(0, 0), qd, 1e-9 * qd);
+  EXPECT_NEAR(d.qd(1, 1), qd, 1e-9 * qd);
+  EXPECT_NEAR(d.qd(0, 1), 0.0, 1e-9 * qd);
+  // A second oscillation does not fit the one-per-model slot; bad parameters are refused.
+  EXPECT_EQ(c.add_oscillation(1e-3, 5.0, 1.0), imu::ModelStatus::kCapacity);
+  imu::ContinuousModel<4> e;
+  EXPECT_EQ(e.add_oscillation(1e-3, 5.0, 0.0), imu::ModelStatus::kBadParameter);
+  EXPECT_EQ(e.add_oscillation(1e-3, -1.0, 1.0), imu::ModelStatus::kBadParameter);
+  EXPECT_EQ(e.add_oscillation(std::nan(""), 5.0, 1.0), imu::ModelStatus::kBadParameter);
 }

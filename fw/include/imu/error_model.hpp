@@ -21,6 +21,13 @@
 //   bias instability B (flicker, IEEE Std 952: two-sided PSD (B^2 / 2 pi) / f, ADEV floor
 //           0.664 B): realised over [bi_tau_lo_s, bi_tau_hi_s] by a bank of first-order GMs
 //           (flicker_bank(): one per decade of Tb, drive PSDs in fixed ratio), one state each.
+//   narrowband oscillation (sigma, f0, beta): a randomly driven, damped oscillator, the
+//           "exponentially correlated cosine" R(t) = sigma^2 e^(-beta |t|) cos(2 pi f0 t)
+//           (Brown & Hwang, Introduction to Random Signals and Applied Kalman Filtering, 4th
+//           ed., table 2.1 / problem 3.x): a vibration mode or resonance, a peak of half-power
+//           width beta / pi Hz in the PSD (a sinusoid is its limit beta -> 0). 2 states (a, b):
+//           [a; b]' = [[-beta, -w], [w, -beta]] [a; b] + w, PSD(w) = 2 beta sigma^2 each,
+//           H picks a, prior sigma^2 per state (stationary).
 // Analytic AVAR: sum of the MODELS.md formulas (model_avar). For the sampled model the white,
 // quantization and ramp formulas are exact at tau = m Ts; the GM, RRW and sinusoid formulas are
 // the continuous-time ones (their sampled values differ by O(Ts/tau), < 1e-3 relative for
@@ -115,6 +122,9 @@ struct ModelParams {
   double bi = 0.0;          ///< bias instability B [unit] (flicker), AVAR ~ (0.664 B)^2
   double bi_tau_lo_s = 0.0;  ///< tau range over which the flicker bank realises B
   double bi_tau_hi_s = 0.0;
+  double osc_sigma = 0.0;       ///< narrowband oscillation: std of the process [unit]
+  double osc_f0_hz = 0.0;       ///< its centre frequency [Hz]
+  double osc_beta_per_s = 0.0;  ///< its damping rate [1/s] (PSD half-power width beta/pi Hz)
 };
 
 /// The flicker bank for B over [tau_lo_s, tau_hi_s] (see kMaxFlickerGm). Returns the number of
@@ -130,6 +140,11 @@ struct ModelParams {
 [[nodiscard]] double avar_rrw(double k, double tau_s);
 [[nodiscard]] double avar_ramp(double r, double tau_s);
 [[nodiscard]] double avar_sinusoid(double a, double f0_hz, double tau_s);
+/// Narrowband oscillation: sigma^2 Re{2 g(x) / x}, x = (beta - i 2 pi f0) tau, g(x) =
+/// 1 - (3 - 4 e^-x + e^-2x) / (2x) (the GM's bracket at a complex rate; beta > 0, f0 >= 0);
+/// a power series for |x| < 0.5, where the closed form cancels.
+[[nodiscard]] double avar_oscillation(double sigma, double f0_hz, double beta_per_s,
+                                      double tau_s);
 /// Ideal flicker floor (2 ln 2 / pi) B^2 (for reference; the model uses the bank's own AVAR).
 [[nodiscard]] double avar_flicker_ideal(double b);
 /// AVAR of flicker_bank(b, tau_lo_s, tau_hi_s) at tau_s (0 for a bad range).
@@ -168,12 +183,14 @@ struct ContinuousModel {
   [[nodiscard]] ModelStatus add_sinusoid(double a, double f0_hz);
   /// Bias instability B realised by flicker_bank over [tau_lo_s, tau_hi_s].
   [[nodiscard]] ModelStatus add_flicker(double b, double tau_lo_s, double tau_hi_s);
+  /// A narrowband oscillation (at most one per model).
+  [[nodiscard]] ModelStatus add_oscillation(double sigma, double f0_hz, double beta_per_s);
 
   [[nodiscard]] double avar(double tau_s) const { return model_avar(params, tau_s); }
 };
 
 /// Build a continuous model from parameters: terms in the order white, quantization, GMs,
-/// flicker bank, RRW, ramp, sinusoids; zero parameters are skipped.
+/// flicker bank, RRW, ramp, sinusoids, oscillation; zero parameters are skipped.
 template <std::size_t kMaxStates>
 [[nodiscard]] ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out);
 

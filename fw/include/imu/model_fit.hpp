@@ -41,6 +41,7 @@ enum FitTerm : std::uint32_t {
   kFitRrw = 1U << 4,
   kFitRamp = 1U << 5,
   kFitFlicker = 1U << 6,  ///< bias instability B (flicker bank over the flicker_tau range)
+  kFitOscillation = 1U << 7,  ///< narrowband oscillation sigma^2 (osc_f0_hz, osc_beta fixed)
 };
 
 /// Largest number of ADEV points used (OnlineAdev<8, 22> reports at most 96).
@@ -62,6 +63,10 @@ struct FitOptions {
   /// 0: tau_min_s / tau_max_s.
   double flicker_tau_lo_s = 0.0;
   double flicker_tau_hi_s = 0.0;
+  /// The narrowband oscillation's shape (kFitOscillation fits its sigma^2 only): centre
+  /// frequency [Hz] and damping rate [1/s], from the record's spectrum.
+  double osc_f0_hz = 0.0;
+  double osc_beta_per_s = 0.0;
 };
 
 enum class FitStatus : std::uint8_t {
