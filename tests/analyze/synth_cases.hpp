@@ -29,6 +29,12 @@ inline constexpr double kGmSigma = 1.46e-3;      // the seed GM's std sqrt(Pss)
 inline constexpr double kStep3Size = 3.0 * kGmSigma;  // a step of 3 GM sigmas,
 inline constexpr double kStep3Time = 16000.0;          // late in a 20,000 s record
 inline constexpr std::size_t kStep3Samples = 2000000;
+// Narrowband oscillation (a vibration mode): sigma 0.6 x the white noise's per-sample std
+// (0.033), at 6 Hz, half-power width 0.5 Hz; the ADEV bump it makes near tau = 0.06 s is 1.9 x
+// the white noise's AVAR there.
+inline constexpr double kOscSigma = 0.02;
+inline constexpr double kOscF0 = 6.0;
+inline constexpr double kOscBeta = 3.14159265358979323846 * 0.5;
 inline constexpr double kDriftWalk = 2e-6;  // "unknown": AVAR q^2 tau^3 / 20 meets the model near 200 s
 
 // "_alt" cases: another first-order model (N = 5e-4, B = 2e-4, Tp = 60 s, 3e5 samples), so the
@@ -70,6 +76,10 @@ inline SynthSpec make_case(const std::string& name, std::uint64_t seed) {
     s.nan_gap_len = 1000;
   } else if (name == "drift_walk") {
     s.drift_walk = kDriftWalk;
+  } else if (name == "oscillation") {
+    s.osc_sigma = kOscSigma;
+    s.osc_f0_hz = kOscF0;
+    s.osc_beta_per_s = kOscBeta;
   }
   if (name.size() > 4 && name.compare(name.size() - 4, 4, "_alt") == 0) {
     // Another first-order model: gyro-like, short GM, shorter record (generalisation checks).

@@ -123,6 +123,18 @@ TEST(AnalyzeSynthetic, Sinusoid) {
   EXPECT_GE(t.rms_lower, 9);
 }
 
+TEST(AnalyzeSynthetic, NarrowbandOscillationIsNotASinusoid) {
+  // A randomly driven, damped oscillation (a vibration mode; the ADIS16405 gyro_z carry one at
+  // 20 Hz): named `oscillation`, not `sinusoid`, with its sigma and centre frequency.
+  const Tally t = tally("oscillation", "oscillation", [](const ia::Effect& e) {
+    return std::fabs(e.amplitude - tc::kOscSigma) <= 0.25 * tc::kOscSigma &&  // 25 %
+           std::fabs(e.freq_hz - tc::kOscF0) <= 0.05 * tc::kOscF0;            // 5 %
+  });
+  EXPECT_GE(t.found, 9);
+  EXPECT_LE(t.extra, 1);
+  EXPECT_GE(t.rms_lower, 9);
+}
+
 TEST(AnalyzeSynthetic, BiasStep) {
   const double record_s = 1e6 / 100.0;
   const Tally t = tally("bias_step", "bias_step", [record_s](const ia::Effect& e) {

@@ -186,9 +186,14 @@ ModelParams with_sines(ModelParams p, const ModelParams& from) {
 }
 
 // tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max).
+// shape: the oscillation's f0 and beta when terms hold kFitOscillation.
 FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
-                    double tb_max_s = 0.0) {
+                    double tb_max_s = 0.0, const ModelParams* shape = nullptr) {
   FitOptions fo;
+  if (shape != nullptr) {
+    fo.osc_f0_hz = shape->osc_f0_hz;
+    fo.osc_beta_per_s = shape->osc_beta_per_s;
+  }
   fo.terms = terms;
   fo.tau_min_s = tau_min;
   fo.tau_max_s = tau_max;
@@ -602,32 +607,52 @@ SineFit sine_ls(const std::vector<double>& y, double ts, double f_hz) {
   return out;
 }
 
-// Frequency near f_c (from the ADEV bump): periodogram of Hann-windowed block means in
-// [f_c / 2, 2 f_c], golden-section refinement of the DTFT peak, then the full-rate LS amplitude.
-SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c) {
+// The Hann-windowed record and its spectrum, computed once per channel: the record the
+// sinusoid search reads does not change in the greedy loop, and every bump's search window is
+// a slice of the one full-rate spectrum.
+struct SpectrumCache {
+  std::size_t dec = 0;
+  std::vector<double> x;                // Hann-windowed block means
+  std::vector<std::complex<double>> a;  // their DFT (zero-padded to a power of two)
+};
+
+// Frequency near f_c (from the ADEV bump): periodogram of the Hann-windowed record in
+// [f_c / 2, 2 f_c], parabolic then golden-section refinement of the DTFT peak, then the
+// full-rate LS amplitude.
+SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c,
+                          SpectrumCache& cache) {
   const double fs = 1.0 / ts;
-  const auto dec = static_cast<std::size_t>(std::max(1.0, std::floor(fs / (8.0 * f_c))));
+  // One full-rate spectrum serves every bump of every round: one FFT per channel instead of
+  // one per decimation (the block means of a decimation saved samples, not time).
+  const std::size_t dec = 1;
   const std::size_t nd = y.size() / dec;
   SineFit none;
   if (nd < 64) {
     return none;
   }
-  std::vector<double> x = block_means(y, dec);
-  const double mean = mean_of(x);
-  for (std::size_t j = 0; j < nd; ++j) {
-    const double w = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(j) /
-                                          static_cast<double>(nd - 1));
-    x[j] = (x[j] - mean) * w;
+  if (cache.dec != dec) {
+    cache.dec = dec;
+    cache.x = block_means(y, dec);
+    std::vector<double>& x = cache.x;
+    const double mean = mean_of(x);
+    for (std::size_t j = 0; j < nd; ++j) {
+      const double w = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(j) /
+                                            static_cast<double>(nd - 1));
+      x[j] = (x[j] - mean) * w;
+    }
+    std::size_t n2 = 1;
+    while (n2 < nd) {
+      n2 <<= 1;
+    }
+    cache.a.assign(n2, std::complex<double>(0.0, 0.0));
+    for (std::size_t j = 0; j < nd; ++j) {
+      cache.a[j] = x[j];
+    }
+    fft(cache.a);
   }
-  std::size_t nfft = 1;
-  while (nfft < 2 * nd) {
-    nfft <<= 1;
-  }
-  std::vector<std::complex<double>> a(nfft);
-  for (std::size_t j = 0; j < nd; ++j) {
-    a[j] = x[j];
-  }
-  fft(a);
+  const std::vector<double>& x = cache.x;
+  const std::vector<std::complex<double>>& a = cache.a;
+  const std::size_t nfft = a.size();
   const double fsd = fs / static_cast<double>(dec);  // decimated rate
   const double df = fsd / static_cast<double>(nfft);
   const auto k_lo = static_cast<std::size_t>(std::max(1.0, std::floor(0.5 * f_c / df)));
@@ -645,15 +670,26 @@ SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c) {
       kbest = k;
     }
   }
-  // Golden section on [kbest - 1, kbest + 1] bins (unimodal near the main-lobe peak).
-  double lo = (static_cast<double>(kbest) - 1.0) * df / fsd;
-  double hi = (static_cast<double>(kbest) + 1.0) * df / fsd;
+  // Parabolic interpolation of the log power over the peak bin and its neighbours (Hann),
+  // then golden section of the DTFT power on +-0.3 bin around it (unimodal there).
+  double centre = static_cast<double>(kbest);
+  if (kbest > k_lo && kbest < k_hi) {
+    const double l0 = std::log(std::norm(a[kbest - 1]) + 1e-300);
+    const double l1 = std::log(std::norm(a[kbest]) + 1e-300);
+    const double l2 = std::log(std::norm(a[kbest + 1]) + 1e-300);
+    const double den = l0 - 2.0 * l1 + l2;
+    if (den < 0.0) {
+      centre += std::clamp(0.5 * (l0 - l2) / den, -0.5, 0.5);
+    }
+  }
+  double lo = (centre - 0.3) * df / fsd;
+  double hi = (centre + 0.3) * df / fsd;
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
   double c = hi - g * (hi - lo);
   double d = lo + g * (hi - lo);
   double pc = dtft_power(x, c);
   double pd = dtft_power(x, d);
-  for (int it = 0; it < 22; ++it) {  // 2 bins * 0.618^22 = 5e-5 bin
+  for (int it = 0; it < 16; ++it) {  // 0.6 bin * 0.618^16 = 2.8e-4 bin
     if (pc > pd) {
       hi = d;
       d = c;
@@ -685,6 +721,148 @@ std::vector<double> minus_sine(const std::vector<double>& y, double ts, const Si
       ph = std::complex<double>(std::cos(a), std::sin(a));
     }
   }
+  return out;
+}
+
+// A narrowband oscillation near f_c (from an ADEV bump): Welch PSD of the record (Hann
+// segments of 2^k samples, half overlap, >= 32 segments), peak of the excess over the local
+// floor (the median of the flanks 3-8 half-widths away) between f_c / 3 and 3 f_c, its
+// half-power points. A band only: the half-power width must be >= 6 bins (a Hann-windowed line
+// is ~1.5 bins wide, 3 after the 3-bin smoothing) and the peak at least twice the floor, with
+// both half-power points inside the window; centre = excess-weighted mean between them,
+// beta = pi x half-power width (a Lorentzian's). The ADEV fit then sizes sigma^2.
+struct OscFit {
+  bool ok = false;
+  double f0_hz = 0.0;
+  double beta_per_s = 0.0;
+  double width_bins = 0.0;
+};
+
+// The Welch PSD of a record, 3-bin smoothed (computed once per record version: every bump's
+// estimate reads it).
+struct WelchPsd {
+  double df = 0.0;
+  std::vector<double> sm;  // smoothed, per bin
+};
+
+WelchPsd welch_psd(const std::vector<double>& y, double ts) {
+  WelchPsd out;
+  const double fs = 1.0 / ts;
+  std::size_t len = 1024;
+  while (2 * len * 32 <= y.size() && len < 65536) {
+    len *= 2;
+  }
+  if (y.size() < 8 * len) {
+    return out;
+  }
+  const double df = fs / static_cast<double>(len);
+  std::vector<double> psd(len / 2 + 1, 0.0);
+  std::vector<double> win(len);
+  for (std::size_t j = 0; j < len; ++j) {
+    win[j] = 0.5 - 0.5 * std::cos(2.0 * kPi * static_cast<double>(j) / static_cast<double>(len));
+  }
+  std::vector<std::complex<double>> a(len);
+  std::size_t segs = 0;
+  for (std::size_t start = 0; start + len <= y.size(); start += len / 2) {
+    double mean = 0.0;
+    for (std::size_t j = 0; j < len; ++j) {
+      mean += y[start + j];
+    }
+    mean /= static_cast<double>(len);
+    for (std::size_t j = 0; j < len; ++j) {
+      a[j] = (y[start + j] - mean) * win[j];
+    }
+    fft(a);
+    for (std::size_t k = 0; k < psd.size(); ++k) {
+      psd[k] += std::norm(a[k]);
+    }
+    ++segs;
+  }
+  // 3-bin smoothing (the averaged periodogram still scatters ~1/sqrt(segments) per bin).
+  out.df = df;
+  out.sm.assign(psd.size(), 0.0);
+  for (std::size_t k = 1; k + 1 < psd.size(); ++k) {
+    out.sm[k] = (psd[k - 1] + psd[k] + psd[k + 1]) / (3.0 * static_cast<double>(segs));
+  }
+  return out;
+}
+
+OscFit estimate_oscillation(const WelchPsd& w_psd, double f_c) {
+  OscFit none;
+  const std::vector<double>& sm = w_psd.sm;
+  const double df = w_psd.df;
+  if (sm.size() < 64) {
+    return none;
+  }
+  const auto k_lo = static_cast<std::size_t>(std::max(2.0, std::floor(f_c / 3.0 / df)));
+  const auto k_hi = static_cast<std::size_t>(
+      std::min(static_cast<double>(sm.size()) - 3.0, std::ceil(3.0 * f_c / df)));
+  if (k_hi <= k_lo + 16) {
+    return none;
+  }
+  const auto median_of = [&sm](std::size_t lo, std::size_t hi) {  // [lo, hi)
+    std::vector<double> v(sm.begin() + static_cast<std::ptrdiff_t>(lo),
+                          sm.begin() + static_cast<std::ptrdiff_t>(hi));
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  double floor_level = median_of(k_lo, k_hi + 1);
+  std::size_t kp = 0;
+  std::size_t a_lo = 0;
+  std::size_t a_hi = 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    kp = k_lo;
+    for (std::size_t k = k_lo; k <= k_hi; ++k) {
+      kp = sm[k] > sm[kp] ? k : kp;
+    }
+    const double peak = sm[kp] - floor_level;
+    if (!(peak > floor_level)) {
+      return none;  // not twice the floor
+    }
+    a_lo = kp;
+    while (a_lo > k_lo && sm[a_lo] - floor_level > 0.5 * peak) {
+      --a_lo;
+    }
+    a_hi = kp;
+    while (a_hi < k_hi && sm[a_hi] - floor_level > 0.5 * peak) {
+      ++a_hi;
+    }
+    if (a_lo == k_lo || a_hi == k_hi) {
+      return none;  // the peak is not inside the window
+    }
+    // Local floor from the flanks 3-8 half-widths from the peak.
+    const std::size_t w = std::max<std::size_t>(2, (a_hi - a_lo) / 2);
+    std::vector<double> flank;
+    for (std::size_t k = k_lo; k <= k_hi; ++k) {
+      const std::size_t d = k > kp ? k - kp : kp - k;
+      if (d >= 3 * w && d <= 8 * w) {
+        flank.push_back(sm[k]);
+      }
+    }
+    if (flank.size() < 8) {
+      return none;
+    }
+    std::nth_element(flank.begin(), flank.begin() + static_cast<std::ptrdiff_t>(flank.size() / 2),
+                     flank.end());
+    floor_level = flank[flank.size() / 2];
+  }
+  const double width = static_cast<double>(a_hi - a_lo);
+  if (width < 6.0) {
+    return none;  // a line, not a band: the sinusoid's business
+  }
+  double sw = 0.0;
+  double swf = 0.0;
+  for (std::size_t k = a_lo; k <= a_hi; ++k) {
+    const double e = std::max(0.0, sm[k] - floor_level);
+    sw += e;
+    swf += e * static_cast<double>(k);
+  }
+  OscFit out;
+  out.f0_hz = swf / sw * df;
+  out.beta_per_s = kPi * width * df;
+  out.width_bins = width;
+  // Underdamped only (a peak away from 0 Hz): otherwise it is a GM's business.
+  out.ok = sw > 0.0 && out.f0_hz > width * df;
   return out;
 }
 
@@ -997,6 +1175,8 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
         fo.edf_cap = cap;
         fo.flicker_tau_hi_s = c.tau_max;
         fo.flicker_tau_lo_s = flicker_tau_lo(c.ts, c.tau_max, pts);
+        fo.osc_f0_hz = sines.osc_f0_hz;
+        fo.osc_beta_per_s = sines.osc_beta_per_s;
         const FitResult f = fit(pts.data(), pts.size(), fo);
         if (f.status != FitStatus::kOk) {
           continue;
@@ -1007,6 +1187,7 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
         zeroed |= (terms & kFitRrw) != 0U && !(q.k > 0.0) ? kFitRrw : 0U;
         zeroed |= (terms & kFitRamp) != 0U && !(q.r > 0.0) ? kFitRamp : 0U;
         zeroed |= (terms & kFitFlicker) != 0U && !(q.bi > 0.0) ? kFitFlicker : 0U;
+        zeroed |= (terms & kFitOscillation) != 0U && !(q.osc_sigma > 0.0) ? kFitOscillation : 0U;
         if (zeroed != 0U && !allow_zeroed) {
           continue;
         }
@@ -1034,6 +1215,7 @@ const char* term_name(std::uint32_t t) {
     case kFitRrw: return "rate_random_walk";
     case kFitRamp: return "ramp";
     case kFitFlicker: return "bias_instability";
+    case kFitOscillation: return "oscillation";
     default: return "sinusoid";
   }
 }
@@ -1167,6 +1349,10 @@ void drop_unmodelled_effects(const ModelParams& p, Report& out) {
       v = e.r = p.r;
     } else if (e.type == "bias_instability") {
       v = e.b = p.bi;
+    } else if (e.type == "oscillation") {
+      e.freq_hz = p.osc_f0_hz;
+      e.bandwidth_hz = p.osc_beta_per_s / kPi;
+      v = e.amplitude = p.osc_sigma;
     } else if (e.type == "sinusoid") {
       e.freq_hz = sines == 0 ? p.sin_f0_hz : p.sin2_f0_hz;
       v = e.amplitude = sines == 0 ? p.sin_a : p.sin2_a;
@@ -1234,6 +1420,10 @@ double term_avar(const std::string& type, const ModelParams& p, double tau) {
   if (type == "bias_instability") {
     return avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau);
   }
+  if (type == "oscillation") {
+    return p.osc_sigma > 0.0 ? avar_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s, tau)
+                             : 0.0;
+  }
   return -1.0;  // not an ADEV term
 }
 
@@ -1252,6 +1442,8 @@ ModelParams without(const ModelParams& p, const std::string& type) {
     q.r = 0.0;
   } else if (type == "bias_instability") {
     q.bi = 0.0;
+  } else if (type == "oscillation") {
+    q.osc_sigma = 0.0;
   }
   return q;
 }
@@ -1344,7 +1536,7 @@ void drop_degenerate_effects(double ts, double n_d, Report& out) {
       v = e.r;
     } else if (e.type == "bias_instability") {
       v = e.b;
-    } else if (e.type == "sinusoid") {
+    } else if (e.type == "sinusoid" || e.type == "oscillation") {
       v = e.amplitude;
     } else if (e.type == "bias_step") {
       v = e.size;
@@ -1824,6 +2016,9 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   // bump comes back round after round; each entry costs passes over the record.
   std::map<std::size_t, SineCand> sine_cache;
   std::map<int, SineCand> harmonic_cache;  // by harmonic number, of y minus the sinusoid
+  std::map<std::size_t, OscFit> osc_cache;  // by bump (tau index), of y_fit's PSD
+  WelchPsd psd_of_y_fit;                     // empty until needed; reset when y_fit changes
+  SpectrumCache spectrum_of_y;               // of y (the sinusoid search reads y itself)
   bool have_sine2 = false;
 
   for (int round = 0; round < 6; ++round) {
@@ -1844,7 +2039,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       if ((terms & own) != 0U) {
         return;
       }
-      const FitResult f = fit_terms(fit_pts, terms | t, ts, tau_max, tb_max);
+      const FitResult f = fit_terms(fit_pts, terms | t, ts, tau_max, tb_max, &cur_p);
       if (f.status != FitStatus::kOk) {
         return;
       }
@@ -1855,7 +2050,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     // sinusoids of `sines` added analytically.
     const auto add_sine_cand = [&](const char* type, const SineCand& sc, const ModelParams& sines) {
       const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
-      const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max);
+      const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max, &cur_p);
       if (f.status != FitStatus::kOk) {
         return;
       }
@@ -1900,7 +2095,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         auto it = sine_cache.find(imin);
         if (it == sine_cache.end()) {
           SineCand sc;
-          sc.fit = estimate_sinusoid(y, ts, f_c);
+          sc.fit = estimate_sinusoid(y, ts, f_c, spectrum_of_y);
           if (sc.fit.ok) {
             sc.adev = adev_of(to_counts(minus_sine(y, ts, sc.fit), offset, lsb, sat), gap, ts, lsb);
           }
@@ -1943,6 +2138,46 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         sines.sin2_a = sc.fit.amplitude;
         sines.sin2_f0_hz = sc.fit.f_hz;
         add_sine_cand("sinusoid_harmonic", sc, sines);
+      }
+    }
+    // A narrowband oscillation (a vibration mode or resonance: a band in the spectrum, not a
+    // line) at the bumps where the data sit above the model; its shape from the spectrum of
+    // the record (estimate_oscillation), its sigma^2 from the joint ADEV fit.
+    if ((terms & kFitOscillation) == 0U) {
+      for (std::size_t r = 0; r < res.check.n_runs; ++r) {
+        const AdevRun& run = res.check.runs[r];
+        if (run.sign >= 0) {
+          continue;
+        }
+        std::size_t imin = run.first;
+        for (std::size_t i = run.first; i < run.first + run.count; ++i) {
+          imin = res.z[i] < res.z[imin] ? i : imin;
+        }
+        const double f_c = 0.371 / eval[imin].tau_s;
+        if (f_c * t_rec < 200.0) {
+          continue;  // too few cycles in the record to see a band
+        }
+        if (psd_of_y_fit.sm.empty()) {
+          psd_of_y_fit = welch_psd(y_fit, ts);
+        }
+        auto it = osc_cache.find(imin);
+        if (it == osc_cache.end()) {
+          it = osc_cache.emplace(imin, estimate_oscillation(psd_of_y_fit, f_c)).first;
+        }
+        if (!it->second.ok) {
+          continue;
+        }
+        ModelParams shape = cur_p;
+        shape.osc_f0_hz = it->second.f0_hz;
+        shape.osc_beta_per_s = it->second.beta_per_s;
+        const FitResult f =
+            fit_terms(fit_pts, terms | kFitOscillation, ts, tau_max, tb_max, &shape);
+        if (f.status != FitStatus::kOk || !(f.params.osc_sigma > 0.0)) {
+          continue;
+        }
+        const ModelParams p = with_sines(f.params, cur_p);
+        cands.push_back(Cand{"oscillation", terms | kFitOscillation, p,
+                             residual(eval, p, o, ts, tau_max).cost, nullptr});
       }
     }
     const Cand* best = nullptr;
@@ -2006,6 +2241,8 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     if (best->sine != nullptr && best->type == "sinusoid_harmonic") {
       have_sine2 = true;
       y_fit = minus_sine(y_fit, ts, best->sine->fit);
+      psd_of_y_fit = WelchPsd{};
+      osc_cache.clear();
       fit_set = best->sine->adev;
       out.notes.push_back("sinusoid at " + fmt("%.5g", cur_p.sin2_f0_hz) + " Hz: harmonic " +
                           fmt("%.0f", cur_p.sin2_f0_hz / cur_p.sin_f0_hz) + " of " +
@@ -2014,6 +2251,8 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       have_sine = true;
       sine = best->sine->fit;
       y_fit = minus_sine(y, ts, sine);
+      psd_of_y_fit = WelchPsd{};
+      osc_cache.clear();
       fit_set = best->sine->adev;
     }
     fit_pts = in_range(points_for_model(fit_set, cur_p), tau_max);
@@ -2028,7 +2267,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     const RrwLikelihoodTest lt =
         test_rrw(y_fit, ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
     if (lt.ok && lt.lr > lr_thr) {
-      const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max);
+      const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p);
       if (f.status == FitStatus::kOk && f.params.k > 0.0) {
         Effect e;
         e.type = "rate_random_walk";

@@ -283,6 +283,17 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
   x[iw] = diffuse ? means[0] : 0.0;
   double ll = 0.0;
   std::size_t next_reset = 0;
+  // Steady state: the model is time-invariant, so P (and with it s and the gain) converges;
+  // once s repeats to 1e-14 relative, P is a fixed point of its recursion and is no longer
+  // updated (O(d) per block instead of O(d^2), one log for the whole stretch) until a reset
+  // disturbs it.
+  bool steady = false;
+  double log_prod = 1.0;  // sum of log(s) = log(log_prod) + log_exp ln 2 (transient blocks)
+  long log_exp = 0;
+  double s_prev = -1.0;
+  double steady_s = 0.0;
+  double steady_log_s = 0.0;
+  std::array<double, kMaxStates> steady_g{};
   for (std::size_t k = 0; k < means.size(); ++k) {
     bool reset = false;
     while (next_reset < resets.size() && resets[next_reset] <= k) {
@@ -291,6 +302,23 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
     }
     if (reset && k > 0) {  // the walk's level is unknown again
       p[iw][iw] += big;
+      steady = false;
+      s_prev = -1.0;
+    }
+    if (steady) {
+      double pred = 0.0;
+      for (std::size_t i = 0; i < d; ++i) {
+        pred += c[i].hm * x[i];
+      }
+      const double nu = means[k] - pred;
+      ll -= 0.5 * (steady_log_s + nu * nu / steady_s);
+      if (whitened != nullptr) {
+        (*whitened)[k] = nu / std::sqrt(steady_s);
+      }
+      for (std::size_t i = 0; i < d; ++i) {
+        x[i] = c[i].f * x[i] + steady_g[i] * nu;
+      }
+      continue;
     }
     std::array<double, kMaxStates> ph{};  // P hm
     double pred = 0.0;
@@ -309,7 +337,13 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
     }
     const double nu = means[k] - pred;
     if ((!diffuse || k > 0) && !reset) {
-      ll -= 0.5 * (std::log(s) + nu * nu / s);
+      // sum log(s) as the log of a running product (mantissa and binary exponent kept apart,
+      // renormalised every block): one log per record instead of one per block.
+      log_prod *= s;
+      int e = 0;
+      log_prod = std::frexp(log_prod, &e);
+      log_exp += e;
+      ll -= 0.5 * (nu * nu / s);
       if (whitened != nullptr) {
         (*whitened)[k] = nu / std::sqrt(s);
       }
@@ -321,13 +355,21 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
       g[i] = (c[i].f * ph[i] + c[i].s) / s;
       x[i] = c[i].f * x[i] + g[i] * nu;
     }
+    if (k > 0 && !reset && std::fabs(s - s_prev) <= 1e-14 * s) {
+      steady = true;
+      steady_s = s;
+      steady_log_s = std::log(s);
+      steady_g = g;
+      continue;  // P is at its fixed point
+    }
+    s_prev = s;
     for (std::size_t i = 0; i < d; ++i) {
       for (std::size_t j = 0; j < d; ++j) {
         p[i][j] = c[i].f * p[i][j] * c[j].f - g[i] * g[j] * s + (i == j ? c[i].q : 0.0);
       }
     }
   }
-  return ll;
+  return ll - 0.5 * (std::log(log_prod) + static_cast<double>(log_exp) * std::log(2.0));
 }
 
 }  // namespace

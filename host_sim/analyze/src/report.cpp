@@ -49,7 +49,7 @@ std::string gm_list(const GmParam* g, std::size_t n) {
 
 // Every term of the model with its parameters, and the state-space size it takes
 // (error_model.hpp build_model: GMs 1 state each, the flicker bank 1 per member, RRW 1, ramp 2,
-// each sinusoid 2).
+// each sinusoid 2, the oscillation 2).
 std::string model_json(const ModelParams& p) {
   std::ostringstream s;
   ContinuousModel<kModelMaxStates> c;
@@ -63,6 +63,8 @@ std::string model_json(const ModelParams& p) {
     << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"bias_instability\": {\"B\": "
     << num(p.bi) << ", \"tau_lo_s\": " << num(p.bi_tau_lo_s) << ", \"tau_hi_s\": "
     << num(p.bi_tau_hi_s) << ", \"gm_bank\": " << gm_list(bank, nb)
+    << "}, \"oscillation\": {\"sigma\": " << num(p.osc_sigma) << ", \"f0_hz\": "
+    << num(p.osc_f0_hz) << ", \"beta_per_s\": " << num(p.osc_beta_per_s)
     << "}, \"n_states\": " << (built ? std::to_string(c.n_states) : std::string("null")) << "}";
   return s.str();
 }
@@ -94,6 +96,9 @@ std::string effect_json(const Effect& e) {
     s << ", \"B\": " << num(e.b);
   } else if (e.type == "sinusoid") {
     s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"amplitude\": " << num(e.amplitude);
+  } else if (e.type == "oscillation") {
+    s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"sigma\": " << num(e.amplitude)
+      << ", \"bandwidth_hz\": " << num(e.bandwidth_hz);
   } else if (e.type == "bias_step") {
     s << ", \"time_s\": " << num(e.time_s) << ", \"size\": " << num(e.size);
   } else if (e.type == "outliers") {
@@ -185,6 +190,11 @@ std::string to_text(const Report& r) {
       std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin2_a, p.sin2_f0_hz);
       s << buf;
     }
+    if (p.osc_sigma > 0.0) {
+      std::snprintf(buf, sizeof buf, ", oscillation sigma = %.4e f0 = %.5g Hz beta = %.3g /s",
+                    p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s);
+      s << buf;
+    }
     if (p.bi > 0.0) {
       std::snprintf(buf, sizeof buf, ", bias instability B = %.4e (flicker bank over [%.3g, %.4g] s)",
                     p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s);
@@ -220,6 +230,10 @@ std::string to_text(const Report& r) {
     } else if (e.type == "sinusoid") {
       std::snprintf(buf, sizeof buf, "effect sinusoid: f = %.6g Hz (period %.4g s), A = %.4e",
                     e.freq_hz, 1.0 / e.freq_hz, e.amplitude);
+    } else if (e.type == "oscillation") {
+      std::snprintf(buf, sizeof buf,
+                    "effect oscillation: f0 = %.5g Hz, half-power width %.3g Hz, sigma = %.4e",
+                    e.freq_hz, e.bandwidth_hz, e.amplitude);
     } else if (e.type == "bias_step") {
       std::snprintf(buf, sizeof buf, "effect bias_step: at t = %.1f s, size %.4e", e.time_s,
                     e.size);

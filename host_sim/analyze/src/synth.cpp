@@ -88,6 +88,23 @@ std::vector<double> synthesize(const SynthSpec& s) {
       y[i] += f[i / hold];
     }
   }
+  if (s.osc_sigma > 0.0 && s.osc_beta_per_s > 0.0) {
+    GaussianRng ro(s.seed ^ 0x05C111ULL);
+    const double rho = std::exp(-s.osc_beta_per_s * ts);
+    const double th = 2.0 * kPi * s.osc_f0_hz * ts;
+    const double rc = rho * std::cos(th);
+    const double sn = rho * std::sin(th);
+    const double sd = s.osc_sigma * std::sqrt(1.0 - rho * rho);
+    double a = s.osc_sigma * ro.normal();  // stationary start
+    double b = s.osc_sigma * ro.normal();
+    for (std::size_t i = 0; i < s.samples; ++i) {
+      y[i] += a;
+      const double a1 = rc * a - sn * b + sd * ro.normal();
+      const double b1 = sn * a + rc * b + sd * ro.normal();
+      a = a1;
+      b = b1;
+    }
+  }
   if (s.drift_walk > 0.0) {
     GaussianRng rd(s.seed ^ 0xD21F7ULL);
     double rate = 0.0;

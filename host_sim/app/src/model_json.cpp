@@ -190,6 +190,16 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
   if (r > 0.0 || sin_a > 0.0 || sin2_a > 0.0) {
     dropped = "ramp/sinusoid of model_after not sent: deterministic, not filter states";
   }
+  // The narrowband oscillation (2 filter states) has no slot in the model record (version 1):
+  // the node runs without it, and says so.
+  const std::size_t osc = member(json, m, "oscillation");
+  double osc_sigma = 0.0;
+  if (osc != std::string::npos && get_number(json, osc, "sigma", osc_sigma, err) &&
+      osc_sigma > 0.0) {
+    dropped += std::string(dropped.empty() ? "" : "; ") +
+               "oscillation of model_after not sent: the model record (v1) has no slot for it";
+  }
+  err.clear();
   out = rec;
   return true;
 }

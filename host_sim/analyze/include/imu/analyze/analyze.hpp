@@ -84,14 +84,16 @@ struct ErrorStats {
 };
 
 struct Effect {
-  /// quantization, rate_random_walk, ramp, sinusoid, bias_step, outliers, bias_instability
+  /// quantization, rate_random_walk, ramp, sinusoid, bias_step, outliers, bias_instability,
+  /// oscillation (a narrowband random oscillation: error_model.hpp)
   std::string type;
   double b = 0.0;          ///< bias instability B [unit] (ADEV floor 0.664 B)
   double q = 0.0;          ///< quantization Q [unit s]
   double k = 0.0;          ///< rate random walk K [unit / sqrt(s)]
   double r = 0.0;          ///< ramp R [unit / s]
-  double freq_hz = 0.0;    ///< sinusoid
-  double amplitude = 0.0;  ///< sinusoid [unit]
+  double freq_hz = 0.0;    ///< sinusoid; oscillation: centre frequency
+  double amplitude = 0.0;  ///< sinusoid [unit]; oscillation: the process's std sigma [unit]
+  double bandwidth_hz = 0.0;  ///< oscillation: half-power width of its PSD peak (beta / pi)
   double time_s = 0.0;     ///< bias step: time of the first sample after it
   double size = 0.0;       ///< bias step [unit]
   std::uint64_t count = 0; ///< outliers

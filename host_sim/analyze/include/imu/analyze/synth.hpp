@@ -41,6 +41,13 @@ struct SynthSpec {
   /// Not a term of the analysis (for "unexplained" tests): a random walk of the drift rate,
   /// d^2 b / dt^2 = w, PSD(w) = drift_walk^2 [unit / s^1.5]; AVAR ~ tau^3.
   double drift_walk = 0.0;
+  /// Narrowband oscillation R(t) = osc_sigma^2 e^(-osc_beta |t|) cos(2 pi osc_f0 t), generated
+  /// by its exact sampled recursion (a damped rotation of a 2-vector driven by white noise of
+  /// variance osc_sigma^2 (1 - rho^2), rho = e^(-beta Ts)), written here independently of the
+  /// analysis's Van Loan path.
+  double osc_sigma = 0.0;
+  double osc_f0_hz = 0.0;
+  double osc_beta_per_s = 0.0;
   /// Logger dropouts: nan_gaps runs of nan_gap_len NaN samples at random positions.
   std::size_t nan_gaps = 0;
   std::size_t nan_gap_len = 0;
