@@ -1152,16 +1152,14 @@ bool preferred(const AfterChoice& a, const AfterChoice& b, const ErrorStats& bef
 // weights let the very precise shortest taus decide alone when the model cannot follow the data
 // everywhere); the preferred one (below).
 AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelParams& sines,
-                      bool keep_sines, double wide_override = 0.0) {
+                      bool keep_sines) {
   AfterChoice best;
   const AdevSet& base = keep_sines ? c.fit_set : c.clean;
   const Points pts = in_range(points_for_model(base, sines), c.tau_max);
   // The GM bounded (peak and an octave inside [Ts, T/10], as in the search) or as free as the
   // before-model's (10 x its 100 s range): a before-model whose GM sits at its bound can follow
   // a long-tau rise that the bounded GM leaves to K alone.
-  const double wide = wide_override > 0.0
-                          ? wide_override
-                          : std::max(c.tb_max, 10.0 * std::min(c.o.seed_tau_max_s, c.tau_max));
+  const double wide = std::max(c.tb_max, 10.0 * std::min(c.o.seed_tau_max_s, c.tau_max));
   // First the variants that keep every term; only if none does, those where the joint fit
   // zeroed a term (the term then leaves the set: its effect is not reported).
   for (const bool allow_zeroed : {false, true}) {
@@ -1273,20 +1271,17 @@ AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const Model
 
 // A walk and a slow GM are one curve on the ADEV up to T/10 (AVAR ~ Sb tau / 3 = K^2 tau / 3
 // for tau << Tb): with both in the model, the joint fit shares the walk's power between them at
-// random from one realisation to the next, and K comes out anywhere from half to all of the
+// random from one realisation to the next, and its K comes out anywhere from half to all of the
 // truth. The record decides whether the slow GM is there at all: the block-mean likelihood
 // (long_memory.hpp) of white + slow GMs + K against white + K, 2 ln LR against chi-square(2) at
-// alpha (a GM has two parameters). If the GMs are not needed, the after-model is refitted with
-// its GMs limited to the short taus (below two likelihood blocks), under the never-worse rule.
-// Returns the walk-only likelihood's K when the GMs are not needed (0 otherwise): the effect's
-// K when the refit is not taken (the ADEV-best model then keeps the pair; the record's K is the
-// better estimate of the walk). Replaces `choice` when the refit is taken.
-double drop_unneeded_slow_gm(const AfterContext& c, const std::vector<double>& y_fit, bool ramp,
-                           const std::vector<std::uint64_t>& step_at, AfterChoice& choice,
-                           std::vector<std::string>& notes) {
-  const ModelParams& p = choice.p;
-  if (!(p.k > 0.0) || p.n_gm == 0) {
-    return 0.0;
+// alpha (a GM has two parameters). If the GMs are not needed, the walk's K is the walk-only
+// likelihood's (the effect's K); model_after keeps the ADEV fit's pair, which follows the ADEV
+// best (never worse) and carries the same power over the range. Returns 0 when n/a.
+double walk_only_k(const AfterContext& c, const std::vector<double>& y_fit, bool ramp,
+                   const std::vector<std::uint64_t>& step_at, const ModelParams& p,
+                   std::vector<std::string>& notes) {
+  if (!(p.k > 0.0) || p.n_gm == 0 || p.bi > 0.0) {
+    return 0.0;  // with bias instability in the model the "walk alone" would not be alone
   }
   const RrwLikelihoodTest lt = test_rrw(y_fit, c.ts, p, std::max(c.tb_max, p.gm[0].tb_s), ramp,
                                         step_at);
@@ -1295,8 +1290,12 @@ double drop_unneeded_slow_gm(const AfterContext& c, const std::vector<double>& y
   }
   const double slow_tb = 2.0 * lt.block_s;
   bool slow = false;
+  double k2_pair = p.k * p.k;  // the pair's walk power at tau << Tb: K^2 + sum Sb (slow GMs)
   for (std::size_t i = 0; i < p.n_gm; ++i) {
-    slow = slow || p.gm[i].tb_s >= slow_tb;
+    if (p.gm[i].tb_s >= slow_tb) {
+      slow = true;
+      k2_pair += p.gm[i].sb;
+    }
   }
   if (!slow) {
     return 0.0;
@@ -1305,33 +1304,23 @@ double drop_unneeded_slow_gm(const AfterContext& c, const std::vector<double>& y
   walk_only.n_gm = 0;
   const LikelihoodFit f = fit_block_model(lt.means, lt.block_s, walk_only, true, lt.block_s,
                                           slow_tb, lt.resets);
-  if (!f.ok) {
+  if (!f.ok || !(f.model.k > 0.0)) {
     return 0.0;
   }
   const double lr = std::max(0.0, 2.0 * (lt.h1.loglik - f.loglik));
   const double thr = chi2_quantile(1.0 - c.o.alpha, 2.0);
-  if (lr > thr) {
+  // The walk alone must carry the power the ADEV fit gives the pair (within 1.5 x): else the
+  // block means tell a different story than the ADEV, and the ADEV fit's K stays.
+  const double ratio = f.model.k / std::sqrt(k2_pair);
+  if (lr > thr || ratio < 1.0 / 1.5 || ratio > 1.5) {
     return 0.0;
   }
-  AfterContext c2 = c;
-  c2.tb_max = slow_tb;
-  AfterChoice alt = fit_after(c2, choice.terms, p, p.sin_a > 0.0, slow_tb);
-  if (!alt.ok || !not_worse(alt.e, c.before) || !(alt.p.k > 0.0)) {
-    notes.push_back("rate_random_walk: K = " + fmt("%.4g", f.model.k) + " from the record's "
-                    "block-mean likelihood with the walk alone (a slow GM beside it is not "
-                    "needed: 2 ln LR = " + fmt("%.1f", lr) + " <= " + fmt("%.2f", thr) +
-                    "); model_after keeps the ADEV fit's GM + K pair (K " + fmt("%.3g", p.k) +
-                    "): without the GM its ADEV error would be RMS " +
-                    fmt("%.3f", alt.e.adev_rms_rel) + " / max " + fmt("%.3f", alt.e.adev_max_rel) +
-                    ", worse than before");
-    return f.model.k;
-  }
-  notes.push_back("slow Gauss-Markov term left out: with the walk in the model the record does not "
-                  "need it (block-mean likelihood 2 ln LR = " + fmt("%.1f", lr) + " <= " +
-                  fmt("%.2f", thr) + ", chi-square(2)); it only shared the walk's power (K " +
-                  fmt("%.3g", p.k) + " -> " + fmt("%.3g", alt.p.k) + ")");
-  choice = alt;
-  return alt.p.k;
+  notes.push_back("rate_random_walk: K = " + fmt("%.4g", f.model.k) + " from the record's "
+                  "block-mean likelihood of the walk alone: a slow GM beside it is not needed "
+                  "(2 ln LR = " + fmt("%.1f", lr) + " <= " + fmt("%.2f", thr) +
+                  ", chi-square(2)); model_after keeps the ADEV fit's slow GM + K " +
+                  fmt("%.3g", p.k) + ", which share the walk's power over the taus fitted");
+  return f.model.k;
 }
 
 // Effects whose term left the model (dropped above, said in the notes) are not reported; the
@@ -2293,9 +2282,9 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
   const AfterContext ac{o, ts, tau_max, tb_max, clean, fit_set, out.error_before};
   // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
   // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
-  AfterChoice choice = choose_after(ac, terms, cur_p, out.model_before, out.notes);
+  const AfterChoice choice = choose_after(ac, terms, cur_p, out.model_before, out.notes);
   const double k_record =
-      drop_unneeded_slow_gm(ac, y_fit, (terms & kFitRamp) != 0U, step_at, choice, out.notes);
+      walk_only_k(ac, y_fit, (terms & kFitRamp) != 0U, step_at, choice.p, out.notes);
   cur_p = choice.p;
   out.model_after = cur_p;
   out.error_after = choice.e;
