@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <string>
 
 #include "imu/analyze/analyze.hpp"
@@ -56,7 +57,7 @@ int run_file(const char* path, const char* channel, const char* lsb_name) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run(int argc, char** argv) {
   if (argc == 4 && std::string(argv[1]).size() > 4 &&
       std::string(argv[1]).substr(std::string(argv[1]).size() - 4) == ".mat") {
     return run_file(argv[1], argv[2], argv[3]);
@@ -84,4 +85,13 @@ int main(int argc, char** argv) {
     dump(r);
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tune_analyze: %s\n", e.what());
+    return 1;
+  }
 }
