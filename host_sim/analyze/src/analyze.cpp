@@ -1665,364 +1665,394 @@ double derive_lsb(const std::vector<double>& y, std::string& note) {
   return lsb;
 }
 
-bool analyze(const std::vector<double>& y_in, const std::string& channel, const Options& o,
-             Report& out, std::string& error) {
-  const auto t0 = std::chrono::steady_clock::now();
-  const std::clock_t c0 = std::clock();
-  out = Report{};
-  out.channel = channel;
-  out.fs_hz = o.fs_hz;
-  out.samples = y_in.size();
-  if (!(o.fs_hz > 0.0) || !std::isfinite(o.fs_hz)) {
-    error = "analyze: sample rate must be > 0 (got " + fmt("%g", o.fs_hz) + ")";
-    return false;
-  }
-  if (y_in.size() < 1000) {
-    error = "analyze: channel '" + channel + "' has " + std::to_string(y_in.size()) +
-            " samples; at least 1000 are needed";
-    return false;
-  }
-  // Non-finite samples are gaps: the ADEV marks them missing, the filters skip them, and the
-  // time-domain steps see them filled by interpolation.
-  std::vector<double> y0 = y_in;
-  std::vector<std::uint8_t> gap;
-  if (!fill_gaps(y0, gap, out.gap_samples, out.gap_runs)) {
-    error = "analyze: channel '" + channel + "' has no finite sample";
-    return false;
-  }
-  if (out.gap_samples > 0) {
-    out.notes.push_back(std::to_string(out.gap_samples) + " non-finite samples in " +
-                        std::to_string(out.gap_runs) +
-                        " gaps: marked missing in the ADEV, skipped by the filters");
-  }
-  if (static_cast<double>(out.gap_samples) > 0.5 * static_cast<double>(y_in.size())) {
-    error = "analyze: channel '" + channel + "' is more than half gaps (" +
-            std::to_string(out.gap_samples) + " of " + std::to_string(y_in.size()) +
-            " samples are not finite)";
-    return false;
-  }
-  const double ts = 1.0 / o.fs_hz;
-  const double n_d = static_cast<double>(y_in.size());
-  const double t_rec = n_d * ts;
-  const double tau_max = o.tau_max_fraction * t_rec;
-  const double offset = y0[0];
-  out.lsb = o.lsb;
-  if (o.lsb > 0.0) {
-    out.lsb_note = "LSB given: " + fmt("%.6g", o.lsb);
-  } else {
-    out.lsb = derive_lsb(y0, out.lsb_note);
-  }
-  const double lsb = out.lsb;
-  std::size_t sat = 0;
-  std::vector<std::int32_t> counts = to_counts(y0, offset, lsb, sat);  // of y below, kept current
-  if (sat > 0) {
-    error = "analyze: " + std::to_string(sat) + " samples differ from the first by more than "
-            "int32 counts hold at LSB " + fmt("%g", lsb);
-    return false;
-  }
-  const AdevSet raw = adev_of(counts, gap, ts, lsb);
+namespace {
 
-  // ---- before: the seed's first-order model over [Ts, 100 s]
-  const double seed_max = std::min(o.seed_tau_max_s, tau_max);
-  const FitResult before0 = fit_terms(raw.by_alpha[2], kFitWhite | kFitGm1, ts, seed_max);
-  if (before0.status != FitStatus::kOk) {
-    error = "analyze: the first-order fit over [Ts, 100 s] failed (status " +
-            std::to_string(static_cast<int>(before0.status)) + ")";
-    return false;
-  }
-  const Points raw_pts_b = points_for_model(raw, before0.params);
-  const FitResult before = fit_terms(raw_pts_b, kFitWhite | kFitGm1, ts, seed_max);
-  out.model_before = before.status == FitStatus::kOk ? before.params : before0.params;
-  if (before0.tb_at_bound || before.tb_at_bound) {
-    out.notes.emplace_back("before: the GM correlation time is at its search bound (the range "
-                           "[Ts, 100 s] does not determine it)");
-  }
-  out.adev = raw.by_alpha[2];
-  const double known_raw = initial_level(y0);
-  const FilterRun fb =
-      run_filter(out.model_before, ts, y0, known_raw, gap.empty() ? nullptr : &gap);
-  fill_errors(raw_pts_b, out.model_before, o, ts, tau_max, out.error_before);
-  out.error_before.nis_mean = fb.nis_mean;
-  out.error_before.nis_flagged_fraction = fb.nis_flagged;
-  out.error_before.whiteness_flagged_fraction = fb.whiteness_flagged;
-  out.error_before.filter_states = fb.states;
-  out.error_before.cov_ratio = covariance_ratio(out.model_before, ts, y0);
+// The analysis of one channel: a pipeline of named steps over one shared state (the record as
+// it is cleaned step by step, its counts and ADEV, the model as it grows). Each step reads what
+// the earlier ones left; analyze() runs them in order.
+class Analysis {
+ public:
+  Analysis(const std::vector<double>& y_in_, const std::string& channel_, const Options& o_,
+           Report& out_, std::string& error_)
+      : y_in(y_in_), channel(channel_), o(o_), out(out_), error(error_) {}
 
-  // ---- time domain: outliers on the before filter's innovations (gaps are skipped like them)
-  std::vector<double> y = y0;
-  std::vector<std::uint8_t> outlier = gap.empty() ? std::vector<std::uint8_t>(y.size(), 0) : gap;
-  std::vector<std::pair<std::size_t, double>> outlier_delta;  // index, value - replacement
-  bool outliers_replaced = false;
-  {
-    const double scale = robust_scale(fb.nu);
-    const double thr = two_sided_normal_threshold(o.alpha / n_d);
-    OutlierGate gate;
-    std::vector<double> times;
-    if (scale > 0.0 && gate.configure(thr) == EffectStatus::kOk) {
-      for (std::size_t i = 0; i < y.size(); ++i) {
-        if ((gap.empty() || gap[i] == 0) && gate.push(fb.nu[i] / scale)) {
-          outlier[i] = 1;
-          outlier_delta.emplace_back(i, y[i] - fb.pred[i]);
-          y[i] = fb.pred[i];
-          outliers_replaced = true;
-          if (times.size() < 100) {
-            times.push_back(static_cast<double>(i) * ts);
+  bool run() {
+    if (!prepare() || !fit_before()) {
+      return false;
+    }
+    find_outliers();
+    find_steps_by_windows();
+    // Over [Ts, T/10] the GM must show its ADEV peak (1.89 Tb) and one octave of its falling side
+    // inside the range: a GM whose peak lies at or beyond the end is, on these taus, the same curve
+    // as a rate random walk (AVAR ~ Sb tau / 3), and the one-parameter RRW is the name for it.
+    tb_max = tau_max / (2.0 * kGmPeakTauFactor);
+    find_steps_by_likelihood();
+    if (!select_terms()) {
+      return false;
+    }
+    rrw_by_likelihood();
+    after_model();
+    return true;
+  }
+
+ private:
+  // Inputs checked, gaps marked, the LSB chosen, the counts and the raw ADEV.
+  bool prepare() {
+    out = Report{};
+    out.channel = channel;
+    out.fs_hz = o.fs_hz;
+    out.samples = y_in.size();
+    if (!(o.fs_hz > 0.0) || !std::isfinite(o.fs_hz)) {
+      error = "analyze: sample rate must be > 0 (got " + fmt("%g", o.fs_hz) + ")";
+      return false;
+    }
+    if (y_in.size() < 1000) {
+      error = "analyze: channel '" + channel + "' has " + std::to_string(y_in.size()) +
+              " samples; at least 1000 are needed";
+      return false;
+    }
+    // Non-finite samples are gaps: the ADEV marks them missing, the filters skip them, and the
+    // time-domain steps see them filled by interpolation.
+    y0 = y_in;
+    if (!fill_gaps(y0, gap, out.gap_samples, out.gap_runs)) {
+      error = "analyze: channel '" + channel + "' has no finite sample";
+      return false;
+    }
+    if (out.gap_samples > 0) {
+      out.notes.push_back(std::to_string(out.gap_samples) + " non-finite samples in " +
+                          std::to_string(out.gap_runs) +
+                          " gaps: marked missing in the ADEV, skipped by the filters");
+    }
+    if (static_cast<double>(out.gap_samples) > 0.5 * static_cast<double>(y_in.size())) {
+      error = "analyze: channel '" + channel + "' is more than half gaps (" +
+              std::to_string(out.gap_samples) + " of " + std::to_string(y_in.size()) +
+              " samples are not finite)";
+      return false;
+    }
+    ts = 1.0 / o.fs_hz;
+    n_d = static_cast<double>(y_in.size());
+    t_rec = n_d * ts;
+    tau_max = o.tau_max_fraction * t_rec;
+    offset = y0[0];
+    out.lsb = o.lsb;
+    if (o.lsb > 0.0) {
+      out.lsb_note = "LSB given: " + fmt("%.6g", o.lsb);
+    } else {
+      out.lsb = derive_lsb(y0, out.lsb_note);
+    }
+    lsb = out.lsb;
+    counts = to_counts(y0, offset, lsb, sat);  // of y below, kept current
+    if (sat > 0) {
+      error = "analyze: " + std::to_string(sat) + " samples differ from the first by more than "
+              "int32 counts hold at LSB " + fmt("%g", lsb);
+      return false;
+    }
+    raw = adev_of(counts, gap, ts, lsb);
+    return true;
+  }
+
+  // The seed's first-order model, its filter and its errors (the "before").
+  bool fit_before() {
+    // ---- before: the seed's first-order model over [Ts, 100 s]
+    const double seed_max = std::min(o.seed_tau_max_s, tau_max);
+    const FitResult before0 = fit_terms(raw.by_alpha[2], kFitWhite | kFitGm1, ts, seed_max);
+    if (before0.status != FitStatus::kOk) {
+      error = "analyze: the first-order fit over [Ts, 100 s] failed (status " +
+              std::to_string(static_cast<int>(before0.status)) + ")";
+      return false;
+    }
+    const Points raw_pts_b = points_for_model(raw, before0.params);
+    const FitResult before = fit_terms(raw_pts_b, kFitWhite | kFitGm1, ts, seed_max);
+    out.model_before = before.status == FitStatus::kOk ? before.params : before0.params;
+    if (before0.tb_at_bound || before.tb_at_bound) {
+      out.notes.emplace_back("before: the GM correlation time is at its search bound (the range "
+                             "[Ts, 100 s] does not determine it)");
+    }
+    out.adev = raw.by_alpha[2];
+    const double known_raw = initial_level(y0);
+    fb = run_filter(out.model_before, ts, y0, known_raw, gap.empty() ? nullptr : &gap);
+    fill_errors(raw_pts_b, out.model_before, o, ts, tau_max, out.error_before);
+    out.error_before.nis_mean = fb.nis_mean;
+    out.error_before.nis_flagged_fraction = fb.nis_flagged;
+    out.error_before.whiteness_flagged_fraction = fb.whiteness_flagged;
+    out.error_before.filter_states = fb.states;
+    out.error_before.cov_ratio = covariance_ratio(out.model_before, ts, y0);
+    return true;
+  }
+
+  void find_outliers() {
+    // ---- time domain: outliers on the before filter's innovations (gaps are skipped like them)
+    y = y0;
+    outlier = gap.empty() ? std::vector<std::uint8_t>(y.size(), 0) : gap;
+    bool outliers_replaced = false;
+    {
+      const double scale = robust_scale(fb.nu);
+      const double thr = two_sided_normal_threshold(o.alpha / n_d);
+      OutlierGate gate;
+      std::vector<double> times;
+      if (scale > 0.0 && gate.configure(thr) == EffectStatus::kOk) {
+        for (std::size_t i = 0; i < y.size(); ++i) {
+          if ((gap.empty() || gap[i] == 0) && gate.push(fb.nu[i] / scale)) {
+            outlier[i] = 1;
+            outlier_delta.emplace_back(i, y[i] - fb.pred[i]);
+            y[i] = fb.pred[i];
+            outliers_replaced = true;
+            if (times.size() < 100) {
+              times.push_back(static_cast<double>(i) * ts);
+            }
+          }
+        }
+        if (gate.stats().outliers > 0) {
+          Effect e;
+          e.times_s = times;
+          e.type = "outliers";
+          e.count = gate.stats().outliers;
+          e.statistic = gate.stats().max_abs;
+          e.threshold = thr;
+          out.effects.push_back(e);
+        }
+      }
+    }
+
+    // The counts and ADEV of the current y: the raw ones until a sample changes (each is a pass
+    // over the record, done only when y changed).
+    adev_y = raw;
+    if (outliers_replaced) {
+      counts = to_counts(y, offset, lsb, sat);
+      adev_y = adev_of(counts, gap, ts, lsb);
+    }
+  }
+
+  void find_steps_by_windows() {
+    // ---- time domain: bias steps (two-window detector at several scales)
+    for (int step_no = 0; step_no < o.max_steps; ++step_no) {
+      const Points& pts = adev_y.by_alpha[2];
+      const std::size_t np = pts.size();
+      struct Scale {
+        std::uint32_t block;
+        double avar_counts2;
+      };
+      std::vector<Scale> scales;
+      double n_eff = 0.0;
+      for (std::uint32_t p = 4; p < 24; ++p) {
+        const std::uint32_t af = 8U << p;
+        if (static_cast<double>(af) > n_d / 50.0) {
+          break;
+        }
+        for (std::size_t i = 0; i < np; ++i) {
+          if (pts[i].af == af && pts[i].avar > 0.0) {
+            scales.push_back(Scale{1U << p, pts[i].avar / (lsb * lsb)});
+            n_eff += 2.0 * n_d / static_cast<double>(af);
           }
         }
       }
-      if (gate.stats().outliers > 0) {
-        Effect e;
-        e.times_s = times;
-        e.type = "outliers";
-        e.count = gate.stats().outliers;
-        e.statistic = gate.stats().max_abs;
-        e.threshold = thr;
-        out.effects.push_back(e);
-      }
-    }
-  }
-
-  // The counts and ADEV of the current y: the raw ones until a sample changes (each is a pass
-  // over the record, done only when y changed).
-  AdevSet adev_y = raw;
-  if (outliers_replaced) {
-    counts = to_counts(y, offset, lsb, sat);
-    adev_y = adev_of(counts, gap, ts, lsb);
-  }
-
-  // ---- time domain: bias steps (two-window detector at several scales)
-  std::vector<std::uint64_t> step_at;
-  for (int step_no = 0; step_no < o.max_steps; ++step_no) {
-    const Points& pts = adev_y.by_alpha[2];
-    const std::size_t np = pts.size();
-    struct Scale {
-      std::uint32_t block;
-      double avar_counts2;
-    };
-    std::vector<Scale> scales;
-    double n_eff = 0.0;
-    for (std::uint32_t p = 4; p < 24; ++p) {
-      const std::uint32_t af = 8U << p;
-      if (static_cast<double>(af) > n_d / 50.0) {
+      if (scales.empty()) {
         break;
       }
-      for (std::size_t i = 0; i < np; ++i) {
-        if (pts[i].af == af && pts[i].avar > 0.0) {
-          scales.push_back(Scale{1U << p, pts[i].avar / (lsb * lsb)});
-          n_eff += 2.0 * n_d / static_cast<double>(af);
+      const double thr = two_sided_normal_threshold(o.alpha / n_eff);
+      std::vector<StepDetector<16, 4>> det(scales.size());
+      bool ok = true;
+      for (std::size_t s = 0; s < scales.size(); ++s) {
+        ok = ok && det[s].configure(scales[s].block, 8, scales[s].avar_counts2, thr) ==
+                       EffectStatus::kOk;
+      }
+      if (!ok) {
+        break;
+      }
+      for (const std::int32_t v : counts) {
+        for (auto& d : det) {
+          d.push(v);
         }
       }
-    }
-    if (scales.empty()) {
-      break;
-    }
-    const double thr = two_sided_normal_threshold(o.alpha / n_eff);
-    std::vector<StepDetector<16, 4>> det(scales.size());
-    bool ok = true;
-    for (std::size_t s = 0; s < scales.size(); ++s) {
-      ok = ok && det[s].configure(scales[s].block, 8, scales[s].avar_counts2, thr) ==
-                     EffectStatus::kOk;
-    }
-    if (!ok) {
-      break;
-    }
-    for (const std::int32_t v : counts) {
-      for (auto& d : det) {
-        d.push(v);
-      }
-    }
-    StepEvent best{};
-    bool found = false;
-    double best_window = 0.0;  // samples on each side of the boundary at the best scale
-    for (std::size_t s = 0; s < det.size(); ++s) {
-      StepDetector<16, 4>& d = det[s];
-      d.finish();
-      for (std::size_t i = 0; i < d.n_events(); ++i) {
-        if (!found || std::fabs(d.event(i).z) > std::fabs(best.z)) {
-          best = d.event(i);
-          best_window = 8.0 * scales[s].block;
-          found = true;
+      StepEvent best{};
+      bool found = false;
+      double best_window = 0.0;  // samples on each side of the boundary at the best scale
+      for (std::size_t s = 0; s < det.size(); ++s) {
+        StepDetector<16, 4>& d = det[s];
+        d.finish();
+        for (std::size_t i = 0; i < d.n_events(); ++i) {
+          if (!found || std::fabs(d.event(i).z) > std::fabs(best.z)) {
+            best = d.event(i);
+            best_window = 8.0 * scales[s].block;
+            found = true;
+          }
         }
       }
-    }
-    if (!found) {
-      break;
-    }
-    // A second "step" within one window of an earlier one is the other edge of a transient (or
-    // the residue of the first estimate), not a new step: stop there and say so.
-    bool near_previous = false;
-    for (const std::uint64_t prev : step_at) {
-      const double dist =
-          std::fabs(static_cast<double>(best.sample_index) - static_cast<double>(prev));
-      near_previous = near_previous || dist < best_window;
-    }
-    const double at = static_cast<double>(best.sample_index);
-    if (at < best_window || n_d - at < best_window) {
-      out.notes.push_back("step search stopped: the strongest excursion, at t = " +
-                          fmt("%.1f", at * ts) + " s, lies within one window (" +
-                          fmt("%.0f", best_window * ts) +
-                          " s) of an end of the record: an edge effect, not a step");
-      break;
-    }
-    if (near_previous) {
-      // The other edge of a short transient (a blip, not a level change) when it undoes at least
-      // half of the step just found: that step is withdrawn. Otherwise it is the residue of
-      // the step's estimate. Either way the search ends here.
-      const double prev_size = out.effects.back().size;
-      const double this_size = best.size_counts * lsb;
-      const bool undoes = out.effects.back().type == "bias_step" && this_size * prev_size < 0.0 &&
-                          std::fabs(this_size) >= 0.5 * std::fabs(prev_size);
-      if (undoes) {
-        const auto from = static_cast<std::size_t>(step_at.back());
-        for (std::size_t i = from; i < y.size(); ++i) {
-          y[i] += prev_size;
+      if (!found) {
+        break;
+      }
+      // A second "step" within one window of an earlier one is the other edge of a transient (or
+      // the residue of the first estimate), not a new step: stop there and say so.
+      bool near_previous = false;
+      for (const std::uint64_t prev : step_at) {
+        const double dist =
+            std::fabs(static_cast<double>(best.sample_index) - static_cast<double>(prev));
+        near_previous = near_previous || dist < best_window;
+      }
+      const double at = static_cast<double>(best.sample_index);
+      if (at < best_window || n_d - at < best_window) {
+        out.notes.push_back("step search stopped: the strongest excursion, at t = " +
+                            fmt("%.1f", at * ts) + " s, lies within one window (" +
+                            fmt("%.0f", best_window * ts) +
+                            " s) of an end of the record: an edge effect, not a step");
+        break;
+      }
+      if (near_previous) {
+        // The other edge of a short transient (a blip, not a level change) when it undoes at least
+        // half of the step just found: that step is withdrawn. Otherwise it is the residue of
+        // the step's estimate. Either way the search ends here.
+        const double prev_size = out.effects.back().size;
+        const double this_size = best.size_counts * lsb;
+        const bool undoes = out.effects.back().type == "bias_step" && this_size * prev_size < 0.0 &&
+                            std::fabs(this_size) >= 0.5 * std::fabs(prev_size);
+        if (undoes) {
+          const auto from = static_cast<std::size_t>(step_at.back());
+          for (std::size_t i = from; i < y.size(); ++i) {
+            y[i] += prev_size;
+          }
+          out.notes.push_back("transient, not a step: the level shift at t = " +
+                              fmt("%.1f", static_cast<double>(from) * ts) + " s is undone at t = " +
+                              fmt("%.1f", at * ts) + " s, within one window");
+          step_at.pop_back();
+          out.effects.pop_back();
+          counts = to_counts(y, offset, lsb, sat);
+          adev_y = adev_of(counts, gap, ts, lsb);
+        } else {
+          out.notes.push_back("step search stopped: a further excursion at t = " +
+                              fmt("%.1f", at * ts) +
+                              " s lies within one window of a step already found (its residue)");
         }
-        out.notes.push_back("transient, not a step: the level shift at t = " +
-                            fmt("%.1f", static_cast<double>(from) * ts) + " s is undone at t = " +
-                            fmt("%.1f", at * ts) + " s, within one window");
-        step_at.pop_back();
-        out.effects.pop_back();
-        counts = to_counts(y, offset, lsb, sat);
-        adev_y = adev_of(counts, gap, ts, lsb);
-      } else {
-        out.notes.push_back("step search stopped: a further excursion at t = " +
-                            fmt("%.1f", at * ts) +
-                            " s lies within one window of a step already found (its residue)");
+        break;
       }
-      break;
+      const double size = best.size_counts * lsb;  // the difference of its two window means
+      step_at.push_back(best.sample_index);
+      Effect e;
+      e.type = "bias_step";
+      e.time_s = static_cast<double>(best.sample_index) * ts;
+      e.size = size;
+      e.statistic = std::fabs(best.z);
+      e.threshold = thr;
+      out.effects.push_back(e);
+      for (std::size_t i = best.sample_index; i < y.size(); ++i) {
+        y[i] -= e.size;
+      }
+      counts = to_counts(y, offset, lsb, sat);
+      adev_y = adev_of(counts, gap, ts, lsb);
     }
-    const double size = best.size_counts * lsb;  // the difference of its two window means
-    step_at.push_back(best.sample_index);
-    Effect e;
-    e.type = "bias_step";
-    e.time_s = static_cast<double>(best.sample_index) * ts;
-    e.size = size;
-    e.statistic = std::fabs(best.z);
-    e.threshold = thr;
-    out.effects.push_back(e);
-    for (std::size_t i = best.sample_index; i < y.size(); ++i) {
-      y[i] -= e.size;
-    }
-    counts = to_counts(y, offset, lsb, sat);
-    adev_y = adev_of(counts, gap, ts, lsb);
   }
 
-  // Over [Ts, T/10] the GM must show its ADEV peak (1.89 Tb) and one octave of its falling side
-  // inside the range: a GM whose peak lies at or beyond the end is, on these taus, the same curve
-  // as a rate random walk (AVAR ~ Sb tau / 3), and the one-parameter RRW is the name for it.
-  const double tb_max = tau_max / (2.0 * kGmPeakTauFactor);
-
-  // ---- bias steps by the record's likelihood: a level shift at the best block boundary
-  // (profile over the boundaries) against H0 (white + GMs, tb <= tb_max), taken when it is
-  // significant over all the positions tried AND explains the record better than a walk would
-  // (a walk also raises the step profile; a step also raises the walk's likelihood).
-  while (static_cast<int>(step_at.size()) < o.max_steps) {
-    const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
-    if (b0.status != FitStatus::kOk) {
-      break;
+  void find_steps_by_likelihood() {
+    // ---- bias steps by the record's likelihood: a level shift at the best block boundary
+    // (profile over the boundaries) against H0 (white + GMs, tb <= tb_max), taken when it is
+    // significant over all the positions tried AND explains the record better than a walk would
+    // (a walk also raises the step profile; a step also raises the walk's likelihood).
+    while (static_cast<int>(step_at.size()) < o.max_steps) {
+      const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
+      if (b0.status != FitStatus::kOk) {
+        break;
+      }
+      const RrwLikelihoodTest lt = test_rrw(y, ts, b0.params, tb_max, false, step_at, kAuxBlocks);
+      const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
+      const StepLikelihood sl = profile_step(lt, margin);
+      if (!sl.ok || sl.positions == 0) {
+        break;
+      }
+      // Bonferroni over the effectively independent boundaries, counted four per slowest
+      // correlation time of H0: the statistics at boundaries closer than that are nearly the
+      // same (counting every block boundary made the test blind to a 3-sigma step; one per
+      // correlation time gave false steps on 2 of 20 controls); level: the ADEV tests' 1 %.
+      double tb_slow = lt.block_s;
+      for (std::size_t g = 0; g < lt.h0.model.n_gm; ++g) {
+        tb_slow = std::max(tb_slow, lt.h0.model.gm[g].tb_s);
+      }
+      const double eff_positions =
+          std::max(1.0, 4.0 * static_cast<double>(sl.positions) * lt.block_s / tb_slow);
+      const double thr = chi2_quantile(1.0 - o.cost_alpha / eff_positions, 1.0);
+      if (sl.lr <= thr) {
+        break;
+      }
+      // The alternatives with one parameter each: a walk (K) and bias instability (B, started from
+      // the data's ADEV at T/100 taken as its floor); the step must explain the record better.
+      const double lr_bi = bias_instability_lr(y, ts, b0.params, tb_max, step_at, adev_y, lt);
+      // The step has one parameter more than K or B (its time): it must beat them by AIC's
+      // penalty of 2 per parameter.
+      constexpr double kAicPenalty = 2.0;
+      const double lr_alt = std::max(lt.lr, lr_bi) + kAicPenalty;
+      if (sl.lr <= lr_alt) {
+        out.notes.push_back("a level shift at t = " +
+                            fmt("%.1f", static_cast<double>(sl.sample) * ts) +
+                            " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but " +
+                            (lt.lr >= lr_bi ? "a walk" : "bias instability") +
+                            " explains the record nearly as well (" +
+                            fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 2 for the step's time):"
+                            " not named a step");
+        break;
+      }
+      step_at.push_back(sl.sample);
+      Effect e;
+      e.type = "bias_step";
+      e.time_s = static_cast<double>(sl.sample) * ts;
+      e.size = sl.size;
+      e.statistic = sl.lr;
+      e.threshold = thr;
+      out.effects.push_back(e);
+      out.notes.push_back("bias step at t = " + fmt("%.1f", e.time_s) +
+                          " s from the record's profile likelihood (2 ln LR = " +
+                          fmt("%.1f", sl.lr) + " > " + fmt("%.1f", thr) + " over " +
+                          fmt("%.0f", eff_positions) + " independent positions, and > a walk's or bias "
+                          "instability's " + fmt("%.1f", lr_alt) + ")");
+      for (std::size_t i = sl.sample; i < y.size(); ++i) {
+        y[i] -= e.size;
+      }
+      counts = to_counts(y, offset, lsb, sat);
+      adev_y = adev_of(counts, gap, ts, lsb);
     }
-    const RrwLikelihoodTest lt = test_rrw(y, ts, b0.params, tb_max, false, step_at, kAuxBlocks);
-    const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
-    const StepLikelihood sl = profile_step(lt, margin);
-    if (!sl.ok || sl.positions == 0) {
-      break;
-    }
-    // Bonferroni over the effectively independent boundaries, counted four per slowest
-    // correlation time of H0: the statistics at boundaries closer than that are nearly the
-    // same (counting every block boundary made the test blind to a 3-sigma step; one per
-    // correlation time gave false steps on 2 of 20 controls); level: the ADEV tests' 1 %.
-    double tb_slow = lt.block_s;
-    for (std::size_t g = 0; g < lt.h0.model.n_gm; ++g) {
-      tb_slow = std::max(tb_slow, lt.h0.model.gm[g].tb_s);
-    }
-    const double eff_positions =
-        std::max(1.0, 4.0 * static_cast<double>(sl.positions) * lt.block_s / tb_slow);
-    const double thr = chi2_quantile(1.0 - o.cost_alpha / eff_positions, 1.0);
-    if (sl.lr <= thr) {
-      break;
-    }
-    // The alternatives with one parameter each: a walk (K) and bias instability (B, started from
-    // the data's ADEV at T/100 taken as its floor); the step must explain the record better.
-    const double lr_bi = bias_instability_lr(y, ts, b0.params, tb_max, step_at, adev_y, lt);
-    // The step has one parameter more than K or B (its time): it must beat them by AIC's
-    // penalty of 2 per parameter.
-    constexpr double kAicPenalty = 2.0;
-    const double lr_alt = std::max(lt.lr, lr_bi) + kAicPenalty;
-    if (sl.lr <= lr_alt) {
-      out.notes.push_back("a level shift at t = " +
-                          fmt("%.1f", static_cast<double>(sl.sample) * ts) +
-                          " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but " +
-                          (lt.lr >= lr_bi ? "a walk" : "bias instability") +
-                          " explains the record nearly as well (" +
-                          fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 2 for the step's time):"
-                          " not named a step");
-      break;
-    }
-    step_at.push_back(sl.sample);
-    Effect e;
-    e.type = "bias_step";
-    e.time_s = static_cast<double>(sl.sample) * ts;
-    e.size = sl.size;
-    e.statistic = sl.lr;
-    e.threshold = thr;
-    out.effects.push_back(e);
-    out.notes.push_back("bias step at t = " + fmt("%.1f", e.time_s) +
-                        " s from the record's profile likelihood (2 ln LR = " +
-                        fmt("%.1f", sl.lr) + " > " + fmt("%.1f", thr) + " over " +
-                        fmt("%.0f", eff_positions) + " independent positions, and > a walk's or bias "
-                        "instability's " + fmt("%.1f", lr_alt) + ")");
-    for (std::size_t i = sl.sample; i < y.size(); ++i) {
-      y[i] -= e.size;
-    }
-    counts = to_counts(y, offset, lsb, sat);
-    adev_y = adev_of(counts, gap, ts, lsb);
   }
 
-  // ---- ADEV residual over [Ts, T/10] of the cleaned record, greedy term selection
-  const AdevSet& clean = adev_y;
-  const std::uint32_t base_terms = kFitWhite | kFitGm1;
-  const FitResult base0 = fit_terms(clean.by_alpha[2], base_terms, ts, tau_max, tb_max);
-  if (base0.status != FitStatus::kOk) {
-    error = "analyze: the white + GM fit over [Ts, T/10] failed";
-    return false;
-  }
-  const Points eval = in_range(points_for_model(clean, base0.params), tau_max);
-  AdevSet fit_set = clean;  // the points the linear terms are fitted to (sinusoid removed)
-  Points fit_pts = eval;
-  std::uint32_t terms = base_terms;
-  FitResult cur = fit_terms(fit_pts, terms, ts, tau_max, tb_max);
-  if (cur.status != FitStatus::kOk) {
-    cur = base0;
-  }
-  ModelParams cur_p = cur.params;
-  double cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
-  const double cost_thr = o.cost_factor * chi2_quantile(1.0 - o.cost_alpha, 1.0);
-  const double lr_thr = chi2_quantile(1.0 - o.alpha, 1.0);  // record likelihood: no inflation
-  bool have_sine = false;
-  SineFit sine{};
-  std::vector<double> y_fit = y;  // y minus the accepted sinusoid
-  // Per bump (by its tau index): the sinusoid estimate and the ADEV of y without it. The same
-  // bump comes back round after round; each entry costs passes over the record.
-  std::map<std::size_t, SineCand> sine_cache;
-  std::map<int, SineCand> harmonic_cache;  // by harmonic number, of y minus the sinusoid
-  std::map<std::size_t, OscFit> osc_cache;  // by bump (tau index), of y_fit's PSD
-  WelchPsd psd_of_y_fit;                     // empty until needed; reset when y_fit changes
-  SpectrumCache spectrum_of_y;               // of y (the sinusoid search reads y itself)
-  bool have_sine2 = false;
-
-  for (int round = 0; round < 6; ++round) {
-    const Residual res = residual(eval, cur_p, o, ts, tau_max);
-    // Candidate sinusoids: bumps where the data sit above the model (negative z).
-    std::vector<AdevRun> bumps;
-    for (std::size_t r = 0; r < res.check.n_runs; ++r) {
-      if (res.check.runs[r].sign < 0) {
-        bumps.push_back(res.check.runs[r]);
+  // The greedy ADEV term search over [Ts, T/10] of the cleaned record.
+  // The greedy ADEV term search over [Ts, T/10] of the cleaned record: while a significant run
+  // of the residual remains, every candidate term is fitted jointly with the terms so far and
+  // the best one is taken if its cost drop passes the test.
+  bool select_terms() {
+    // ---- ADEV residual over [Ts, T/10] of the cleaned record, greedy term selection
+    const AdevSet& clean = adev_y;
+    const std::uint32_t base_terms = kFitWhite | kFitGm1;
+    const FitResult base0 = fit_terms(clean.by_alpha[2], base_terms, ts, tau_max, tb_max);
+    if (base0.status != FitStatus::kOk) {
+      error = "analyze: the white + GM fit over [Ts, T/10] failed";
+      return false;
+    }
+    eval = in_range(points_for_model(clean, base0.params), tau_max);
+    fit_set = clean;
+    fit_pts = eval;
+    terms = base_terms;
+    FitResult cur = fit_terms(fit_pts, terms, ts, tau_max, tb_max);
+    if (cur.status != FitStatus::kOk) {
+      cur = base0;
+    }
+    cur_p = cur.params;
+    cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
+    cost_thr = o.cost_factor * chi2_quantile(1.0 - o.cost_alpha, 1.0);
+    lr_thr = chi2_quantile(1.0 - o.alpha, 1.0);  // record likelihood: no inflation
+    y_fit = y;
+    for (int round = 0; round < 6; ++round) {
+      const Residual res = residual(eval, cur_p, o, ts, tau_max);
+      if (res.check.n_runs == 0) {
+        break;  // every residual is within the intervals: say nothing
+      }
+      std::vector<Cand> cands;
+      term_candidates(cands);
+      sine_candidates(res, cands);
+      oscillation_candidates(res, cands);
+      if (!take_best(cands)) {
+        break;
       }
     }
-    if (res.check.n_runs == 0) {
-      break;  // every residual is within the intervals: say nothing
-    }
-    std::vector<Cand> cands;
+    return true;
+  }
+
+  // One candidate per term not yet in the model, each fitted jointly with the terms so far.
+  void term_candidates(std::vector<Cand>& cands) {
     const auto try_term = [&](const char* type, std::uint32_t t) {
       const std::uint32_t own = (t & ~kFitGm2) != 0U ? (t & ~kFitGm2) : t;  // the term tried
       if ((terms & own) != 0U) {
@@ -2034,17 +2064,6 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       }
       const ModelParams p = with_sines(f.params, cur_p);
       cands.push_back(Cand{type, terms | t, p, residual(eval, p, o, ts, tau_max).cost, nullptr});
-    };
-    // A sinusoid candidate: the linear terms refitted to the ADEV of the record without it, the
-    // sinusoids of `sines` added analytically.
-    const auto add_sine_cand = [&](const char* type, const SineCand& sc, const ModelParams& sines) {
-      const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
-      const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max, &cur_p);
-      if (f.status != FitStatus::kOk) {
-        return;
-      }
-      const ModelParams p = with_sines(f.params, sines);
-      cands.push_back(Cand{type, terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
     };
     try_term("quantization", kFitQuantization);
     try_term("rate_random_walk", kFitRrw);
@@ -2065,6 +2084,30 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
     // the GM leaves the sensor's filter (the ADIS16405's ~0.1 s) to sit on the flicker's range
     // and the pair mimics neither.
     try_term("bias_instability", kFitFlicker | kFitGm2);
+  }
+
+  // A sinusoid candidate: the linear terms refitted to the ADEV of the record without it, the
+  // sinusoids of `sines` added analytically.
+  void add_sine_cand(const char* type, const SineCand& sc, const ModelParams& sines,
+                     std::vector<Cand>& cands) {
+    const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
+    const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max, &cur_p);
+    if (f.status != FitStatus::kOk) {
+      return;
+    }
+    const ModelParams p = with_sines(f.params, sines);
+    cands.push_back(Cand{type, terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
+  }
+
+  // Sinusoids at the three strongest bumps where the data sit above the model (negative z); once
+  // one is in the model, its harmonics 2 and 3.
+  void sine_candidates(const Residual& res, std::vector<Cand>& cands) {
+    std::vector<AdevRun> bumps;
+    for (std::size_t r = 0; r < res.check.n_runs; ++r) {
+      if (res.check.runs[r].sign < 0) {
+        bumps.push_back(res.check.runs[r]);
+      }
+    }
     if (!have_sine) {
       // The three strongest bumps (by sum of z) are candidates.
       std::sort(bumps.begin(), bumps.end(),
@@ -2097,7 +2140,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         ModelParams sines{};
         sines.sin_a = sc.fit.amplitude;
         sines.sin_f0_hz = sc.fit.f_hz;
-        add_sine_cand("sinusoid", sc, sines);
+        add_sine_cand("sinusoid", sc, sines, cands);
       }
     } else if (!have_sine2) {
       // Harmonics of the sinusoid found (a periodic disturbance that is not a pure tone, e.g.
@@ -2126,12 +2169,15 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
         sines.sin_f0_hz = sine.f_hz;
         sines.sin2_a = sc.fit.amplitude;
         sines.sin2_f0_hz = sc.fit.f_hz;
-        add_sine_cand("sinusoid_harmonic", sc, sines);
+        add_sine_cand("sinusoid_harmonic", sc, sines, cands);
       }
     }
-    // A narrowband oscillation (a vibration mode or resonance: a band in the spectrum, not a
-    // line) at the bumps where the data sit above the model; its shape from the spectrum of
-    // the record (estimate_oscillation), its sigma^2 from the joint ADEV fit.
+  }
+
+  // A narrowband oscillation (a vibration mode or resonance: a band in the spectrum, not a line)
+  // at the bumps where the data sit above the model; its shape from the spectrum of the record
+  // (estimate_oscillation), its sigma^2 from the joint ADEV fit.
+  void oscillation_candidates(const Residual& res, std::vector<Cand>& cands) {
     if ((terms & kFitOscillation) == 0U) {
       for (std::size_t r = 0; r < res.check.n_runs; ++r) {
         const AdevRun& run = res.check.runs[r];
@@ -2169,6 +2215,12 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
                              residual(eval, p, o, ts, tau_max).cost, nullptr});
       }
     }
+  }
+
+  // The best candidate, checked against its rivals (ramp against a walk, the long-tau family by
+  // the record's likelihood), is taken if its cost drop passes the test. Returns false when no
+  // candidate is taken (the search ends).
+  bool take_best(const std::vector<Cand>& cands) {
     const Cand* best = nullptr;
     for (const auto& c : cands) {
       if (best == nullptr || c.cost < best->cost) {
@@ -2211,7 +2263,7 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
                             fmt("%.1f", cur_cost - best->cost) + " <= " + fmt("%.1f", cost_thr) +
                             ")");
       }
-      break;
+      return false;
     }
     if (best->type == "second_gm") {
       out.notes.push_back("a second Gauss-Markov term was needed (cost drop " +
@@ -2245,91 +2297,154 @@ bool analyze(const std::vector<double>& y_in, const std::string& channel, const 
       fit_set = best->sine->adev;
     }
     fit_pts = in_range(points_for_model(fit_set, cur_p), tau_max);
+    return true;
   }
 
-  // ---- rate random walk by the record's likelihood (when the ADEV up to T/10 did not need it).
-  // The ADEV of a GM peaking near T/10 is the same curve as an RRW's there; the record itself is
-  // not: a walk keeps wandering, a GM with tb <= tb_max reverts many times (long_memory.hpp).
-  // H0 = the current model's GMs (tb <= tb_max), H1 = H0 + K (on the detrended record if a ramp
-  // was found).
-  if ((terms & kFitRrw) == 0U) {
-    const RrwLikelihoodTest lt =
-        test_rrw(y_fit, ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
-    if (lt.ok && lt.lr > lr_thr) {
-      const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p);
-      if (f.status == FitStatus::kOk && f.params.k > 0.0) {
-        Effect e;
-        e.type = "rate_random_walk";
-        e.statistic = lt.lr;
-        e.threshold = lr_thr;
-        out.effects.push_back(e);
-        out.notes.push_back(
-            "rate_random_walk from the record's likelihood: 2 ln LR = " + fmt("%.1f", lt.lr) +
-            " > " + fmt("%.2f", lr_thr) + " (" + std::to_string(lt.blocks) + " block means of " +
-            fmt("%.3g", lt.block_s) + " s; GM alone, tb <= " + fmt("%.0f", tb_max) +
-            " s, vs GM + K = " + fmt("%.3g", lt.h1.model.k) + ")");
-        terms |= kFitRrw;
-        cur_p = with_sines(f.params, cur_p);
+  void rrw_by_likelihood() {
+    // ---- rate random walk by the record's likelihood (when the ADEV up to T/10 did not need it).
+    // The ADEV of a GM peaking near T/10 is the same curve as an RRW's there; the record itself is
+    // not: a walk keeps wandering, a GM with tb <= tb_max reverts many times (long_memory.hpp).
+    // H0 = the current model's GMs (tb <= tb_max), H1 = H0 + K (on the detrended record if a ramp
+    // was found).
+    if ((terms & kFitRrw) == 0U) {
+      const RrwLikelihoodTest lt =
+          test_rrw(y_fit, ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+      if (lt.ok && lt.lr > lr_thr) {
+        const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p);
+        if (f.status == FitStatus::kOk && f.params.k > 0.0) {
+          Effect e;
+          e.type = "rate_random_walk";
+          e.statistic = lt.lr;
+          e.threshold = lr_thr;
+          out.effects.push_back(e);
+          out.notes.push_back(
+              "rate_random_walk from the record's likelihood: 2 ln LR = " + fmt("%.1f", lt.lr) +
+              " > " + fmt("%.2f", lr_thr) + " (" + std::to_string(lt.blocks) + " block means of " +
+              fmt("%.3g", lt.block_s) + " s; GM alone, tb <= " + fmt("%.0f", tb_max) +
+              " s, vs GM + K = " + fmt("%.3g", lt.h1.model.k) + ")");
+          terms |= kFitRrw;
+          cur_p = with_sines(f.params, cur_p);
+        }
+      } else if (lt.ok) {
+        out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
+                            fmt("%.1f", lt.lr) + " <= " + fmt("%.2f", lr_thr));
       }
-    } else if (lt.ok) {
-      out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
-                          fmt("%.1f", lt.lr) + " <= " + fmt("%.2f", lr_thr));
     }
   }
 
-  // ---- after: never worse than before, every named effect real, the remainder said.
-  out.adev_clean = clean.by_alpha[2];
-  const AfterContext ac{o, ts, tau_max, tb_max, clean, fit_set, out.error_before};
-  // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
-  // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
-  const AfterChoice choice = choose_after(ac, terms, cur_p, out.model_before, out.notes);
-  const double k_record =
-      walk_only_k(ac, y_fit, (terms & kFitRamp) != 0U, step_at, choice.p, out.notes);
-  cur_p = choice.p;
-  out.model_after = cur_p;
-  out.error_after = choice.e;
-  drop_unmodelled_effects(cur_p, out);
-  for (auto& e : out.effects) {
-    e.k = e.type == "rate_random_walk" && k_record > 0.0 ? k_record : e.k;
-  }
-  out.unexplained = unexplained_runs(ac, cur_p);
-  name_check(ac, cur_p, ramp_bend_lr(y_fit, ts, cur_p, tb_max, step_at), out);
-  if (!out.unexplained.empty()) {
-    std::string ranges;
-    for (const auto& u : out.unexplained) {
-      ranges += (ranges.empty() ? "" : ", ") + fmt("%.3g", u.tau_min_s) + "-" +
-                fmt("%.3g", u.tau_max_s) + " s (max |z| " + fmt("%.1f", u.max_abs_z) + ")";
+  // The after-model (never worse), the names checked, the remainder said, the filters run.
+  void after_model() {
+    // ---- after: never worse than before, every named effect real, the remainder said.
+    const AdevSet& clean = adev_y;
+    out.adev_clean = clean.by_alpha[2];
+    const AfterContext ac{o, ts, tau_max, tb_max, clean, fit_set, out.error_before};
+    // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
+    // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
+    const AfterChoice choice = choose_after(ac, terms, cur_p, out.model_before, out.notes);
+    const double k_record =
+        walk_only_k(ac, y_fit, (terms & kFitRamp) != 0U, step_at, choice.p, out.notes);
+    cur_p = choice.p;
+    out.model_after = cur_p;
+    out.error_after = choice.e;
+    drop_unmodelled_effects(cur_p, out);
+    for (auto& e : out.effects) {
+      e.k = e.type == "rate_random_walk" && k_record > 0.0 ? k_record : e.k;
     }
-    out.notes.push_back("unexplained: the final model still misses the data at tau " + ranges +
-                        "; no term of the analysis accounts for it");
+    out.unexplained = unexplained_runs(ac, cur_p);
+    name_check(ac, cur_p, ramp_bend_lr(y_fit, ts, cur_p, tb_max, step_at), out);
+    if (!out.unexplained.empty()) {
+      std::string ranges;
+      for (const auto& u : out.unexplained) {
+        ranges += (ranges.empty() ? "" : ", ") + fmt("%.3g", u.tau_min_s) + "-" +
+                  fmt("%.3g", u.tau_max_s) + " s (max |z| " + fmt("%.1f", u.max_abs_z) + ")";
+      }
+      out.notes.push_back("unexplained: the final model still misses the data at tau " + ranges +
+                          "; no term of the analysis accounts for it");
+    }
+    drop_degenerate_effects(ts, n_d, out);
+    // The filter sees the record without the deterministic terms the model holds (their
+    // least-squares estimates): sinusoids, and the least-squares line for a ramp.
+    std::vector<double> y_det = cur_p.sin_a > 0.0 ? y_fit : y;
+    if (cur_p.r > 0.0) {
+      remove_line(y_det, ts);
+    }
+    // The outliers were found on the before-model's innovations; each must also be one on the
+    // after-model's (a model that misses the data makes large innovations that are not outliers).
+    for (const auto& [i, d] : outlier_delta) {
+      y_det[i] += d;
+    }
+    const double known_clean = initial_level(y_det);
+    const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier);
+    confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, out);
+    out.error_after.nis_mean = fa.nis_mean;
+    out.error_after.nis_flagged_fraction = fa.nis_flagged;
+    out.error_after.whiteness_flagged_fraction = fa.whiteness_flagged;
+    out.error_after.filter_states = fa.states;
+    out.error_after.cov_ratio = covariance_ratio(cur_p, ts, y);
+    if (!fb.ok || !fa.ok) {
+      out.notes.emplace_back("a bias filter could not be configured (NIS mean reported as 0)");
+    }
+    out.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    out.cpu_seconds = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   }
-  drop_degenerate_effects(ts, n_d, out);
-  // The filter sees the record without the deterministic terms the model holds (their
-  // least-squares estimates): sinusoids, and the least-squares line for a ramp.
-  std::vector<double> y_det = cur_p.sin_a > 0.0 ? y_fit : y;
-  if (cur_p.r > 0.0) {
-    remove_line(y_det, ts);
-  }
-  // The outliers were found on the before-model's innovations; each must also be one on the
-  // after-model's (a model that misses the data makes large innovations that are not outliers).
-  for (const auto& [i, d] : outlier_delta) {
-    y_det[i] += d;
-  }
-  const double known_clean = initial_level(y_det);
-  const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier);
-  confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, out);
-  out.error_after.nis_mean = fa.nis_mean;
-  out.error_after.nis_flagged_fraction = fa.nis_flagged;
-  out.error_after.whiteness_flagged_fraction = fa.whiteness_flagged;
-  out.error_after.filter_states = fa.states;
-  out.error_after.cov_ratio = covariance_ratio(cur_p, ts, y);
-  if (!fb.ok || !fa.ok) {
-    out.notes.emplace_back("a bias filter could not be configured (NIS mean reported as 0)");
-  }
-  out.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  out.cpu_seconds = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
-  return true;
+
+  const std::vector<double>& y_in;
+  const std::string& channel;
+  const Options& o;
+  Report& out;
+  std::string& error;
+  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
+  std::clock_t c0 = std::clock();
+  // prepare
+  std::vector<double> y0;          // the record, gaps filled
+  std::vector<std::uint8_t> gap;   // 1 at a non-finite sample
+  double ts = 0.0;
+  double n_d = 0.0;
+  double t_rec = 0.0;
+  double tau_max = 0.0;
+  double offset = 0.0;             // counts are taken from the first sample
+  double lsb = 0.0;
+  std::size_t sat = 0;
+  std::vector<std::int32_t> counts;  // of y, kept current
+  AdevSet raw;
+  // fit_before
+  FilterRun fb;
+  // find_outliers, steps: the record cleaned of outliers and steps, its ADEV
+  std::vector<double> y;
+  std::vector<std::uint8_t> outlier;
+  std::vector<std::pair<std::size_t, double>> outlier_delta;  // index, value - replacement
+  AdevSet adev_y;
+  std::vector<std::uint64_t> step_at;
+  double tb_max = 0.0;
+  // select_terms
+  Points eval;
+  AdevSet fit_set;  // the points the linear terms are fitted to (sinusoid removed)
+  Points fit_pts;
+  std::uint32_t terms = 0;
+  ModelParams cur_p{};
+  double cur_cost = 0.0;
+  double cost_thr = 0.0;  // the ADEV cost drop a term must make
+  double lr_thr = 0.0;    // the record likelihood's level (no inflation)
+  std::vector<double> y_fit;  // y minus the accepted sinusoid
+  bool have_sine = false;
+  bool have_sine2 = false;
+  SineFit sine{};
+  // Per bump (by its tau index): the sinusoid estimate and the ADEV of y without it. The same
+  // bump comes back round after round; each entry costs passes over the record.
+  std::map<std::size_t, SineCand> sine_cache;
+  std::map<int, SineCand> harmonic_cache;   // by harmonic number, of y minus the sinusoid
+  std::map<std::size_t, OscFit> osc_cache;  // by bump (tau index), of y_fit's PSD
+  WelchPsd psd_of_y_fit;                    // empty until needed; reset when y_fit changes
+  SpectrumCache spectrum_of_y;              // of y (the sinusoid search reads y itself)
+};
+
+}  // namespace
+
+bool analyze(const std::vector<double>& y_in, const std::string& channel, const Options& o,
+             Report& out, std::string& error) {
+  Analysis a(y_in, channel, o, out, error);
+  return a.run();
 }
 
 }  // namespace imu::analyze
