@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -302,6 +303,33 @@ TEST(SimCli, DISABLED_PushedAnalysisModelGivesNoCusumAlarm) {
   std::string push_json;
   run_seed_and_pushed(dir, seed_json, push_json);
   EXPECT_NE(push_json.find("\"cusum_alarm\": false"), std::string::npos);
+}
+
+/// The model record (v1) has no slot for the narrowband oscillation: `run --model` gives its
+/// variance to the white noise (N'^2 = N^2 + sigma^2 / fs), says so, and the node runs N'.
+TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
+  SKIP_IF_EMULATED();
+  simtest::TempDir dir;
+  const std::string mat = dir.file("synth.mat");
+  auto r = run({"synth", "--out", mat, "--duration", "200"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string f = dir.file("osc.json");
+  {
+    std::ofstream(f) << "{\"channel\": \"acc_z\", \"fs_hz\": 100, \"model_after\": {\"n\": 3.3e-3, "
+                        "\"q\": 0, \"gm\": [{\"sb\": 5.7e-9, \"tb_s\": 158.7}], \"k\": 0, \"r\": 0, "
+                        "\"sin_a\": 0, \"sin_f0_hz\": 0, \"sin2_a\": 0, \"sin2_f0_hz\": 0, "
+                        "\"bias_instability\": {\"B\": 0, \"tau_lo_s\": 0, \"tau_hi_s\": 0}, "
+                        "\"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, \"beta_per_s\": 1.57}}}";
+  }
+  r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--sim-windows", "10", "--out",
+           dir.file("o")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string report = simtest::read_text(dir.file("o") + "/report.txt");
+  EXPECT_NE(report.find("its variance is added to the white noise"), std::string::npos) << report;
+  const std::string json = simtest::read_text(dir.file("o") + "/report.json");
+  // What the node echoes it runs (float in the record): sqrt(3.3e-3^2 + 0.02^2 / 100).
+  const double n_node = simtest::json_number_in(json, "model", "n");
+  EXPECT_NEAR(n_node, std::sqrt(3.3e-3 * 3.3e-3 + 0.02 * 0.02 / 100.0), 1e-6);
 }
 
 /// A malformed or missing model file is a one-line error, exit 1.

@@ -190,14 +190,26 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
   if (r > 0.0 || sin_a > 0.0 || sin2_a > 0.0) {
     dropped = "ramp/sinusoid of model_after not sent: deterministic, not filter states";
   }
-  // The narrowband oscillation (2 filter states) has no slot in the model record (version 1):
-  // the node runs without it, and says so.
+  // The narrowband oscillation (2 filter states) has no slot in the model record (version 1).
+  // Its variance goes to the white noise instead, per sample (N'^2 = N^2 + sigma^2 Ts): the
+  // node's innovations then have the right variance (NIS ~ 1) though not its 20 Hz colour (the
+  // whiteness monitor still sees it). Said in `dropped`.
   const std::size_t osc = member(json, m, "oscillation");
   double osc_sigma = 0.0;
+  double fs_hz = 0.0;
   if (osc != std::string::npos && get_number(json, osc, "sigma", osc_sigma, err) &&
       osc_sigma > 0.0) {
+    if (!number_at(json, member(json, root, "fs_hz"), fs_hz) || !(fs_hz > 0.0)) {
+      err = "model_after has an oscillation but the JSON has no valid fs_hz";
+      return false;
+    }
+    const double n_eff = std::sqrt(n * n + osc_sigma * osc_sigma / fs_hz);
+    rec.n = static_cast<float>(n_eff);
     dropped += std::string(dropped.empty() ? "" : "; ") +
-               "oscillation of model_after not sent: the model record (v1) has no slot for it";
+               "oscillation of model_after (sigma " + std::to_string(osc_sigma) +
+               ") not sent as states: the model record (v1) has no slot for it; its variance "
+               "is added to the white noise (N " + std::to_string(n) + " -> " +
+               std::to_string(n_eff) + ")";
   }
   err.clear();
   out = rec;
