@@ -1821,6 +1821,9 @@ class Analysis {
       counts = to_counts(y, offset, lsb, sat);
       adev_y = adev_of(counts, gap, ts, lsb);
     }
+    // The before filter's per-sample innovations and predictions served the outlier search only.
+    fb.nu = std::vector<double>{};
+    fb.pred = std::vector<double>{};
   }
 
   void find_steps_by_windows() {
@@ -2048,6 +2051,9 @@ class Analysis {
         break;
       }
     }
+    // The spectra and the sinusoid search's record copies are not needed after the search.
+    spectrum_of_y = SpectrumCache{};
+    psd_of_y_fit = WelchPsd{};
     return true;
   }
 
