@@ -1,9 +1,14 @@
-// `analyze FILE.mat --channel NAME [--fs HZ] [--lsb UNITS] [--json OUT] [--plots DIR]`, on the
-// command-line parser and exit codes every imu-sim subcommand shares (host_sim/cli).
+// `analyze FILE.mat --channel NAME|A,B|all [--fs HZ] [--lsb UNITS] [--json OUT] [--plots DIR]
+// [--yaml IMU.yaml]`, on the command-line parser and exit codes every imu-sim subcommand
+// shares (host_sim/cli).
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <new>
 #include <string>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #include "imu/analyze/analyze.hpp"
@@ -19,11 +24,16 @@ using imu::cli::kExitRuntime;
 using imu::cli::kExitUsage;
 
 constexpr const char* kUsage =
-    "usage: imu-sim analyze FILE --channel NAME [--fs HZ] [--lsb UNITS] [--json OUT] [--plots DIR]\n"
+    "usage: imu-sim analyze FILE --channel NAME|A,B,..|all [--fs HZ] [--lsb UNITS] [--json OUT]\n"
+    "                         [--plots DIR] [--yaml IMU.yaml]\n"
     "  (also imu-analyze) residual of the first-order model against the measured ADEV and the\n"
-    "  bias filter's innovations, effects found, augmented model. --fs (else the file's fs or\n"
-    "  Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or lsb) in\n"
-    "  [1e-12, 1e6]. NaN/Inf samples are gaps (counted in the report's `gaps`).\n"
+    "  bias filter's innovations, effects found, augmented model. --channel all: the channels\n"
+    "  acc_x..gyro_z the file holds (a comma list: those), analysed in parallel on the machine's\n"
+    "  cores; one report, one JSON ({\"file\", \"channels\": {NAME: ...}}; one channel: its\n"
+    "  object as before). --yaml: Kalibr's imu.yaml (needs acc* and gyro* channels). --fs (else\n"
+    "  the file's fs or Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
+    "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
+    "  the report's `gaps`). --plots DIR is created if missing.\n"
     "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
     "processed, failed write, out of memory), 2 command-line error\n";
 
@@ -69,46 +79,183 @@ double file_lsb(const imu::mat::MatFile& m, const std::string& channel) {
   return 0.0;
 }
 
-// The run-time part: read, analyse, print, write. Exit status.
-int analyze_file(const std::string& file, const std::string& channel, double fs, double lsb,
-                 const std::string& json, const std::string& plots) {
+constexpr const char* kImuChannels[] = {"acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z"};
+
+// --channel: NAME, a comma list, or `all` (the IMU channels the file holds, in the usual order).
+bool resolve_channels(const imu::mat::MatFile& m, const std::string& file,
+                      const std::string& spec, std::vector<std::string>& out, std::string& err) {
+  out.clear();
+  if (spec == "all") {
+    auto vars = m.list_variables();
+    if (!vars) {
+      err = vars.error().message;
+      return false;
+    }
+    std::string held;
+    for (const char* name : kImuChannels) {
+      for (const auto& v : vars.value()) {
+        if (v.name == name) {
+          out.emplace_back(name);
+        }
+      }
+    }
+    if (out.empty()) {
+      for (const auto& v : vars.value()) {
+        held += (held.empty() ? "" : ", ") + v.name;
+      }
+      err = file + ": --channel all: none of acc_x..gyro_z in the file (it holds: " + held +
+            "); name the channels";
+      return false;
+    }
+    return true;
+  }
+  std::size_t pos = 0;
+  while (pos <= spec.size()) {
+    const std::size_t comma = spec.find(',', pos);
+    const std::string name = spec.substr(pos, comma == std::string::npos ? std::string::npos
+                                                                          : comma - pos);
+    if (name.empty()) {
+      err = "--channel '" + spec + "': an empty name in the list";
+      return false;
+    }
+    if (std::find(out.begin(), out.end(), name) == out.end()) {
+      out.push_back(name);
+    }
+    if (comma == std::string::npos) {
+      break;
+    }
+    pos = comma + 1;
+  }
+  return true;
+}
+
+struct Job {
+  std::string channel;
+  std::vector<double> samples;
+  Options o;
+  Report r;
+  std::string err;
+  bool ok = false;
+};
+
+// Each channel's analysis is independent: at most hardware_concurrency() threads take jobs in
+// turn. An exception (out of memory) in one job is that job's error.
+void run_jobs(std::vector<Job>& jobs) {
+  std::atomic<std::size_t> next{0};
+  const auto work = [&jobs, &next]() {
+    for (std::size_t i = next++; i < jobs.size(); i = next++) {
+      Job& j = jobs[i];
+      try {
+        j.ok = analyze(j.samples, j.channel, j.o, j.r, j.err);
+      } catch (const std::bad_alloc&) {
+        j.ok = false;
+        j.err = "out of memory";
+      }
+      j.samples = std::vector<double>{};
+    }
+  };
+  const std::size_t cores = std::max(1U, std::thread::hardware_concurrency());
+  const std::size_t n_threads = std::min(cores, jobs.size());
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < n_threads; ++t) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads: the ones running (and this one) take the rest
+    }
+  }
+  work();
+  for (auto& t : pool) {
+    t.join();
+  }
+}
+
+// The run-time part: read, analyse (in parallel), print, write. Exit status.
+int analyze_file(const std::string& file, const std::string& channel_spec, double fs, double lsb,
+                 const std::string& json, const std::string& plots, const std::string& yaml) {
   auto mf = imu::mat::MatFile::open(file);
   if (!mf) {
     return fail(mf.error().message, kExitRuntime);
   }
   const imu::mat::MatFile& m = mf.value();
-  auto col = m.read_column(channel);
-  if (!col) {
-    return fail(col.error().message, kExitRuntime);
+  std::string err;
+  std::vector<std::string> channels;
+  if (!resolve_channels(m, file, channel_spec, channels, err)) {
+    return fail(err, kExitRuntime);
+  }
+  if (lsb > 0.0 && channels.size() > 1) {
+    return fail("--lsb applies to one channel; with several, each takes its LSB from the file",
+                kExitRuntime);
   }
   Options o;
-  std::string err;
   if (fs > 0.0) {
     o.fs_hz = fs;
   } else if (!file_rate(m, file, o.fs_hz, err)) {
     return fail(err, kExitRuntime);
   }
-  o.lsb = lsb > 0.0 ? lsb : file_lsb(m, channel);
-  Report r;
-  if (!analyze(col.value(), channel, o, r, err)) {
+  std::vector<Job> jobs(channels.size());
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    auto col = m.read_column(channels[i]);
+    if (!col) {
+      return fail(col.error().message, kExitRuntime);
+    }
+    jobs[i].channel = channels[i];
+    jobs[i].samples = std::move(col.value());
+    jobs[i].o = o;
+    jobs[i].o.lsb = lsb > 0.0 ? lsb : file_lsb(m, channels[i]);
+  }
+  if (!plots.empty() && !imu::cli::make_dirs(plots, err)) {
     return fail(err, kExitRuntime);
   }
-  if (o.lsb > 0.0 && lsb <= 0.0) {
-    r.lsb_note = "LSB from the file: " + r.lsb_note.substr(r.lsb_note.find(':') + 2);
+  run_jobs(jobs);
+  std::vector<Report> reports;
+  for (Job& j : jobs) {
+    if (!j.ok) {
+      return fail((channels.size() > 1 ? j.channel + ": " : std::string()) + j.err, kExitRuntime);
+    }
+    if (j.o.lsb > 0.0 && lsb <= 0.0) {
+      j.r.lsb_note = "LSB from the file: " + j.r.lsb_note.substr(j.r.lsb_note.find(':') + 2);
+    }
+    reports.push_back(std::move(j.r));
   }
-  std::fputs(to_text(r).c_str(), stdout);
+  for (const Report& r : reports) {
+    if (reports.size() > 1) {
+      std::printf("==== %s ====\n", r.channel.c_str());
+    }
+    std::fputs(to_text(r).c_str(), stdout);
+  }
   if (!json.empty()) {
-    if (!imu::cli::write_file_atomic(json, to_json(r), err)) {
+    std::string text;
+    if (reports.size() == 1) {
+      text = to_json(reports[0]);
+    } else {
+      text = "{\n\"file\": \"" + file + "\",\n\"channels\": {";
+      for (std::size_t i = 0; i < reports.size(); ++i) {
+        text += std::string(i > 0 ? "," : "") + "\n\"" + reports[i].channel + "\": " +
+                to_json(reports[i]);
+      }
+      text += "\n}\n}\n";
+    }
+    if (!imu::cli::write_file_atomic(json, text, err)) {
       return fail(err, kExitRuntime);
     }
     std::printf("wrote %s\n", json.c_str());
   }
-  if (!plots.empty()) {
-    std::string msg;
-    if (!write_plots(r, plots, msg)) {
-      return fail(msg, kExitRuntime);
+  if (!yaml.empty()) {
+    std::string text;
+    if (!kalibr_yaml(reports, file, text, err) || !imu::cli::write_file_atomic(yaml, text, err)) {
+      return fail(err, kExitRuntime);
     }
-    std::printf("%s\n", msg.c_str());
+    std::printf("wrote %s\n", yaml.c_str());
+  }
+  if (!plots.empty()) {
+    for (const Report& r : reports) {
+      std::string msg;
+      if (!write_plots(r, plots, msg)) {
+        return fail(msg, kExitRuntime);
+      }
+      std::printf("%s\n", msg.c_str());
+    }
   }
   return kExitOk;
 }
@@ -119,7 +266,8 @@ int cli_main(int argc, char** argv) {
   imu::cli::Args a;
   std::string err;
   const std::vector<imu::cli::OptSpec> specs = {
-      {"--channel", true}, {"--json", true}, {"--plots", true}, {"--fs", true}, {"--lsb", true}};
+      {"--channel", true}, {"--json", true}, {"--plots", true}, {"--fs", true}, {"--lsb", true},
+      {"--yaml", true}};
   if (!a.parse(argc, argv, 1, specs, 1, err)) {
     return fail(err + " (imu-sim analyze --help)", kExitUsage);
   }
@@ -140,7 +288,7 @@ int cli_main(int argc, char** argv) {
   // short of memory): one line, exit 1, no exception escapes.
   try {
     return analyze_file(a.positional()[0], a.get("--channel"), fs, lsb, a.get("--json"),
-                        a.get("--plots"));
+                        a.get("--plots"), a.get("--yaml"));
   } catch (const std::bad_alloc&) {
     return fail("out of memory", kExitRuntime);
   }

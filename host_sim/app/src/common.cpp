@@ -60,28 +60,7 @@ void appendf(std::string& out, const char* fmt, ...) {
 }
 
 bool make_dirs(const std::string& path, std::string& err) {
-  if (path.empty()) {
-    return true;
-  }
-  std::string cur;
-  std::size_t pos = 0;
-  while (pos != std::string::npos) {
-    pos = path.find('/', pos + 1);
-    cur = path.substr(0, pos);
-    if (cur.empty()) {
-      continue;
-    }
-    if (mkdir(cur.c_str(), 0755) != 0 && errno != EEXIST) {
-      err = "cannot create directory '" + cur + "': " + std::strerror(errno);
-      return false;
-    }
-  }
-  struct stat st {};
-  if (stat(path.c_str(), &st) != 0 || !S_ISDIR(st.st_mode)) {
-    err = "'" + path + "' is not a directory";
-    return false;
-  }
-  return true;
+  return imu::cli::make_dirs(path, err);
 }
 
 bool write_file(const std::string& path, const std::string& text, std::string& err) {

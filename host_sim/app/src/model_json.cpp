@@ -114,10 +114,19 @@ bool get_number(const std::string& s, std::size_t obj, const std::string& key, d
 bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
                               std::size_t channel_index, hal::ModelRecord& out,
                               std::string& dropped, std::string& err) {
-  const std::size_t root = skip_ws(json, 0);
+  std::size_t root = skip_ws(json, 0);
   if (root >= json.size() || json[root] != '{' || skip_value(json, root) == std::string::npos) {
     err = "not a JSON object";
     return false;
+  }
+  // A whole-IMU analysis (`analyze --channel all`): {"file", "channels": {NAME: {...}}}.
+  const std::size_t chans = member(json, root, "channels");
+  if (chans != std::string::npos && json[chans] == '{') {
+    root = member(json, chans, channel_name);
+    if (root == std::string::npos || json[root] != '{') {
+      err = "its \"channels\" hold no " + channel_name;
+      return false;
+    }
   }
   const std::size_t ch = member(json, root, "channel");
   const std::size_t ch_end = skip_value(json, ch);

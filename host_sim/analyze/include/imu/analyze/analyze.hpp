@@ -156,6 +156,13 @@ struct Report {
 [[nodiscard]] std::string to_text(const Report& r);
 /// CSV always (DIR/CHANNEL_adev.csv); SVG via gnuplot if found. message says what was written.
 [[nodiscard]] bool write_plots(const Report& r, const std::string& dir, std::string& message);
+/// Kalibr's imu.yaml (accelerometer/gyroscope noise density and random walk, update_rate,
+/// rostopic) from the reports of one IMU's channels (acc* and gyro*, at least one of each):
+/// per sensor the largest axis of the white + walk model fitted to each after-model's ADEV;
+/// per-axis values, bias instability and the full models as extra keys and comments. False
+/// with err if a sensor is missing. source: named in the header comment.
+[[nodiscard]] bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source,
+                               std::string& yaml, std::string& err);
 
 /// `analyze FILE.mat --channel NAME [--fs HZ] [--json OUT] [--plots DIR]` (argv[0] = "analyze").
 /// Prints the text report on stdout; returns 0, or 1 (run-time error) / 2 (command-line error)

@@ -21,6 +21,10 @@ namespace imu::cli {
   return write_file_atomic(path, text.data(), text.size(), err);
 }
 
+/// Create the directory `path` and its missing parents (mode 0755, like mkdir -p). False with a
+/// one-line err if a component cannot be created or `path` is not a directory.
+[[nodiscard]] bool make_dirs(const std::string& path, std::string& err);
+
 }  // namespace imu::cli
 
 #endif  // IMU_CLI_FILE_OUT_HPP
