@@ -186,7 +186,7 @@ std::string write_kalibr_imu() {
     EXPECT_TRUE(w.add_column(names[c], imu::analyze::synthesize(s)).ok());
   }
   EXPECT_TRUE(w.add_scalar("fs", 100.0).ok());
-  const std::string path = tmp_path("kalibr.mat");
+  std::string path = tmp_path("kalibr.mat");
   std::ofstream f(path, std::ios::binary);
   f.write(reinterpret_cast<const char*>(w.bytes().data()),
           static_cast<std::streamsize>(w.bytes().size()));
