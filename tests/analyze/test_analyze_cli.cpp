@@ -216,6 +216,8 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   EXPECT_NEAR(yaml_number(y, "gyroscope_noise_density"), 2e-4, 0.15 * 2e-4) << y;
   EXPECT_NEAR(yaml_number(y, "gyroscope_random_walk"), 3e-5, 0.15 * 3e-5) << y;
   EXPECT_DOUBLE_EQ(yaml_number(y, "update_rate"), 100.0);
+  // Numbers carry a mantissa dot: YAML 1.1 (PyYAML, Kalibr's loader) reads "1e-05" as a string.
+  EXPECT_NE(y.find("\nupdate_rate: 1.0000e+02"), std::string::npos) << y;
   EXPECT_NE(y.find("\nrostopic: /imu0\n"), std::string::npos);
   // A comma list: those channels only; one channel alone keeps the single-channel JSON.
   ASSERT_EQ(call({"analyze", mat, "--channel", "gyro_y,acc_x", "--json", json}), 0);

@@ -66,9 +66,11 @@ KalibrAxis project(const Report& r) {
   return a;
 }
 
+// Always with a mantissa dot: YAML 1.1 loaders (PyYAML, which Kalibr uses) read "1e-05" as a
+// string and only "1.0000e-05" as a float.
 std::string g(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.4g", v);
+  std::snprintf(buf, sizeof buf, "%.4e", v);
   return buf;
 }
 
@@ -114,10 +116,16 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
   const auto names = [](const std::vector<KalibrAxis>& v) {
     std::string s;
     for (const auto& a : v) {
-      s += (s.empty() ? "" : ", ") + a.channel +
-           (a.k_bound ? " (walk: bound)" : (a.k_named ? " (walk: named)" : ""));
+      s += (s.empty() ? "" : ", ") + a.channel;
     }
     return s;
+  };
+  const auto sources = [](const std::vector<KalibrAxis>& v) {
+    std::string s;
+    for (const auto& a : v) {
+      s += std::string(s.empty() ? "" : ", ") + (a.k_bound ? "bound" : (a.k_named ? "named" : "fit"));
+    }
+    return "[" + s + "]";
   };
   const auto terms = [](const std::vector<const Report*>& v) {
     std::string s;
@@ -162,15 +170,18 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
          "accelerometer_axes: [" + names(acc) + "]\n"
          "accelerometer_noise_density_per_axis: " + list(acc, false) + "\n"
          "accelerometer_random_walk_per_axis: " + list(acc, true) + "\n"
+         "accelerometer_random_walk_source_per_axis: " + sources(acc) + "\n"
          "accelerometer_bias_instability_per_axis: " + bis(acc_r) + "  # IEEE 952 B, m/s^2\n"
          "gyroscope_axes: [" + names(gyro) + "]\n"
          "gyroscope_noise_density_per_axis: " + list(gyro, false) + "\n"
          "gyroscope_random_walk_per_axis: " + list(gyro, true) + "\n"
+         "gyroscope_random_walk_source_per_axis: " + sources(gyro) + "\n"
          "gyroscope_bias_instability_per_axis: " + bis(gyro_r) + "  # IEEE 952 B, rad/s\n"
          "# The full models (model_after: GM drive PSD Sb and time Tb, etc.):\n" +
          terms(acc_r) + terms(gyro_r) +
-         "# \"(walk: bound)\": no walk in that axis's model; K is the largest walk its ADEV at\n"
-         "# T/10 allows (Kalibr needs K > 0).\n";
+         "# random_walk_source: named = the rate_random_walk the analysis named; fit = the white +\n"
+         "# walk projection; bound = no walk in that axis's model, K is the largest walk its ADEV\n"
+         "# at T/10 allows (Kalibr needs K > 0).\n";
   return true;
 }
 
