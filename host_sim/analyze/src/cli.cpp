@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <new>
 #include <string>
 #include <system_error>
@@ -24,8 +25,10 @@ using imu::cli::kExitRuntime;
 using imu::cli::kExitUsage;
 
 constexpr const char* kUsage =
-    "usage: imu-sim analyze FILE --channel NAME|A,B,..|all [--fs HZ] [--lsb UNITS] [--json OUT]\n"
+    "usage: imu-sim analyze FILE --channel NAME|NAME:K|A,B,..|all [--fs HZ] [--lsb UNITS]\n"
+    "                         [--json OUT]\n"
     "                         [--plots DIR] [--yaml IMU.yaml]\n"
+    "  NAME:K is column K (1-based) of a matrix NAME; a matrix without :K is refused.\n"
     "  (also imu-analyze) residual of the first-order model against the measured ADEV and the\n"
     "  bias filter's innovations, effects found, augmented model. --channel all: the channels\n"
     "  acc_x..gyro_z the file holds (a comma list: those), analysed in parallel on the machine's\n"
@@ -129,6 +132,53 @@ bool resolve_channels(const imu::mat::MatFile& m, const std::string& file,
   return true;
 }
 
+// NAME or NAME:K (column K, 1-based as in Octave, of a matrix NAME). A matrix named without a
+// column is refused (reading its first column silently was a wrong answer).
+bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vector<double>& out,
+                  std::string& err) {
+  std::string name = spec;
+  std::size_t column = 0;
+  bool has_column = false;
+  const std::size_t colon = spec.rfind(':');
+  if (colon != std::string::npos) {
+    const std::string k = spec.substr(colon + 1);
+    char* end = nullptr;
+    const unsigned long v = std::strtoul(k.c_str(), &end, 10);
+    if (k.empty() || end == nullptr || *end != '\0' || v < 1 || v > 1000000) {
+      err = "--channel " + spec + ": the column after ':' must be a number >= 1";
+      return false;
+    }
+    name = spec.substr(0, colon);
+    column = static_cast<std::size_t>(v - 1);
+    has_column = true;
+  }
+  auto vars = m.list_variables();
+  if (!vars) {
+    err = vars.error().message;
+    return false;
+  }
+  for (const auto& v : vars.value()) {
+    if (v.name == name && v.rows > 1 && v.cols > 1 && !has_column) {
+      err = "'" + name + "' is a " + std::to_string(v.rows) + " x " + std::to_string(v.cols) +
+            " matrix: name a column, " + name + ":1 .. " + name + ":" + std::to_string(v.cols);
+      return false;
+    }
+  }
+  auto col = m.read_column(name, column);
+  if (!col) {
+    err = col.error().message;
+    return false;
+  }
+  out = std::move(col.value());
+  return true;
+}
+
+// The LSB's file name for a channel spec: the base name of NAME:K.
+std::string base_name(const std::string& spec) {
+  const std::size_t colon = spec.rfind(':');
+  return colon == std::string::npos ? spec : spec.substr(0, colon);
+}
+
 struct Job {
   std::string channel;
   std::vector<double> samples;
@@ -195,14 +245,12 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
   }
   std::vector<Job> jobs(channels.size());
   for (std::size_t i = 0; i < channels.size(); ++i) {
-    auto col = m.read_column(channels[i]);
-    if (!col) {
-      return fail(col.error().message, kExitRuntime);
+    if (!read_channel(m, channels[i], jobs[i].samples, err)) {
+      return fail(err, kExitRuntime);
     }
     jobs[i].channel = channels[i];
-    jobs[i].samples = std::move(col.value());
     jobs[i].o = o;
-    jobs[i].o.lsb = lsb > 0.0 ? lsb : file_lsb(m, channels[i]);
+    jobs[i].o.lsb = lsb > 0.0 ? lsb : file_lsb(m, base_name(channels[i]));
   }
   if (!plots.empty() && !imu::cli::make_dirs(plots, err)) {
     return fail(err, kExitRuntime);
