@@ -50,7 +50,7 @@ constexpr std::size_t kFastRoom = 320U;
 // chunk, and the last 32 KiB slide to the front. The input buffer is refilled from the source
 // whenever less than kInMargin bytes are left at a symbol or block boundary: more than the
 // longest dynamic block header (< 600 bytes) or symbol, so decoding never stops inside one.
-constexpr std::size_t kWindow = 32768U;
+constexpr std::size_t kInflateWindow = 32768U;
 constexpr std::size_t kStreamChunk = std::size_t{1} << 16U;
 constexpr std::size_t kStreamRoom = 258U;
 constexpr std::size_t kInMargin = 1024U;
@@ -244,11 +244,11 @@ class Inflater {
   }
 
   // Streaming: compressed bytes from `src` through `in_buf` (kInBuffer bytes), output into
-  // `out` (kWindow + kStreamChunk bytes, never grown). Decode with pump(), take bytes from
-  // pending(), then slide().
+  // `out` (kInflateWindow + kStreamChunk bytes, never grown). Decode with pump(), take bytes
+  // from pending(), then slide().
   Inflater(ByteSource& src, std::vector<std::uint8_t>& in_buf, std::vector<std::uint8_t>& out)
-      : Inflater(in_buf.data(), 0, kWindow + kStreamChunk, InflateMode::whole, out,
-                 kWindow + kStreamChunk) {
+      : Inflater(in_buf.data(), 0, kInflateWindow + kStreamChunk, InflateMode::whole, out,
+                 kInflateWindow + kStreamChunk) {
     src_ = &src;
     in_buf_ = &in_buf;
     src_eof_ = false;
@@ -289,12 +289,13 @@ class Inflater {
     return out_.data() + delivered_;
   }
   void take(std::size_t n) { delivered_ += n; }
-  // Keep the last kWindow bytes (the most a distance reaches back). Precondition: all taken.
+  // Keep the last kInflateWindow bytes (the most a distance reaches back). Precondition: all
+  // taken.
   void slide() {
-    if (n_out_ > kWindow) {
-      std::memmove(out_.data(), out_.data() + (n_out_ - kWindow), kWindow);
-      n_out_ = kWindow;
-      delivered_ = kWindow;
+    if (n_out_ > kInflateWindow) {
+      std::memmove(out_.data(), out_.data() + (n_out_ - kInflateWindow), kInflateWindow);
+      n_out_ = kInflateWindow;
+      delivered_ = kInflateWindow;
     }
   }
   // n byte-aligned input bytes (the zlib header and trailer), partial byte bits dropped first.
