@@ -218,34 +218,19 @@ int cmd_model(int argc, char** argv) {
   return kExitOk;
 }
 
-// The ADEV of one channel with its non-finite samples as gaps: samples before the first and
-// after the last finite one are not part of the series (as for the node, whose receiver starts
-// at the first sample it gets); each run of non-finite samples inside is one mark_missing().
-void adev_with_gaps(const std::vector<double>& values, const std::vector<std::int32_t>& counts,
-                    OnlineAdev<8, 22>& adev) {
-  std::size_t lo = 0;
-  std::size_t hi = values.size();
-  while (lo < hi && !std::isfinite(values[lo])) {
-    ++lo;
-  }
-  while (hi > lo && !std::isfinite(values[hi - 1])) {
-    --hi;
-  }
-  std::size_t i = lo;
-  while (i < hi) {
-    std::size_t j = i;
-    const bool finite = std::isfinite(values[i]);
-    while (j < hi && std::isfinite(values[j]) == finite) {
-      ++j;
-    }
-    if (finite) {
-      adev.push_block(counts.data() + i, j - i);
-    } else {
-      adev.mark_missing(j - i);
-    }
-    i = j;
-  }
-}
+// The ADEV of one channel with its non-finite samples as gaps (stream_counts() splits the
+// record: samples before the first and after the last finite one are not part of the series,
+// as for the node, whose receiver starts at the first sample it gets; each run of non-finite
+// samples inside is one mark_missing()).
+class AdevSink final : public CountSink {
+ public:
+  explicit AdevSink(OnlineAdev<8, 22>& adev) : adev_(adev) {}
+  void push(const std::int32_t* counts, std::size_t n) override { adev_.push_block(counts, n); }
+  void gap(std::size_t n) override { adev_.mark_missing(n); }
+
+ private:
+  OnlineAdev<8, 22>& adev_;
+};
 
 struct AdevTiming {
   double read, quantize, adev, total;
@@ -303,25 +288,28 @@ int cmd_adev(int argc, char** argv) {
   want[chan] = true;
   lsb_over[chan] = lsb;
   SensorData sd;
-  if (!load_sensor(path, want, want, lsb_over, fs, sd, err)) {
+  if (!load_sensor_meta(path, want, want, lsb_over, fs, sd, err)) {
     return fail(cmd, err);
   }
-  const double t1 = now_s();
-  std::vector<std::int32_t> counts;
+  // The channel in chunks (issue 14: memory independent of the record's length); the times of
+  // the interleaved steps are summed.
   ChannelData& ch = sd.ch[chan];
-  const int st = to_counts(path, chan, ch, counts, err);
+  OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
+  AdevSink sink(adev);
+  StreamTiming tm;
+  const int st = stream_counts(path, chan, ch, sink, tm, err);
   if (st != kExitOk) {
     return fail(cmd, err, st);
   }
-  const double t2 = now_s();
-  OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
-  adev_with_gaps(ch.values, counts, adev);
   AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
   const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
   const double t3 = now_s();
+  const double t1 = t0 + (t3 - t0 - tm.quantize_s - tm.sink_s);  // metadata + read + inflate
+  const double t2 = t1 + tm.quantize_s;
+  const std::size_t n_samples = sd.n_samples;
   const std::vector<AdevRow> rows = rows_from_points(pts, np);
   std::printf("%s %s: %zu samples at %g Hz, LSB %g %s%s\n", path.c_str(), chan_name.c_str(),
-              counts.size(), sd.fs_hz, ch.lsb, channel_unit(chan),
+              n_samples, sd.fs_hz, ch.lsb, channel_unit(chan),
               ch.lsb_from_file ? " (from the file)" : "");
   std::fputs(format_adev_table(rows).c_str(), stdout);
   std::printf("time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", t1 - t0,
@@ -336,7 +324,7 @@ int cmd_adev(int argc, char** argv) {
   }
   if (a.has("--json") &&
       !write_file(a.get("--json"),
-                  adev_json(path, chan_name, chan, sd, counts.size(), rows,
+                  adev_json(path, chan_name, chan, sd, n_samples, rows,
                             AdevTiming{t1 - t0, t2 - t1, t3 - t2, t3 - t0}),
                   err)) {
     return fail(cmd, err);

@@ -1,8 +1,10 @@
 // Loading a sensor recording (see data.hpp).
 #include "data.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <string_view>
 
 #include "imu/mat/mat_reader.hpp"
 #include "imu/online_adev.hpp"
@@ -25,8 +27,18 @@ std::string num(double v) {
   return buf;
 }
 
+// The scalars of a file through a ChannelStream (the file is not read whole).
+struct StreamScalars {
+  const std::string& path;
+  [[nodiscard]] mat::Result<double> read_scalar(std::string_view name) const {
+    return mat::stream_scalar(path, name);
+  }
+};
+
 // The rate: fs_override, else the file's `fs`, else its `Fs`, within [kMinFsHz, kMaxFsHz].
-bool read_rate(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& vars,
+// Reader: mat::MatFile or StreamScalars.
+template <class Reader>
+bool read_rate(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
                const std::string& path, double fs_override, double& fs_hz, std::string& err) {
   if (fs_override > 0.0) {
     fs_hz = fs_override;
@@ -49,7 +61,8 @@ bool read_rate(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& var
 }
 
 // acc_lsb and gyro_lsb if present (0 if absent).
-bool read_file_lsbs(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& vars,
+template <class Reader>
+bool read_file_lsbs(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
                     const std::string& path, double (&file_lsb)[2], std::string& err) {
   const char* lsb_names[2] = {"acc_lsb", "gyro_lsb"};
   for (std::size_t g = 0; g < 2; ++g) {
@@ -187,6 +200,202 @@ bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
     return false;
   }
   return true;
+}
+
+bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
+                      const bool (&required)[kNumChannels],
+                      const double (&lsb_override)[kNumChannels], double fs_override,
+                      SensorData& out, std::string& err) {
+  out = SensorData{};
+  out.path = path;
+  auto listed = mat::scan_variables(path);
+  if (!listed.ok()) {
+    err = listed.error().message;
+    return false;
+  }
+  const std::vector<mat::VariableInfo>& vars = listed.value();
+  const StreamScalars mf{path};
+  double file_lsb[2] = {0.0, 0.0};
+  if (!read_rate(mf, vars, path, fs_override, out.fs_hz, err) ||
+      !read_file_lsbs(mf, vars, path, file_lsb, err)) {
+    return false;
+  }
+  bool any = false;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const mat::VariableInfo* info = find_var(vars, kChannelNames[c]);
+    if (!want[c] || (info == nullptr && !required[c])) {
+      continue;
+    }
+    if (info == nullptr) {
+      // Missing and required: the reader's "not found; variables: ..." message.
+      auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+      err = cs.ok() ? path + ": variable '" + kChannelNames[c] + "' not found"
+                    : cs.error().message;
+      return false;
+    }
+    if (!check_vector(*info, path, err)) {
+      return false;
+    }
+    // Class, dimensions against the data, budget: checked by opening the stream (no data read).
+    auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+    if (!cs.ok()) {
+      err = cs.error().message;
+      return false;
+    }
+    const auto n = static_cast<std::size_t>(cs.value().size());
+    if (any && n != out.n_samples) {
+      err = path + ": variable '" + kChannelNames[c] + "' has " + std::to_string(n) +
+            " samples, others " + std::to_string(out.n_samples);
+      return false;
+    }
+    out.n_samples = n;
+    any = true;
+    ChannelData& ch = out.ch[c];
+    ch.present = true;
+    const double fl = file_lsb[c < 3 ? 0 : 1];
+    ch.lsb = lsb_override[c] > 0.0 ? lsb_override[c] : (fl > 0.0 ? fl : default_lsb(c));
+    ch.lsb_from_option = lsb_override[c] > 0.0;
+    ch.lsb_from_file = !ch.lsb_from_option && fl > 0.0;
+  }
+  if (!any) {
+    err = path + ": none of the channels acc_x .. gyro_z is in the file";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Every sample of channel c through f(const double* v, std::size_t n), chunk by chunk.
+template <class F>
+bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>& buf,
+                    double& read_s, std::string& err, F&& f) {
+  auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+  if (!cs.ok()) {
+    err = cs.error().message;
+    return false;
+  }
+  for (;;) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = cs.value().read(buf.data(), buf.size());
+    read_s += seconds_since(t0);
+    if (!r.ok()) {
+      err = r.error().message;
+      return false;
+    }
+    if (r.value() == 0U) {
+      return true;
+    }
+    f(buf.data(), r.value());
+  }
+}
+
+}  // namespace
+
+int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, CountSink& sink,
+                  StreamTiming& timing, std::string& err) {
+  constexpr std::size_t kChunk = 8192;
+  constexpr double kMaxCounts = 2147483647.0;
+  const std::string where = path + ": variable '" + kChannelNames[c] + "': ";
+  std::vector<double> values(kChunk);
+  std::vector<std::int32_t> counts(kChunk);
+  Scan s;
+  Scan q;
+  std::int32_t cand = 0;
+  std::uint64_t votes = 0;
+  std::uint64_t total = 0;
+  bool overflow = false;   // a finite |value| / LSB beyond int32: nothing more is pushed
+  bool started = false;    // a finite sample was pushed
+  std::uint64_t pending_gap = 0;
+  ch.off_grid = 0;
+  const double lsb = ch.lsb;
+  const bool ok = for_each_chunk(path, c, values, timing.read_s, err, [&](const double* v,
+                                                                          std::size_t n) {
+    const auto t0 = std::chrono::steady_clock::now();
+    total += n;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(v[i])) {
+        counts[i] = 0;
+        continue;
+      }
+      s.add(v[i]);
+      overflow = overflow || std::fabs(v[i]) / lsb >= kMaxCounts + 0.5;
+      const std::int32_t k = quantize(v[i], lsb).counts;
+      counts[i] = k;
+      const double resid = v[i] / lsb - static_cast<double>(k);
+      ch.off_grid += std::fabs(resid) > 1e-6 ? 1U : 0U;
+      q.add(static_cast<double>(k) * lsb);
+      if (votes == 0) {
+        cand = k;
+        votes = 1;
+      } else {
+        votes = k == cand ? votes + 1 : votes - 1;
+      }
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    timing.quantize_s += std::chrono::duration<double>(t1 - t0).count();
+    std::size_t i = 0;
+    while (i < n && !overflow) {
+      std::size_t j = i;
+      const bool finite = std::isfinite(v[i]);
+      while (j < n && std::isfinite(v[j]) == finite) {
+        ++j;
+      }
+      if (!finite) {
+        pending_gap += started ? j - i : 0U;  // leading non-finite samples are not in the series
+      } else {
+        if (pending_gap > 0U) {
+          sink.gap(static_cast<std::size_t>(pending_gap));
+          pending_gap = 0;
+        }
+        sink.push(counts.data() + i, j - i);
+        started = true;
+      }
+      i = j;
+    }
+    timing.sink_s += seconds_since(t1);
+  });
+  if (!ok) {
+    return kExitRuntime;
+  }
+  ch.non_finite = total - s.finite;
+  if (s.finite == 0) {
+    err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
+    return kExitRuntime;
+  }
+  const int misfit = ch.lsb_from_option ? kExitUsage : kExitRuntime;
+  const std::string lsb_origin =
+      ch.lsb_from_option ? "--lsb " : (ch.lsb_from_file ? "the file's LSB " : "the default LSB ");
+  if (overflow) {
+    err = where + "values up to " + num(s.max_abs) + " do not fit int32 counts at " + lsb_origin +
+          num(lsb) + " (the LSB must be at least " + num(s.max_abs / kMaxCounts) + ")";
+    return misfit;
+  }
+  if (q.std_dev() < 0.5 * s.std_dev()) {
+    // Only now is the exact share of the majority candidate needed: a second pass.
+    std::uint64_t same = 0;
+    double second_read_s = 0.0;
+    if (!for_each_chunk(path, c, values, second_read_s, err, [&](const double* v, std::size_t n) {
+          for (std::size_t i = 0; i < n; ++i) {
+            same += std::isfinite(v[i]) && quantize(v[i], lsb).counts == cand ? 1U : 0U;
+          }
+        })) {
+      return kExitRuntime;
+    }
+    timing.read_s += second_read_s;
+    const double top_share = static_cast<double>(same) / static_cast<double>(s.finite);
+    if (top_share > 0.99) {
+      err = where + lsb_origin + num(lsb) + " puts " + num(100.0 * top_share) +
+            " % of the samples in one count (std " + num(s.std_dev()) + " becomes " +
+            num(q.std_dev()) + "): the LSB is too coarse for these data";
+      return misfit;
+    }
+  }
+  return kExitOk;
 }
 
 int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
