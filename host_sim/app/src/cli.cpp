@@ -26,6 +26,7 @@
 namespace imu::sim {
 namespace {
 
+using imu::cli::AtomicFileWriter;
 using imu::cli::write_file_atomic;
 
 constexpr const char* kUsageSynth =
@@ -93,9 +94,9 @@ bool parse_synth(const Args& a, SynthOptions& o, std::string& err) {
     return false;
   }
   const double samples = std::round(o.dur * o.fs);
-  if (!(samples >= 16.0 && samples <= static_cast<double>(kMaxSamples))) {
+  if (!(samples >= 16.0 && samples <= static_cast<double>(kMaxStreamSamples))) {
     err = "--duration x --fs = " + std::to_string(samples) + " samples, outside [16, " +
-          std::to_string(kMaxSamples) + "]";
+          std::to_string(kMaxStreamSamples) + "]";
     return false;
   }
   o.count = static_cast<std::size_t>(samples);
@@ -105,19 +106,49 @@ bool parse_synth(const Args& a, SynthOptions& o, std::string& err) {
 
 // Draw the samples (exact LSB multiples). kExitUsage if the model's values do not fit int32
 // counts of the LSB (a saturated sample would be a wrong number in the file).
-int synth_samples(const SynthOptions& o, ModelSimulator<4>& sim, std::vector<double>& z,
-                  std::string& err) {
-  z.resize(o.count);
-  for (double& v : z) {
-    const double x = sim.next();
-    const QuantizeResult q = quantize(x, o.lsb);
-    if (q.saturated || !std::isfinite(x)) {
-      err = "the model's values reach " + std::to_string(x) +
-            ", beyond int32 counts of --lsb " + std::to_string(o.lsb) +
-            " (lower --N/--B/--K or raise --lsb)";
-      return kExitUsage;
+// Draw, quantise and write the channel's o.count samples in chunks of 8192 (issue 14: memory
+// independent of the length): `w` holds the header and the small variables, which follow the
+// column. Exit status; err set.
+int synth_write(const SynthOptions& o, ModelSimulator<4>& sim, mat::MatWriter& w,
+                std::string& err) {
+  auto start = w.column_start(o.chan_name, o.count);
+  if (!start.ok()) {
+    err = start.error().message;
+    return kExitRuntime;
+  }
+  const std::vector<std::uint8_t>& small = w.bytes();
+  constexpr std::size_t kHeader = 128;
+  const std::size_t slash = o.out.rfind('/');
+  AtomicFileWriter out;
+  if ((slash != std::string::npos && !make_dirs(o.out.substr(0, slash), err)) ||
+      !out.open(o.out, err) || !out.write(small.data(), kHeader, err) ||
+      !out.write(start.value().data(), start.value().size(), err)) {
+    return kExitRuntime;
+  }
+  constexpr std::size_t kChunk = 8192;
+  std::vector<double> z(kChunk);
+  std::vector<std::uint8_t> bytes(8U * kChunk);
+  for (std::size_t done = 0; done < o.count;) {
+    const std::size_t n = std::min(kChunk, o.count - done);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double x = sim.next();
+      const QuantizeResult q = quantize(x, o.lsb);
+      if (q.saturated || !std::isfinite(x)) {
+        err = "the model's values reach " + std::to_string(x) +
+              ", beyond int32 counts of --lsb " + std::to_string(o.lsb) +
+              " (lower --N/--B/--K or raise --lsb)";
+        return kExitUsage;  // `out` removes its temporary file
+      }
+      z[i] = static_cast<double>(q.counts) * o.lsb;
     }
-    v = static_cast<double>(q.counts) * o.lsb;
+    mat::MatWriter::encode_doubles(z.data(), n, bytes.data());
+    if (!out.write(bytes.data(), 8U * n, err)) {
+      return kExitRuntime;
+    }
+    done += n;
+  }
+  if (!out.write(small.data() + kHeader, small.size() - kHeader, err) || !out.commit(err)) {
+    return kExitRuntime;
   }
   return kExitOk;
 }
@@ -157,11 +188,6 @@ int cmd_synth(int argc, char** argv) {
     return fail(cmd, "the model could not be built or simulated");
   }
   const double t0 = now_s();
-  std::vector<double> z;
-  const int st_z = synth_samples(o, sim, z, err);
-  if (st_z != kExitOk) {
-    return fail(cmd, err, st_z);
-  }
   std::string source;
   appendf(source,
           "SYNTHETIC data from imu-sim synth (not a recording: the seed's marble-slab data is not "
@@ -170,10 +196,7 @@ int cmd_synth(int argc, char** argv) {
           o.n, o.b, o.tp, o.k, o.fs, o.count, static_cast<unsigned long long>(o.seed), o.lsb);
   const char* lsb_name = o.chan < 3 ? "acc_lsb" : "gyro_lsb";
   mat::MatWriter w;
-  auto st = w.add_column(o.chan_name, z);
-  if (st.ok()) {
-    st = w.add_scalar("fs", o.fs);
-  }
+  auto st = w.add_scalar("fs", o.fs);
   if (st.ok()) {
     st = w.add_scalar(lsb_name, o.lsb);
   }
@@ -183,10 +206,9 @@ int cmd_synth(int argc, char** argv) {
   if (!st.ok()) {
     return fail(cmd, st.error().message);
   }
-  const std::size_t slash = o.out.rfind('/');
-  if ((slash != std::string::npos && !make_dirs(o.out.substr(0, slash), err)) ||
-      !write_file_atomic(o.out, w.bytes().data(), w.bytes().size(), err)) {
-    return fail(cmd, err);
+  const int st_w = synth_write(o, sim, w, err);
+  if (st_w != kExitOk) {
+    return fail(cmd, err, st_w);
   }
   std::printf("wrote %s: %s (%zu samples at %g Hz, %g s), fs, %s\n%s\ntook %.2f s\n",
               o.out.c_str(), o.chan_name.c_str(), o.count, o.fs, o.dur, lsb_name, source.c_str(),

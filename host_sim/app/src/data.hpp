@@ -29,6 +29,9 @@ inline constexpr double kMinFsHz = 1e-3;
 inline constexpr double kMaxFsHz = 1e6;
 /// Samples of one channel: the MAT reader's budget (256 MiB of doubles per variable).
 inline constexpr std::uint64_t kMaxSamples = std::uint64_t{1} << 25U;
+/// Samples of one channel written by synth and read in chunks by adev: 2e8 (1.6 GB of doubles,
+/// 139 h at 400 Hz), within a MAT v5 element (2^31 bytes) and the streaming reader's budget.
+inline constexpr std::uint64_t kMaxStreamSamples = 200000000U;
 
 struct ChannelData {
   bool present = false;
