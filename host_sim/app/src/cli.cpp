@@ -27,7 +27,6 @@ namespace imu::sim {
 namespace {
 
 using imu::cli::AtomicFileWriter;
-using imu::cli::write_file_atomic;
 
 constexpr const char* kUsageSynth =
     "usage: imu-sim synth [--out FILE] [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--K 1.4e-4]\n"

@@ -1,6 +1,7 @@
 // Loading a sensor recording (see data.hpp).
 #include "data.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -110,6 +111,67 @@ struct Scan {
     const double d = v - mean;
     mean += d / static_cast<double>(finite);
     m2 += d * (v - mean);
+  }
+};
+
+// imu::quantize(x, lsb).counts for finite x, from c = x / lsb, without branches: half away from
+// zero is trunc(c + copysign(0.5, c)) (equal to quantize's floor forms on each side of zero),
+// clamped in double first so that the conversion is defined, saturating at the int32 ends as
+// quantize does.
+std::int32_t round_counts(double c) {
+  const double t = std::min(std::max(c + std::copysign(0.5, c), -2147483648.0), 2147483647.0);
+  return static_cast<std::int32_t>(t);
+}
+
+// Count, mean, sum of squared deviations and largest |x| of a stream given in chunks: each
+// chunk's own mean and deviations (two passes in cache, no division per sample), merged by
+// Chan et al.'s update. Equal to Scan's Welford recurrence up to rounding.
+struct Moments {
+  std::uint64_t n = 0;
+  double mean = 0.0;
+  double m2 = 0.0;
+  double max_abs = 0.0;
+  [[nodiscard]] double std_dev() const {
+    return n > 1 ? std::sqrt(m2 / static_cast<double>(n - 1)) : 0.0;
+  }
+  void add(const double* x, std::size_t k) {
+    if (k == 0U) {
+      return;
+    }
+    double sum[4] = {0.0, 0.0, 0.0, 0.0};  // four chains: the adds do not wait on each other
+    double top[4] = {0.0, 0.0, 0.0, 0.0};
+    std::size_t i = 0;
+    for (; i + 4U <= k; i += 4U) {
+      for (std::size_t l = 0; l < 4U; ++l) {
+        sum[l] += x[i + l];
+        top[l] = std::max(top[l], std::fabs(x[i + l]));
+      }
+    }
+    for (; i < k; ++i) {
+      sum[0] += x[i];
+      top[0] = std::max(top[0], std::fabs(x[i]));
+    }
+    const double kd = static_cast<double>(k);
+    const double mean_k = ((sum[0] + sum[1]) + (sum[2] + sum[3])) / kd;
+    double dev[4] = {0.0, 0.0, 0.0, 0.0};
+    for (i = 0; i + 4U <= k; i += 4U) {
+      for (std::size_t l = 0; l < 4U; ++l) {
+        const double d = x[i + l] - mean_k;
+        dev[l] += d * d;
+      }
+    }
+    for (; i < k; ++i) {
+      const double d = x[i] - mean_k;
+      dev[0] += d * d;
+    }
+    const double m2_k = (dev[0] + dev[1]) + (dev[2] + dev[3]);
+    const double nd = static_cast<double>(n);
+    const double delta = mean_k - mean;
+    const double total = nd + kd;
+    mean += delta * kd / total;
+    m2 += m2_k + delta * delta * nd * kd / total;
+    n += k;
+    max_abs = std::max({max_abs, std::max(top[0], top[1]), std::max(top[2], top[3])});
   }
 };
 
@@ -303,8 +365,10 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
   const std::string where = path + ": variable '" + kChannelNames[c] + "': ";
   std::vector<double> values(kChunk);
   std::vector<std::int32_t> counts(kChunk);
-  Scan s;
-  Scan q;
+  std::vector<double> fin(kChunk);    // the chunk's finite values
+  std::vector<double> quant(kChunk);  // and their quantised values (counts x LSB)
+  Moments s;
+  Moments q;
   std::int32_t cand = 0;
   std::uint64_t votes = 0;
   std::uint64_t total = 0;
@@ -317,29 +381,45 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
                                                                           std::size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
     total += n;
+    std::size_t m = 0;
+    bool all_finite = true;
+    std::uint64_t off_grid = 0;
     for (std::size_t i = 0; i < n; ++i) {
-      if (!std::isfinite(v[i])) {
+      const double x = v[i];
+      if (!std::isfinite(x)) {
         counts[i] = 0;
+        all_finite = false;
         continue;
       }
-      s.add(v[i]);
-      overflow = overflow || std::fabs(v[i]) / lsb >= kMaxCounts + 0.5;
-      const std::int32_t k = quantize(v[i], lsb).counts;
+      const double cnt = x / lsb;
+      const std::int32_t k = round_counts(cnt);  // saturates; overflow is checked below
       counts[i] = k;
-      const double resid = v[i] / lsb - static_cast<double>(k);
-      ch.off_grid += std::fabs(resid) > 1e-6 ? 1U : 0U;
-      q.add(static_cast<double>(k) * lsb);
-      if (votes == 0) {
-        cand = k;
-        votes = 1;
-      } else {
-        votes = k == cand ? votes + 1 : votes - 1;
-      }
+      off_grid += std::fabs(cnt - static_cast<double>(k)) > 1e-6 ? 1U : 0U;
+      fin[m] = x;
+      quant[m] = static_cast<double>(k) * lsb;
+      ++m;
+      // Boyer-Moore vote without branches (k == cand is a coin toss on noisy data).
+      const bool fresh = votes == 0;
+      const bool same = k == cand;
+      cand = fresh ? k : cand;
+      votes = fresh ? 1U : (same ? votes + 1U : votes - 1U);
     }
+    ch.off_grid += off_grid;
+    s.add(fin.data(), m);
+    q.add(quant.data(), m);
+    overflow = overflow || s.max_abs / lsb >= kMaxCounts + 0.5;
     const auto t1 = std::chrono::steady_clock::now();
     timing.quantize_s += std::chrono::duration<double>(t1 - t0).count();
+    if (all_finite && !overflow) {
+      if (pending_gap > 0U) {
+        sink.gap(static_cast<std::size_t>(pending_gap));
+        pending_gap = 0;
+      }
+      sink.push(counts.data(), n);
+      started = true;
+    }
     std::size_t i = 0;
-    while (i < n && !overflow) {
+    while (!all_finite && i < n && !overflow) {
       std::size_t j = i;
       const bool finite = std::isfinite(v[i]);
       while (j < n && std::isfinite(v[j]) == finite) {
@@ -362,8 +442,8 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
   if (!ok) {
     return kExitRuntime;
   }
-  ch.non_finite = total - s.finite;
-  if (s.finite == 0) {
+  ch.non_finite = total - s.n;
+  if (s.n == 0) {
     err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
     return kExitRuntime;
   }
@@ -387,7 +467,7 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
       return kExitRuntime;
     }
     timing.read_s += second_read_s;
-    const double top_share = static_cast<double>(same) / static_cast<double>(s.finite);
+    const double top_share = static_cast<double>(same) / static_cast<double>(s.n);
     if (top_share > 0.99) {
       err = where + lsb_origin + num(lsb) + " puts " + num(100.0 * top_share) +
             " % of the samples in one count (std " + num(s.std_dev()) + " becomes " +

@@ -267,9 +267,12 @@ class Inflater {
     }
   }
 
-  // Streaming: decode until the output buffer has less than kStreamRoom bytes of room or the
-  // final block ended. Returns ok or the first error.
-  [[nodiscard]] InflateStatus pump() {
+  // Streaming: decode until about `want` bytes more were produced (the output buffer has less
+  // than kStreamRoom bytes of room below that mark) or the final block ended. Returns ok or the
+  // first error. A small `want` (a header peek) decodes little more than asked for.
+  [[nodiscard]] InflateStatus pump(std::size_t want) {
+    // The decoder's bound is cap_: lower it to the mark (never above the buffer).
+    cap_ = std::min(out_.size(), n_out_ + std::max(want, kFastRoom) + kStreamRoom);
     suspended_ = false;
     for (;;) {
       const InflateStatus st = step();
@@ -282,7 +285,7 @@ class Inflater {
     }
   }
   [[nodiscard]] bool deflate_done() const { return phase_ == Phase::done; }
-  [[nodiscard]] bool needs_slide() const { return cap_ - n_out_ < kStreamRoom; }
+  [[nodiscard]] bool needs_slide() const { return out_.size() - n_out_ < kStreamRoom + kFastRoom; }
   // Output produced and not yet taken: [delivered_, n_out_).
   [[nodiscard]] const std::uint8_t* pending(std::size_t& n) const {
     n = n_out_ - delivered_;
@@ -923,8 +926,9 @@ struct InflateStream::Impl {
       fail(InflateStatus::preset_dictionary);
     }
   }
-  // Decode more output (after the consumer took all there was). False when nothing more comes.
-  bool produce() {
+  // Decode more output, about `want` bytes (after the consumer took all there was). False when
+  // nothing more comes.
+  bool produce(std::size_t want) {
     if (failed || inf.deflate_done()) {
       return false;
     }
@@ -937,7 +941,7 @@ struct InflateStream::Impl {
     if (inf.needs_slide()) {
       inf.slide();
     }
-    const InflateStatus st = inf.pump();
+    const InflateStatus st = inf.pump(want);
     if (st != InflateStatus::ok) {
       fail(st);
       return false;
@@ -979,7 +983,7 @@ std::size_t InflateStream::read(std::uint8_t* dst, std::size_t n) {
       m.total += k;
       continue;
     }
-    if (!m.produce()) {
+    if (!m.produce(n - got)) {
       break;
     }
   }
