@@ -57,7 +57,7 @@ for ((e = 6; e <= max_exp; ++e)); do
   file_mb=$(awk -v b="$(stat -c %s "$mat")" 'BEGIN { printf "%.0f", b / 1e6 }')
   measure adev "$imu_sim" adev "$mat" --channel acc_z
   adev_rss=$rss_mb adev_wall=$wall_s
-  adev_mbs=$(awk -v m="$file_mb" -v t="$wall_s" 'BEGIN { printf "%.0f", t > 0 ? m / t : 0 }')
+  adev_mbs=$(awk -v m="$file_mb" -v t="$wall_s" 'BEGIN { printf "%.0f", (t > 0) ? m / t : 0 }')
   run_rss="-" run_wall="-"
   if [ "$e" -le "$run_max_exp" ]; then
     measure run "$imu_sim" run "$mat" --channel acc_z --bus loopback --rate max \

@@ -425,7 +425,9 @@ class PieceSource : public imu::mat::ByteSource {
   PieceSource(const Bytes& b, std::size_t step) : b_(b), step_(step) {}
   std::size_t read(std::uint8_t* dst, std::size_t n) override {
     const std::size_t k = std::min({n, step_, b_.size() - pos_});
-    std::memcpy(dst, b_.data() + pos_, k);
+    if (k > 0U) {  // (an empty vector's data() may be null: no memcpy from it)
+      std::memcpy(dst, b_.data() + pos_, k);
+    }
     pos_ += k;
     return k;
   }
