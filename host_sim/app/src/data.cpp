@@ -4,8 +4,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <limits>
+#include <mutex>
 #include <string_view>
+#include <thread>
 
 #include "imu/mat/mat_reader.hpp"
 #include "imu/online_adev.hpp"
@@ -332,7 +336,10 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Every sample of channel c through f(const double* v, std::size_t n), chunk by chunk.
+// Every sample of channel c through f(const double* v, std::size_t n), chunk by chunk
+// (buf.size() samples). The file is read and inflated one chunk ahead on a second thread, so
+// that inflating chunk k + 1 overlaps f's work on chunk k (two buffers, handed over under a
+// mutex). read_s: the time f's thread waited for data. The reader is used by that thread alone.
 template <class F>
 bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>& buf,
                     double& read_s, std::string& err, F&& f) {
@@ -341,19 +348,65 @@ bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>&
     err = cs.error().message;
     return false;
   }
-  for (;;) {
+  struct Slot {
+    std::vector<double> v;
+    std::size_t n = 0;
+    bool full = false;  // filled by the reader, not yet used by f
+  };
+  Slot slot[2];
+  slot[0].v.swap(buf);
+  slot[1].v.resize(slot[0].v.size());
+  std::mutex m;
+  std::condition_variable cv;
+  bool stop = false;       // f's side is leaving (error or end)
+  std::string read_err;    // the reader's error, set before its last slot is marked full
+  std::thread reader([&] {
+    for (std::size_t k = 0;; k ^= 1U) {
+      {
+        std::unique_lock<std::mutex> lock(m);
+        cv.wait(lock, [&] { return stop || !slot[k].full; });
+        if (stop) {
+          return;
+        }
+      }
+      const auto r = cs.value().read(slot[k].v.data(), slot[k].v.size());
+      std::lock_guard<std::mutex> lock(m);
+      slot[k].n = r.ok() ? r.value() : 0U;
+      if (!r.ok()) {
+        read_err = r.error().message;
+      }
+      slot[k].full = true;
+      cv.notify_all();
+      if (slot[k].n == 0U) {
+        return;  // end (checked) or error
+      }
+    }
+  });
+  bool ok = true;
+  for (std::size_t k = 0;; k ^= 1U) {
     const auto t0 = std::chrono::steady_clock::now();
-    const auto r = cs.value().read(buf.data(), buf.size());
+    std::size_t n = 0;
+    {
+      std::unique_lock<std::mutex> lock(m);
+      cv.wait(lock, [&] { return slot[k].full; });
+      n = slot[k].n;
+      if (n == 0U) {
+        ok = read_err.empty();
+        err = read_err;
+        stop = true;
+        cv.notify_all();
+        break;
+      }
+    }
     read_s += seconds_since(t0);
-    if (!r.ok()) {
-      err = r.error().message;
-      return false;
-    }
-    if (r.value() == 0U) {
-      return true;
-    }
-    f(buf.data(), r.value());
+    f(slot[k].v.data(), n);
+    std::lock_guard<std::mutex> lock(m);
+    slot[k].full = false;
+    cv.notify_all();
   }
+  reader.join();
+  buf.swap(slot[0].v);
+  return ok;
 }
 
 }  // namespace
@@ -383,8 +436,29 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
     total += n;
     std::size_t m = 0;
     bool all_finite = true;
-    std::uint64_t off_grid = 0;
     for (std::size_t i = 0; i < n; ++i) {
+      all_finite = all_finite && std::fabs(v[i]) <= std::numeric_limits<double>::max();  // no NaN
+    }
+    std::uint64_t off_grid = 0;
+    if (all_finite) {
+      // The common case, in loops the compiler vectorises: quantise, then the vote (a chain).
+      for (std::size_t i = 0; i < n; ++i) {
+        const double cnt = v[i] / lsb;
+        const std::int32_t k = round_counts(cnt);
+        counts[i] = k;
+        off_grid += std::fabs(cnt - static_cast<double>(k)) > 1e-6 ? 1U : 0U;
+        quant[i] = static_cast<double>(k) * lsb;
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::int32_t k = counts[i];
+        const bool fresh = votes == 0;
+        const bool same = k == cand;
+        cand = fresh ? k : cand;
+        votes = fresh ? 1U : (same ? votes + 1U : votes - 1U);
+      }
+      m = n;
+    }
+    for (std::size_t i = 0; i < n && !all_finite; ++i) {
       const double x = v[i];
       if (!std::isfinite(x)) {
         counts[i] = 0;
@@ -405,7 +479,7 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
       votes = fresh ? 1U : (same ? votes + 1U : votes - 1U);
     }
     ch.off_grid += off_grid;
-    s.add(fin.data(), m);
+    s.add(all_finite ? v : fin.data(), m);
     q.add(quant.data(), m);
     overflow = overflow || s.max_abs / lsb >= kMaxCounts + 0.5;
     const auto t1 = std::chrono::steady_clock::now();
