@@ -9,6 +9,7 @@
 #include <limits>
 #include <mutex>
 #include <string_view>
+#include <system_error>
 #include <thread>
 
 #include "imu/mat/mat_reader.hpp"
@@ -360,7 +361,7 @@ bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>&
   std::condition_variable cv;
   bool stop = false;       // f's side is leaving (error or end)
   std::string read_err;    // the reader's error, set before its last slot is marked full
-  std::thread reader([&] {
+  const auto read_ahead = [&] {
     for (std::size_t k = 0;; k ^= 1U) {
       {
         std::unique_lock<std::mutex> lock(m);
@@ -381,7 +382,24 @@ bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>&
         return;  // end (checked) or error
       }
     }
-  });
+  };
+  std::thread reader;
+  try {
+    reader = std::thread(read_ahead);
+  } catch (const std::system_error&) {
+    // No thread to be had (limits): read and work in turn on this one.
+    for (;;) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const auto r = cs.value().read(slot[0].v.data(), slot[0].v.size());
+      read_s += seconds_since(t0);
+      if (!r.ok() || r.value() == 0U) {
+        err = r.ok() ? std::string() : r.error().message;
+        buf.swap(slot[0].v);
+        return r.ok();
+      }
+      f(slot[0].v.data(), r.value());
+    }
+  }
   bool ok = true;
   for (std::size_t k = 0;; k ^= 1U) {
     const auto t0 = std::chrono::steady_clock::now();
