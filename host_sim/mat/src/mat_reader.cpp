@@ -1495,11 +1495,19 @@ Result<std::size_t> ChannelStream::read(double* out, std::size_t n) {
   while (done < n && s.delivered < s.count) {
     const auto k = static_cast<std::size_t>(std::min<std::uint64_t>(
         {static_cast<std::uint64_t>(n - done), s.count - s.delivered, s.buf.size() / s.unit}));
-    Status st = s.pull(s.buf.data(), k * s.unit);
-    if (!st.ok()) {
-      return st.error();
+    if (s.f.m.data_type == kMiDouble && !s.file.swap && host_little_endian()) {
+      // The file's bytes are host doubles: inflate (or read) them straight into `out`.
+      Status st = s.pull(static_cast<std::uint8_t*>(static_cast<void*>(out + done)), k * s.unit);
+      if (!st.ok()) {
+        return st.error();
+      }
+    } else {
+      Status st = s.pull(s.buf.data(), k * s.unit);
+      if (!st.ok()) {
+        return st.error();
+      }
+      convert(s.buf.data(), s.f.m.data_type, k, s.file.swap, out + done);
     }
-    convert(s.buf.data(), s.f.m.data_type, k, s.file.swap, out + done);
     done += k;
     s.delivered += k;
   }
