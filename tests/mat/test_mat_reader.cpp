@@ -193,7 +193,7 @@ std::string column_error(const Bytes& b, const std::string& var, std::size_t col
     return f.error().message;
   }
   const auto r = f.value().read_column(var, column);
-  const std::string e = r.ok() ? std::string("(no error)") : r.error().message;
+  std::string e = r.ok() ? std::string("(no error)") : r.error().message;
   EXPECT_EQ(se, e) << "ChannelStream and MatFile disagree";
   if (r.ok()) {
     expect_same(streamed, r.value());
