@@ -5,6 +5,7 @@
 // mat_writer_python_check).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -126,6 +127,37 @@ INSTANTIATE_TEST_SUITE_P(
              : i.param.deflate == imu::mat::Deflate::stored ? std::string("stored")
                                                              : std::string("fixed_huffman");
     });
+
+// A column written in pieces (column_start + encode_doubles + the other variables) is the same
+// file, byte for byte, as add_column() followed by the same variables.
+TEST(MatWriter, ColumnInPiecesIsTheSameFile) {
+  std::vector<double> v(1001);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    v[i] = 1e-6 * static_cast<double>(i * i) - 0.25;
+  }
+  MatWriter whole;
+  ASSERT_TRUE(whole.add_column("acc_z", v).ok());
+  ASSERT_TRUE(whole.add_scalar("fs", 100.0).ok());
+  ASSERT_TRUE(whole.add_string("source", "test").ok());
+  MatWriter small;
+  const auto start = small.column_start("acc_z", v.size());
+  ASSERT_TRUE(start.ok()) << start.error().message;
+  ASSERT_TRUE(small.add_scalar("fs", 100.0).ok());
+  ASSERT_TRUE(small.add_string("source", "test").ok());
+  EXPECT_FALSE(small.add_scalar("acc_z", 1.0).ok());  // the name is taken
+  Bytes file(small.bytes().begin(), small.bytes().begin() + 128);
+  file.insert(file.end(), start.value().begin(), start.value().end());
+  for (std::size_t at = 0; at < v.size(); at += 300U) {  // in pieces of 300 samples
+    const std::size_t n = std::min<std::size_t>(300U, v.size() - at);
+    Bytes piece(8U * n);
+    MatWriter::encode_doubles(v.data() + at, n, piece.data());
+    file.insert(file.end(), piece.begin(), piece.end());
+  }
+  file.insert(file.end(), small.bytes().begin() + 128, small.bytes().end());
+  EXPECT_EQ(file, whole.bytes());
+  MatWriter packed(WriterOptions{true});
+  EXPECT_FALSE(packed.column_start("x", 10).ok());  // compressed: not in pieces
+}
 
 TEST(MatWriter, SaveAndReadBackFromDisk) {
   const std::string path = ::testing::TempDir() + "imu_mat_writer_test.mat";

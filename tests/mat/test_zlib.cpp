@@ -3,6 +3,7 @@
 // CRC-32 computed here), hand-built bad streams, output bounds, and the stored-block writer.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <cstdint>
@@ -414,3 +415,110 @@ TEST(Zlib, DescribeEveryStatus) {
 }
 
 }  // namespace
+
+// ---- InflateStream: the same decoder fed and drained in pieces ----
+namespace stream_test {
+
+// Hands out a byte vector `step` bytes per read() (1: the worst case for the input refills).
+class PieceSource : public imu::mat::ByteSource {
+ public:
+  PieceSource(const Bytes& b, std::size_t step) : b_(b), step_(step) {}
+  std::size_t read(std::uint8_t* dst, std::size_t n) override {
+    const std::size_t k = std::min({n, step_, b_.size() - pos_});
+    if (k > 0U) {  // (an empty vector's data() may be null: no memcpy from it)
+      std::memcpy(dst, b_.data() + pos_, k);
+    }
+    pos_ += k;
+    return k;
+  }
+
+ private:
+  const Bytes& b_;
+  std::size_t step_;
+  std::size_t pos_ = 0;
+};
+
+// Inflate `z` through an InflateStream, reading `out_step` bytes at a time.
+InflateStatus stream_all(const Bytes& z, bool zlib, std::size_t in_step, std::size_t out_step,
+                         Bytes& out) {
+  PieceSource src(z, in_step);
+  imu::mat::InflateStream s(src, zlib);
+  out.clear();
+  Bytes piece(out_step);
+  for (;;) {
+    const std::size_t n = s.read(piece.data(), piece.size());
+    if (n == 0U) {
+      break;
+    }
+    out.insert(out.end(), piece.begin(), piece.begin() + static_cast<std::ptrdiff_t>(n));
+  }
+  EXPECT_EQ(s.total_out(), out.size());
+  EXPECT_EQ(s.finished(), s.status() == InflateStatus::ok);
+  return s.status();
+}
+
+}  // namespace stream_test
+
+// Every vector (stored, fixed, dynamic blocks, 14-bit codes, long matches across the 96 kB
+// output buffer) gives the same bytes as the whole-buffer inflater, whatever the input and
+// output piece sizes.
+TEST(ZlibStream, EveryVectorEqualsWholeInflate) {
+  for (const Vector& v : load_vectors()) {
+    SCOPED_TRACE(v.name);
+    for (const std::size_t in_step : {std::size_t{1}, std::size_t{7}, std::size_t{4096},
+                                      std::size_t{1} << 20U}) {
+      for (const std::size_t out_step : {std::size_t{1}, std::size_t{8}, std::size_t{100000}}) {
+        if ((in_step == 1U || out_step == 1U) && v.size > 300000U) {
+          continue;  // keep the unit test fast
+        }
+        Bytes out;
+        ASSERT_EQ(stream_test::stream_all(v.stream, !v.raw, in_step, out_step, out),
+                  InflateStatus::ok)
+            << "in " << in_step << " out " << out_step;
+        ASSERT_EQ(out.size(), v.size);
+        EXPECT_EQ(crc32(out), v.crc);
+      }
+    }
+  }
+}
+
+// A long output (several slides of the 32 kB window) with matches reaching back across a slide.
+TEST(ZlibStream, LongOutputAcrossSlides) {
+  Bytes in(1U << 20U);
+  std::uint32_t x = 5U;
+  for (std::size_t i = 0; i < in.size(); ++i) {
+    x = x * 1664525U + 1013904223U;
+    // a 30000-byte period: every match is 30000 back, across slides of the window
+    in[i] = i < 30000U ? static_cast<std::uint8_t>(x >> 24U) : in[i - 30000U];
+  }
+  for (const Bytes& z : {imu::mat::zlib_compress_fixed(in.data(), in.size()),
+                         imu::mat::zlib_store(in.data(), in.size())}) {
+    Bytes out;
+    ASSERT_EQ(stream_test::stream_all(z, true, 3000U, 77777U, out), InflateStatus::ok);
+    EXPECT_EQ(out, in);
+  }
+}
+
+TEST(ZlibStream, ErrorsAsWholeInflate) {
+  for (const Vector& v : load_vectors()) {
+    if (v.raw || v.stream.size() > 5000U) {
+      continue;
+    }
+    SCOPED_TRACE(v.name);
+    for (std::size_t cut = 0; cut < v.stream.size(); cut += 1U + cut / 16U) {
+      const Bytes z(v.stream.begin(), v.stream.begin() + static_cast<std::ptrdiff_t>(cut));
+      Bytes out;
+      ASSERT_EQ(stream_test::stream_all(z, true, 5U, 4096U, out), InflateStatus::truncated_input)
+          << "cut at " << cut;
+    }
+    Bytes bad = v.stream;
+    bad.back() = static_cast<std::uint8_t>(bad.back() ^ 1U);
+    Bytes out;
+    EXPECT_EQ(stream_test::stream_all(bad, true, 64U, 4096U, out), InflateStatus::adler_mismatch);
+  }
+  Bytes out;
+  EXPECT_EQ(stream_test::stream_all({0x78, 0x9D, 0x03, 0x00}, true, 1U, 8U, out),
+            InflateStatus::bad_zlib_header);
+  EXPECT_EQ(stream_test::stream_all({0x78, 0xBB, 0x03, 0x00}, true, 1U, 8U, out),
+            InflateStatus::preset_dictionary);
+}

@@ -26,7 +26,7 @@
 namespace imu::sim {
 namespace {
 
-using imu::cli::write_file_atomic;
+using imu::cli::AtomicFileWriter;
 
 constexpr const char* kUsageSynth =
     "usage: imu-sim synth [--out FILE] [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--K 1.4e-4]\n"
@@ -93,9 +93,9 @@ bool parse_synth(const Args& a, SynthOptions& o, std::string& err) {
     return false;
   }
   const double samples = std::round(o.dur * o.fs);
-  if (!(samples >= 16.0 && samples <= static_cast<double>(kMaxSamples))) {
+  if (!(samples >= 16.0 && samples <= static_cast<double>(kMaxStreamSamples))) {
     err = "--duration x --fs = " + std::to_string(samples) + " samples, outside [16, " +
-          std::to_string(kMaxSamples) + "]";
+          std::to_string(kMaxStreamSamples) + "]";
     return false;
   }
   o.count = static_cast<std::size_t>(samples);
@@ -105,19 +105,49 @@ bool parse_synth(const Args& a, SynthOptions& o, std::string& err) {
 
 // Draw the samples (exact LSB multiples). kExitUsage if the model's values do not fit int32
 // counts of the LSB (a saturated sample would be a wrong number in the file).
-int synth_samples(const SynthOptions& o, ModelSimulator<4>& sim, std::vector<double>& z,
-                  std::string& err) {
-  z.resize(o.count);
-  for (double& v : z) {
-    const double x = sim.next();
-    const QuantizeResult q = quantize(x, o.lsb);
-    if (q.saturated || !std::isfinite(x)) {
-      err = "the model's values reach " + std::to_string(x) +
-            ", beyond int32 counts of --lsb " + std::to_string(o.lsb) +
-            " (lower --N/--B/--K or raise --lsb)";
-      return kExitUsage;
+// Draw, quantise and write the channel's o.count samples in chunks of 8192 (issue 14: memory
+// independent of the length): `w` holds the header and the small variables, which follow the
+// column. Exit status; err set.
+int synth_write(const SynthOptions& o, ModelSimulator<4>& sim, mat::MatWriter& w,
+                std::string& err) {
+  auto start = w.column_start(o.chan_name, o.count);
+  if (!start.ok()) {
+    err = start.error().message;
+    return kExitRuntime;
+  }
+  const std::vector<std::uint8_t>& small = w.bytes();
+  constexpr std::size_t kHeader = 128;
+  const std::size_t slash = o.out.rfind('/');
+  AtomicFileWriter out;
+  if ((slash != std::string::npos && !make_dirs(o.out.substr(0, slash), err)) ||
+      !out.open(o.out, err) || !out.write(small.data(), kHeader, err) ||
+      !out.write(start.value().data(), start.value().size(), err)) {
+    return kExitRuntime;
+  }
+  constexpr std::size_t kChunk = 8192;
+  std::vector<double> z(kChunk);
+  std::vector<std::uint8_t> bytes(8U * kChunk);
+  for (std::size_t done = 0; done < o.count;) {
+    const std::size_t n = std::min(kChunk, o.count - done);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double x = sim.next();
+      const QuantizeResult q = quantize(x, o.lsb);
+      if (q.saturated || !std::isfinite(x)) {
+        err = "the model's values reach " + std::to_string(x) +
+              ", beyond int32 counts of --lsb " + std::to_string(o.lsb) +
+              " (lower --N/--B/--K or raise --lsb)";
+        return kExitUsage;  // `out` removes its temporary file
+      }
+      z[i] = static_cast<double>(q.counts) * o.lsb;
     }
-    v = static_cast<double>(q.counts) * o.lsb;
+    mat::MatWriter::encode_doubles(z.data(), n, bytes.data());
+    if (!out.write(bytes.data(), 8U * n, err)) {
+      return kExitRuntime;
+    }
+    done += n;
+  }
+  if (!out.write(small.data() + kHeader, small.size() - kHeader, err) || !out.commit(err)) {
+    return kExitRuntime;
   }
   return kExitOk;
 }
@@ -157,11 +187,6 @@ int cmd_synth(int argc, char** argv) {
     return fail(cmd, "the model could not be built or simulated");
   }
   const double t0 = now_s();
-  std::vector<double> z;
-  const int st_z = synth_samples(o, sim, z, err);
-  if (st_z != kExitOk) {
-    return fail(cmd, err, st_z);
-  }
   std::string source;
   appendf(source,
           "SYNTHETIC data from imu-sim synth (not a recording: the seed's marble-slab data is not "
@@ -170,10 +195,7 @@ int cmd_synth(int argc, char** argv) {
           o.n, o.b, o.tp, o.k, o.fs, o.count, static_cast<unsigned long long>(o.seed), o.lsb);
   const char* lsb_name = o.chan < 3 ? "acc_lsb" : "gyro_lsb";
   mat::MatWriter w;
-  auto st = w.add_column(o.chan_name, z);
-  if (st.ok()) {
-    st = w.add_scalar("fs", o.fs);
-  }
+  auto st = w.add_scalar("fs", o.fs);
   if (st.ok()) {
     st = w.add_scalar(lsb_name, o.lsb);
   }
@@ -183,10 +205,9 @@ int cmd_synth(int argc, char** argv) {
   if (!st.ok()) {
     return fail(cmd, st.error().message);
   }
-  const std::size_t slash = o.out.rfind('/');
-  if ((slash != std::string::npos && !make_dirs(o.out.substr(0, slash), err)) ||
-      !write_file_atomic(o.out, w.bytes().data(), w.bytes().size(), err)) {
-    return fail(cmd, err);
+  const int st_w = synth_write(o, sim, w, err);
+  if (st_w != kExitOk) {
+    return fail(cmd, err, st_w);
   }
   std::printf("wrote %s: %s (%zu samples at %g Hz, %g s), fs, %s\n%s\ntook %.2f s\n",
               o.out.c_str(), o.chan_name.c_str(), o.count, o.fs, o.dur, lsb_name, source.c_str(),
@@ -218,34 +239,19 @@ int cmd_model(int argc, char** argv) {
   return kExitOk;
 }
 
-// The ADEV of one channel with its non-finite samples as gaps: samples before the first and
-// after the last finite one are not part of the series (as for the node, whose receiver starts
-// at the first sample it gets); each run of non-finite samples inside is one mark_missing().
-void adev_with_gaps(const std::vector<double>& values, const std::vector<std::int32_t>& counts,
-                    OnlineAdev<8, 22>& adev) {
-  std::size_t lo = 0;
-  std::size_t hi = values.size();
-  while (lo < hi && !std::isfinite(values[lo])) {
-    ++lo;
-  }
-  while (hi > lo && !std::isfinite(values[hi - 1])) {
-    --hi;
-  }
-  std::size_t i = lo;
-  while (i < hi) {
-    std::size_t j = i;
-    const bool finite = std::isfinite(values[i]);
-    while (j < hi && std::isfinite(values[j]) == finite) {
-      ++j;
-    }
-    if (finite) {
-      adev.push_block(counts.data() + i, j - i);
-    } else {
-      adev.mark_missing(j - i);
-    }
-    i = j;
-  }
-}
+// The ADEV of one channel with its non-finite samples as gaps (stream_counts() splits the
+// record: samples before the first and after the last finite one are not part of the series,
+// as for the node, whose receiver starts at the first sample it gets; each run of non-finite
+// samples inside is one mark_missing()).
+class AdevSink final : public CountSink {
+ public:
+  explicit AdevSink(OnlineAdev<8, 22>& adev) : adev_(adev) {}
+  void push(const std::int32_t* counts, std::size_t n) override { adev_.push_block(counts, n); }
+  void gap(std::size_t n) override { adev_.mark_missing(n); }
+
+ private:
+  OnlineAdev<8, 22>& adev_;
+};
 
 struct AdevTiming {
   double read, quantize, adev, total;
@@ -303,25 +309,28 @@ int cmd_adev(int argc, char** argv) {
   want[chan] = true;
   lsb_over[chan] = lsb;
   SensorData sd;
-  if (!load_sensor(path, want, want, lsb_over, fs, sd, err)) {
+  if (!load_sensor_meta(path, want, want, lsb_over, fs, sd, err)) {
     return fail(cmd, err);
   }
-  const double t1 = now_s();
-  std::vector<std::int32_t> counts;
+  // The channel in chunks (issue 14: memory independent of the record's length); the times of
+  // the interleaved steps are summed.
   ChannelData& ch = sd.ch[chan];
-  const int st = to_counts(path, chan, ch, counts, err);
+  OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
+  AdevSink sink(adev);
+  StreamTiming tm;
+  const int st = stream_counts(path, chan, ch, sink, tm, err);
   if (st != kExitOk) {
     return fail(cmd, err, st);
   }
-  const double t2 = now_s();
-  OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
-  adev_with_gaps(ch.values, counts, adev);
   AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
   const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
   const double t3 = now_s();
+  const double t1 = t0 + (t3 - t0 - tm.quantize_s - tm.sink_s);  // metadata + read + inflate
+  const double t2 = t1 + tm.quantize_s;
+  const std::size_t n_samples = sd.n_samples;
   const std::vector<AdevRow> rows = rows_from_points(pts, np);
   std::printf("%s %s: %zu samples at %g Hz, LSB %g %s%s\n", path.c_str(), chan_name.c_str(),
-              counts.size(), sd.fs_hz, ch.lsb, channel_unit(chan),
+              n_samples, sd.fs_hz, ch.lsb, channel_unit(chan),
               ch.lsb_from_file ? " (from the file)" : "");
   std::fputs(format_adev_table(rows).c_str(), stdout);
   std::printf("time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", t1 - t0,
@@ -336,7 +345,7 @@ int cmd_adev(int argc, char** argv) {
   }
   if (a.has("--json") &&
       !write_file(a.get("--json"),
-                  adev_json(path, chan_name, chan, sd, counts.size(), rows,
+                  adev_json(path, chan_name, chan, sd, n_samples, rows,
                             AdevTiming{t1 - t0, t2 - t1, t3 - t2, t3 - t0}),
                   err)) {
     return fail(cmd, err);

@@ -1,8 +1,16 @@
 // Loading a sensor recording (see data.hpp).
 #include "data.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
 #include <cstdio>
+#include <limits>
+#include <mutex>
+#include <string_view>
+#include <system_error>
+#include <thread>
 
 #include "imu/mat/mat_reader.hpp"
 #include "imu/online_adev.hpp"
@@ -25,8 +33,18 @@ std::string num(double v) {
   return buf;
 }
 
+// The scalars of a file through a ChannelStream (the file is not read whole).
+struct StreamScalars {
+  const std::string& path;
+  [[nodiscard]] mat::Result<double> read_scalar(std::string_view name) const {
+    return mat::stream_scalar(path, name);
+  }
+};
+
 // The rate: fs_override, else the file's `fs`, else its `Fs`, within [kMinFsHz, kMaxFsHz].
-bool read_rate(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& vars,
+// Reader: mat::MatFile or StreamScalars.
+template <class Reader>
+bool read_rate(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
                const std::string& path, double fs_override, double& fs_hz, std::string& err) {
   if (fs_override > 0.0) {
     fs_hz = fs_override;
@@ -49,7 +67,8 @@ bool read_rate(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& var
 }
 
 // acc_lsb and gyro_lsb if present (0 if absent).
-bool read_file_lsbs(const mat::MatFile& mf, const std::vector<mat::VariableInfo>& vars,
+template <class Reader>
+bool read_file_lsbs(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
                     const std::string& path, double (&file_lsb)[2], std::string& err) {
   const char* lsb_names[2] = {"acc_lsb", "gyro_lsb"};
   for (std::size_t g = 0; g < 2; ++g) {
@@ -97,6 +116,67 @@ struct Scan {
     const double d = v - mean;
     mean += d / static_cast<double>(finite);
     m2 += d * (v - mean);
+  }
+};
+
+// imu::quantize(x, lsb).counts for finite x, from c = x / lsb, without branches: half away from
+// zero is trunc(c + copysign(0.5, c)) (equal to quantize's floor forms on each side of zero),
+// clamped in double first so that the conversion is defined, saturating at the int32 ends as
+// quantize does.
+std::int32_t round_counts(double c) {
+  const double t = std::min(std::max(c + std::copysign(0.5, c), -2147483648.0), 2147483647.0);
+  return static_cast<std::int32_t>(t);
+}
+
+// Count, mean, sum of squared deviations and largest |x| of a stream given in chunks: each
+// chunk's own mean and deviations (two passes in cache, no division per sample), merged by
+// Chan et al.'s update. Equal to Scan's Welford recurrence up to rounding.
+struct Moments {
+  std::uint64_t n = 0;
+  double mean = 0.0;
+  double m2 = 0.0;
+  double max_abs = 0.0;
+  [[nodiscard]] double std_dev() const {
+    return n > 1 ? std::sqrt(m2 / static_cast<double>(n - 1)) : 0.0;
+  }
+  void add(const double* x, std::size_t k) {
+    if (k == 0U) {
+      return;
+    }
+    double sum[4] = {0.0, 0.0, 0.0, 0.0};  // four chains: the adds do not wait on each other
+    double top[4] = {0.0, 0.0, 0.0, 0.0};
+    std::size_t i = 0;
+    for (; i + 4U <= k; i += 4U) {
+      for (std::size_t l = 0; l < 4U; ++l) {
+        sum[l] += x[i + l];
+        top[l] = std::max(top[l], std::fabs(x[i + l]));
+      }
+    }
+    for (; i < k; ++i) {
+      sum[0] += x[i];
+      top[0] = std::max(top[0], std::fabs(x[i]));
+    }
+    const double kd = static_cast<double>(k);
+    const double mean_k = ((sum[0] + sum[1]) + (sum[2] + sum[3])) / kd;
+    double dev[4] = {0.0, 0.0, 0.0, 0.0};
+    for (i = 0; i + 4U <= k; i += 4U) {
+      for (std::size_t l = 0; l < 4U; ++l) {
+        const double d = x[i + l] - mean_k;
+        dev[l] += d * d;
+      }
+    }
+    for (; i < k; ++i) {
+      const double d = x[i] - mean_k;
+      dev[0] += d * d;
+    }
+    const double m2_k = (dev[0] + dev[1]) + (dev[2] + dev[3]);
+    const double nd = static_cast<double>(n);
+    const double delta = mean_k - mean;
+    const double total = nd + kd;
+    mean += delta * kd / total;
+    m2 += m2_k + delta * delta * nd * kd / total;
+    n += k;
+    max_abs = std::max({max_abs, std::max(top[0], top[1]), std::max(top[2], top[3])});
   }
 };
 
@@ -187,6 +267,307 @@ bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
     return false;
   }
   return true;
+}
+
+bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
+                      const bool (&required)[kNumChannels],
+                      const double (&lsb_override)[kNumChannels], double fs_override,
+                      SensorData& out, std::string& err) {
+  out = SensorData{};
+  out.path = path;
+  auto listed = mat::scan_variables(path);
+  if (!listed.ok()) {
+    err = listed.error().message;
+    return false;
+  }
+  const std::vector<mat::VariableInfo>& vars = listed.value();
+  const StreamScalars mf{path};
+  double file_lsb[2] = {0.0, 0.0};
+  if (!read_rate(mf, vars, path, fs_override, out.fs_hz, err) ||
+      !read_file_lsbs(mf, vars, path, file_lsb, err)) {
+    return false;
+  }
+  bool any = false;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const mat::VariableInfo* info = find_var(vars, kChannelNames[c]);
+    if (!want[c] || (info == nullptr && !required[c])) {
+      continue;
+    }
+    if (info == nullptr) {
+      // Missing and required: the reader's "not found; variables: ..." message.
+      auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+      err = cs.ok() ? path + ": variable '" + kChannelNames[c] + "' not found"
+                    : cs.error().message;
+      return false;
+    }
+    if (!check_vector(*info, path, err)) {
+      return false;
+    }
+    // Class, dimensions against the data, budget: checked by opening the stream (no data read).
+    auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+    if (!cs.ok()) {
+      err = cs.error().message;
+      return false;
+    }
+    const auto n = static_cast<std::size_t>(cs.value().size());
+    if (any && n != out.n_samples) {
+      err = path + ": variable '" + kChannelNames[c] + "' has " + std::to_string(n) +
+            " samples, others " + std::to_string(out.n_samples);
+      return false;
+    }
+    out.n_samples = n;
+    any = true;
+    ChannelData& ch = out.ch[c];
+    ch.present = true;
+    const double fl = file_lsb[c < 3 ? 0 : 1];
+    ch.lsb = lsb_override[c] > 0.0 ? lsb_override[c] : (fl > 0.0 ? fl : default_lsb(c));
+    ch.lsb_from_option = lsb_override[c] > 0.0;
+    ch.lsb_from_file = !ch.lsb_from_option && fl > 0.0;
+  }
+  if (!any) {
+    err = path + ": none of the channels acc_x .. gyro_z is in the file";
+    return false;
+  }
+  return true;
+}
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Every sample of channel c through f(const double* v, std::size_t n), chunk by chunk
+// (buf.size() samples). The file is read and inflated one chunk ahead on a second thread, so
+// that inflating chunk k + 1 overlaps f's work on chunk k (two buffers, handed over under a
+// mutex). read_s: the time f's thread waited for data. The reader is used by that thread alone.
+template <class F>
+bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>& buf,
+                    double& read_s, std::string& err, F&& f) {
+  auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+  if (!cs.ok()) {
+    err = cs.error().message;
+    return false;
+  }
+  struct Slot {
+    std::vector<double> v;
+    std::size_t n = 0;
+    bool full = false;  // filled by the reader, not yet used by f
+  };
+  Slot slot[2];
+  slot[0].v.swap(buf);
+  slot[1].v.resize(slot[0].v.size());
+  std::mutex m;
+  std::condition_variable cv;
+  bool stop = false;       // f's side is leaving (error or end)
+  std::string read_err;    // the reader's error, set before its last slot is marked full
+  const auto read_ahead = [&] {
+    for (std::size_t k = 0;; k ^= 1U) {
+      {
+        std::unique_lock<std::mutex> lock(m);
+        cv.wait(lock, [&] { return stop || !slot[k].full; });
+        if (stop) {
+          return;
+        }
+      }
+      const auto r = cs.value().read(slot[k].v.data(), slot[k].v.size());
+      std::lock_guard<std::mutex> lock(m);
+      slot[k].n = r.ok() ? r.value() : 0U;
+      if (!r.ok()) {
+        read_err = r.error().message;
+      }
+      slot[k].full = true;
+      cv.notify_all();
+      if (slot[k].n == 0U) {
+        return;  // end (checked) or error
+      }
+    }
+  };
+  std::thread reader;
+  try {
+    reader = std::thread(read_ahead);
+  } catch (const std::system_error&) {
+    // No thread to be had (limits): read and work in turn on this one.
+    for (;;) {
+      const auto t0 = std::chrono::steady_clock::now();
+      const auto r = cs.value().read(slot[0].v.data(), slot[0].v.size());
+      read_s += seconds_since(t0);
+      if (!r.ok() || r.value() == 0U) {
+        err = r.ok() ? std::string() : r.error().message;
+        buf.swap(slot[0].v);
+        return r.ok();
+      }
+      f(slot[0].v.data(), r.value());
+    }
+  }
+  bool ok = true;
+  for (std::size_t k = 0;; k ^= 1U) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::size_t n = 0;
+    {
+      std::unique_lock<std::mutex> lock(m);
+      cv.wait(lock, [&] { return slot[k].full; });
+      n = slot[k].n;
+      if (n == 0U) {
+        ok = read_err.empty();
+        err = read_err;
+        stop = true;
+        cv.notify_all();
+        break;
+      }
+    }
+    read_s += seconds_since(t0);
+    f(slot[k].v.data(), n);
+    std::lock_guard<std::mutex> lock(m);
+    slot[k].full = false;
+    cv.notify_all();
+  }
+  reader.join();
+  buf.swap(slot[0].v);
+  return ok;
+}
+
+}  // namespace
+
+int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, CountSink& sink,
+                  StreamTiming& timing, std::string& err) {
+  constexpr std::size_t kChunk = 8192;
+  constexpr double kMaxCounts = 2147483647.0;
+  const std::string where = path + ": variable '" + kChannelNames[c] + "': ";
+  std::vector<double> values(kChunk);
+  std::vector<std::int32_t> counts(kChunk);
+  std::vector<double> fin(kChunk);    // the chunk's finite values
+  std::vector<double> quant(kChunk);  // and their quantised values (counts x LSB)
+  Moments s;
+  Moments q;
+  std::int32_t cand = 0;
+  std::uint64_t votes = 0;
+  std::uint64_t total = 0;
+  bool overflow = false;   // a finite |value| / LSB beyond int32: nothing more is pushed
+  bool started = false;    // a finite sample was pushed
+  std::uint64_t pending_gap = 0;
+  ch.off_grid = 0;
+  const double lsb = ch.lsb;
+  const bool ok = for_each_chunk(path, c, values, timing.read_s, err, [&](const double* v,
+                                                                          std::size_t n) {
+    const auto t0 = std::chrono::steady_clock::now();
+    total += n;
+    std::size_t m = 0;
+    bool all_finite = true;
+    for (std::size_t i = 0; i < n; ++i) {
+      all_finite = all_finite && std::fabs(v[i]) <= std::numeric_limits<double>::max();  // no NaN
+    }
+    std::uint64_t off_grid = 0;
+    if (all_finite) {
+      // The common case, in loops the compiler vectorises: quantise, then the vote (a chain).
+      for (std::size_t i = 0; i < n; ++i) {
+        const double cnt = v[i] / lsb;
+        const std::int32_t k = round_counts(cnt);
+        counts[i] = k;
+        off_grid += std::fabs(cnt - static_cast<double>(k)) > 1e-6 ? 1U : 0U;
+        quant[i] = static_cast<double>(k) * lsb;
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::int32_t k = counts[i];
+        const bool fresh = votes == 0;
+        const bool same = k == cand;
+        cand = fresh ? k : cand;
+        votes = fresh ? 1U : (same ? votes + 1U : votes - 1U);
+      }
+      m = n;
+    }
+    for (std::size_t i = 0; i < n && !all_finite; ++i) {
+      const double x = v[i];
+      if (!std::isfinite(x)) {
+        counts[i] = 0;
+        all_finite = false;
+        continue;
+      }
+      const double cnt = x / lsb;
+      const std::int32_t k = round_counts(cnt);  // saturates; overflow is checked below
+      counts[i] = k;
+      off_grid += std::fabs(cnt - static_cast<double>(k)) > 1e-6 ? 1U : 0U;
+      fin[m] = x;
+      quant[m] = static_cast<double>(k) * lsb;
+      ++m;
+      // Boyer-Moore vote without branches (k == cand is a coin toss on noisy data).
+      const bool fresh = votes == 0;
+      const bool same = k == cand;
+      cand = fresh ? k : cand;
+      votes = fresh ? 1U : (same ? votes + 1U : votes - 1U);
+    }
+    ch.off_grid += off_grid;
+    s.add(all_finite ? v : fin.data(), m);
+    q.add(quant.data(), m);
+    overflow = overflow || s.max_abs / lsb >= kMaxCounts + 0.5;
+    const auto t1 = std::chrono::steady_clock::now();
+    timing.quantize_s += std::chrono::duration<double>(t1 - t0).count();
+    if (all_finite && !overflow) {
+      if (pending_gap > 0U) {
+        sink.gap(static_cast<std::size_t>(pending_gap));
+        pending_gap = 0;
+      }
+      sink.push(counts.data(), n);
+      started = true;
+    }
+    std::size_t i = 0;
+    while (!all_finite && i < n && !overflow) {
+      std::size_t j = i;
+      const bool finite = std::isfinite(v[i]);
+      while (j < n && std::isfinite(v[j]) == finite) {
+        ++j;
+      }
+      if (!finite) {
+        pending_gap += started ? j - i : 0U;  // leading non-finite samples are not in the series
+      } else {
+        if (pending_gap > 0U) {
+          sink.gap(static_cast<std::size_t>(pending_gap));
+          pending_gap = 0;
+        }
+        sink.push(counts.data() + i, j - i);
+        started = true;
+      }
+      i = j;
+    }
+    timing.sink_s += seconds_since(t1);
+  });
+  if (!ok) {
+    return kExitRuntime;
+  }
+  ch.non_finite = total - s.n;
+  if (s.n == 0) {
+    err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
+    return kExitRuntime;
+  }
+  const int misfit = ch.lsb_from_option ? kExitUsage : kExitRuntime;
+  const std::string lsb_origin =
+      ch.lsb_from_option ? "--lsb " : (ch.lsb_from_file ? "the file's LSB " : "the default LSB ");
+  if (overflow) {
+    err = where + "values up to " + num(s.max_abs) + " do not fit int32 counts at " + lsb_origin +
+          num(lsb) + " (the LSB must be at least " + num(s.max_abs / kMaxCounts) + ")";
+    return misfit;
+  }
+  if (q.std_dev() < 0.5 * s.std_dev()) {
+    // Only now is the exact share of the majority candidate needed: a second pass.
+    std::uint64_t same = 0;
+    double second_read_s = 0.0;
+    if (!for_each_chunk(path, c, values, second_read_s, err, [&](const double* v, std::size_t n) {
+          for (std::size_t i = 0; i < n; ++i) {
+            same += std::isfinite(v[i]) && quantize(v[i], lsb).counts == cand ? 1U : 0U;
+          }
+        })) {
+      return kExitRuntime;
+    }
+    timing.read_s += second_read_s;
+    const double top_share = static_cast<double>(same) / static_cast<double>(s.n);
+    if (top_share > 0.99) {
+      err = where + lsb_origin + num(lsb) + " puts " + num(100.0 * top_share) +
+            " % of the samples in one count (std " + num(s.std_dev()) + " becomes " +
+            num(q.std_dev()) + "): the LSB is too coarse for these data";
+      return misfit;
+    }
+  }
+  return kExitOk;
 }
 
 int to_counts(const std::string& path, std::size_t c, ChannelData& ch,

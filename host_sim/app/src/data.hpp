@@ -29,6 +29,9 @@ inline constexpr double kMinFsHz = 1e-3;
 inline constexpr double kMaxFsHz = 1e6;
 /// Samples of one channel: the MAT reader's budget (256 MiB of doubles per variable).
 inline constexpr std::uint64_t kMaxSamples = std::uint64_t{1} << 25U;
+/// Samples of one channel written by synth and read in chunks by adev: 2e8 (1.6 GB of doubles,
+/// 139 h at 400 Hz), within a MAT v5 element (2^31 bytes) and the streaming reader's budget.
+inline constexpr std::uint64_t kMaxStreamSamples = 200000000U;
 
 struct ChannelData {
   bool present = false;
@@ -63,6 +66,47 @@ struct SensorData {
 /// sample, the file's LSB does not fit). O(n), one pass to check and one to quantise.
 [[nodiscard]] int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
                             std::vector<std::int32_t>& counts, std::string& err);
+
+/// load_sensor() without the values: rate, LSBs, which channels are present and their length
+/// (n_samples), from the variables' headers and the scalars; the file is never read whole
+/// (mat::scan_variables, mat::stream_scalar). The channels are then read by stream_counts().
+[[nodiscard]] bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
+                                    const bool (&required)[kNumChannels],
+                                    const double (&lsb_override)[kNumChannels],
+                                    double fs_override, SensorData& out, std::string& err);
+
+/// Where stream_counts() delivers a channel: its finite runs as counts, in order, and each run
+/// of non-finite samples between two finite ones as one gap (those before the first and after
+/// the last finite sample are not part of the series), exactly as adev_with_gaps() splits a
+/// whole record.
+class CountSink {
+ public:
+  CountSink() = default;
+  CountSink(const CountSink&) = delete;
+  CountSink& operator=(const CountSink&) = delete;
+  CountSink(CountSink&&) = delete;
+  CountSink& operator=(CountSink&&) = delete;
+  virtual ~CountSink() = default;
+  virtual void push(const std::int32_t* counts, std::size_t n) = 0;
+  virtual void gap(std::size_t n) = 0;
+};
+
+/// Seconds spent by stream_counts(): reading/inflating, quantising and checking, in the sink.
+struct StreamTiming {
+  double read_s = 0.0;
+  double quantize_s = 0.0;
+  double sink_s = 0.0;
+};
+
+/// Channel c (present, ch.lsb set by load_sensor_meta) read from the file in chunks of 8192
+/// samples and quantised into `sink`, with the checks of to_counts() (no finite sample, int32
+/// overflow, collapse: same messages and statuses) made on running statistics. The sink sees
+/// every chunk before the verdict: its result is valid only when 0 is returned. A second pass
+/// over the file is made only when the quantised std is under half the values' std (to count
+/// the share of the most common count exactly). Fills ch.non_finite and ch.off_grid. Memory: two
+/// chunks and the reader's ~0.3 MB, whatever the length.
+[[nodiscard]] int stream_counts(const std::string& path, std::size_t c, ChannelData& ch,
+                                CountSink& sink, StreamTiming& timing, std::string& err);
 
 /// "the file holds acc_x, gyro_y" (the channels acc_x .. gyro_z present in it), or what else
 /// it holds; for an unknown --channel. Never fails (a bad file is described as such).

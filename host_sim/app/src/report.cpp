@@ -180,6 +180,7 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   const double ts_s = 1.0 / in.fs_hz;
   const char* unit = channel_unit(in.channel_index);
   const std::vector<double>& data = *in.data;
+  const std::size_t n_samples = in.n_samples > 0 ? in.n_samples : data.size();
   if (!make_dirs(opt.out_dir, err)) {
     return false;
   }
@@ -243,7 +244,7 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   }
   const double sim_lsb = std::max(std::sqrt(dm.r_filter()) * 1e-4, 1e-12);
   OnlineAdev<8, 22> sim_adev(ts_s, sim_lsb);
-  (void)simulate_adev(sim, data.size(), sim_lsb, sim_adev);  // lsb > 0 by construction
+  (void)simulate_adev(sim, n_samples, sim_lsb, sim_adev);  // lsb > 0 by construction
   AdevPoint sim_pts[OnlineAdev<8, 22>::kMaxPoints];
   const std::vector<AdevRow> sim_rows =
       rows_from_points(sim_pts, sim_adev.snapshot(sim_pts, OnlineAdev<8, 22>::kMaxPoints));
@@ -298,8 +299,8 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   std::string t;
   appendf(t, "imu-sim report\n==============\n");
   appendf(t, "data: %s, channel %s [%s], %zu samples at %.6g Hz (%.6g s), LSB %.6g %s\n",
-          in.source.c_str(), in.channel.c_str(), unit, data.size(), in.fs_hz,
-          static_cast<double>(data.size()) * ts_s, in.lsb, unit);
+          in.source.c_str(), in.channel.c_str(), unit, n_samples, in.fs_hz,
+          static_cast<double>(n_samples) * ts_s, in.lsb, unit);
   appendf(t, "\n== Error model in the seed's layout (%s)\n\n", model_origin.c_str());
   if (have_gm) {
     t += format_seed_model(gm);
@@ -345,6 +346,10 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
     appendf(t, "%-28s %8zu %14.4e %14.4e %14.4e %8.3f\n", "data", cov.data_windows,
             cov.emp_data[j_end], cov.pred_exact[j_end], cov.pred_seed[j_end],
             cov.emp_data[j_end] / cov.pred_exact[j_end]);
+    if (data.size() < n_samples) {
+      appendf(t, "(data windows from the first %zu of the %zu samples: a bounded prefix)\n",
+              data.size(), n_samples);
+    }
   } else {
     appendf(t, "data: fewer samples than one window (%zu)\n", win);
   }
@@ -579,7 +584,7 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   j += "  \"unit\": " + json_str(unit) + ",\n";
   j += "  \"fs_hz\": " + json_num(in.fs_hz) + ",\n";
   j += "  \"lsb\": " + json_num(in.lsb) + ",\n";
-  j += "  \"n_samples\": " + std::to_string(data.size()) + ",\n";
+  j += "  \"n_samples\": " + std::to_string(n_samples) + ",\n";
   j += "  \"adev_origin\": " + json_str(in.adev_origin) + ",\n";
   j += "  \"adev\": " + adev_json_list(in.adev) + ",\n";
   j += "  \"adev_simulated_model\": " + adev_json_list(sim_rows) + ",\n";

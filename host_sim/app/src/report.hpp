@@ -59,7 +59,10 @@ struct ReportInput {
   std::size_t channel_index = 2;
   double fs_hz = 0.0;
   double lsb = 0.0;
-  const std::vector<double>* data = nullptr;  ///< the channel's samples (covariance check)
+  /// The channel's first samples for the covariance check: the whole record, or a prefix of
+  /// whole windows (run keeps at most 400 windows: memory independent of the record's length).
+  const std::vector<double>* data = nullptr;
+  std::size_t n_samples = 0;       ///< the record's length (0: data->size())
   std::vector<AdevRow> adev;       ///< the node's ADEV of the channel
   std::string adev_origin;         ///< where adev came from (text)
   std::vector<StatGroup> stats;    ///< frame statistics

@@ -29,6 +29,7 @@
 #include "imu/edf.hpp"
 #include "imu/hal/can_socket.hpp"
 #include "imu/hal/gpio_line.hpp"
+#include "imu/mat/mat_reader.hpp"
 #include "imu/node/node.hpp"
 #include "imu/node/node_loop.hpp"
 #include "model_json.hpp"
@@ -390,36 +391,127 @@ bool parse_run(int argc, char** argv, RunOptions& o, std::string& err) {
 /// Which samples are sent. A sample with a non-finite value in any channel sent is not sent (the
 /// protocol has no per-channel validity): inside [lo, hi) it is a gap the node counts missing;
 /// before the first / after the last sendable sample it is not part of the series (the node's
-/// receiver starts at the first sequence number it sees).
+/// receiver starts at the first sequence number it sees). Which samples inside are skipped is
+/// decided again, chunk by chunk, while sending (issue 14: no per-sample vector).
 struct SendPlan {
   std::size_t lo = 0;
   std::size_t hi = 0;
-  std::vector<std::uint8_t> skip;  ///< per sample: 1 = not sent
   std::uint64_t sent = 0;
 };
 
-bool plan_send(const SensorData& sd, SendPlan& plan) {
-  const std::size_t n = sd.n_samples;
-  plan.skip.assign(n, 0);
-  for (const ChannelData& ch : sd.ch) {
-    for (std::size_t k = 0; ch.present && k < n; ++k) {
-      plan.skip[k] = std::isfinite(ch.values[k]) ? plan.skip[k] : std::uint8_t{1};
+/// The present channels of a file read together, chunk by chunk (every present channel has
+/// sd.n_samples samples, checked by load_sensor_meta).
+class Lockstep {
+ public:
+  static constexpr std::size_t kChunk = 8192;
+  bool open(const SensorData& sd, std::string& err) {
+    for (std::size_t c = 0; c < kNumChannels; ++c) {
+      if (!sd.ch[c].present) {
+        continue;
+      }
+      auto cs = mat::ChannelStream::open(sd.path, kChannelNames[c]);
+      if (!cs.ok()) {
+        err = cs.error().message;
+        return false;
+      }
+      stream_[c] = std::make_unique<mat::ChannelStream>(std::move(cs.value()));
+      values_[c].resize(kChunk);
+    }
+    return true;
+  }
+  // The next chunk: n samples of every present channel in values(c). False with err on a read
+  // error or channels of different lengths; n == 0 at the end.
+  bool next(std::size_t& n, std::string& err) {
+    bool first = true;
+    n = 0;
+    for (std::size_t c = 0; c < kNumChannels; ++c) {
+      if (!stream_[c]) {
+        continue;
+      }
+      const auto r = stream_[c]->read(values_[c].data(), kChunk);
+      if (!r.ok()) {
+        err = r.error().message;
+        return false;
+      }
+      if (!first && r.value() != n) {
+        err = "channels of different lengths";
+        return false;
+      }
+      n = r.value();
+      first = false;
+    }
+    return true;
+  }
+  [[nodiscard]] const double* values(std::size_t c) const { return values_[c].data(); }
+  // Sample i of the chunk is finite in every present channel.
+  [[nodiscard]] bool sendable(std::size_t i) const {
+    for (std::size_t c = 0; c < kNumChannels; ++c) {
+      if (stream_[c] && !std::isfinite(values_[c][i])) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+ private:
+  std::unique_ptr<mat::ChannelStream> stream_[kNumChannels];
+  std::vector<double> values_[kNumChannels];
+};
+
+// lo, hi and sent from one pass over the present channels. False with err on a read error.
+bool plan_send(const SensorData& sd, SendPlan& plan, std::string& err) {
+  Lockstep ls;
+  if (!ls.open(sd, err)) {
+    return false;
+  }
+  plan = SendPlan{};
+  bool any = false;
+  std::size_t base = 0;
+  for (std::size_t n = 0; ls.next(n, err) && n > 0; base += n) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (ls.sendable(i)) {
+        plan.lo = any ? plan.lo : base + i;
+        plan.hi = base + i + 1;
+        ++plan.sent;
+        any = true;
+      }
     }
   }
-  plan.lo = 0;
-  plan.hi = n;
-  while (plan.lo < plan.hi && plan.skip[plan.lo] != 0) {
-    ++plan.lo;
-  }
-  while (plan.hi > plan.lo && plan.skip[plan.hi - 1] != 0) {
-    --plan.hi;
-  }
-  plan.sent = 0;
-  for (std::size_t k = plan.lo; k < plan.hi; ++k) {
-    plan.sent += plan.skip[k] == 0 ? 1U : 0U;
-  }
-  return plan.sent > 0;
+  return err.empty();
 }
+
+// The first samples of the report's channel, as many as the covariance check uses (at most
+// kMaxCovWindows windows: a bounded prefix whatever the record's length).
+constexpr std::size_t kMaxCovWindows = 400;
+bool read_cov_prefix(const RunOptions& o, const SensorData& sd, std::vector<double>& prefix,
+                     std::string& err) {
+  const double win = std::round(o.ro.t_avg_s * sd.fs_hz) + std::round(o.ro.t_int_s * sd.fs_hz);
+  const auto want = static_cast<std::size_t>(
+      std::min(static_cast<double>(sd.n_samples), win * static_cast<double>(kMaxCovWindows)));
+  auto cs = mat::ChannelStream::open(sd.path, kChannelNames[o.chan]);
+  if (!cs.ok()) {
+    err = cs.error().message;
+    return false;
+  }
+  prefix.resize(want);
+  std::size_t got = 0;
+  while (got < want) {
+    const auto r = cs.value().read(prefix.data() + got, want - got);
+    if (!r.ok() || r.value() == 0U) {
+      err = r.ok() ? sd.path + ": channel shorter than declared" : r.error().message;
+      return false;
+    }
+    got += r.value();
+  }
+  return true;
+}
+
+// A sink that keeps nothing: stream_counts() for its checks alone.
+class CheckOnly final : public CountSink {
+ public:
+  void push(const std::int32_t* /*counts*/, std::size_t /*n*/) override {}
+  void gap(std::size_t /*n*/) override {}
+};
 
 // The covariance check's windows and simulation in a work and memory budget: a window of at
 // most kMaxSamples, at most kMaxSimSamples samples simulated, at most kMaxSamples doubles of
@@ -447,9 +539,9 @@ bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& e
   return true;
 }
 
-// Read the file, convert every present channel to counts, plan what is sent. Exit status.
-int load_run_data(const RunOptions& o, SensorData& sd, std::vector<std::int32_t> (&counts)[kNumChannels],
-                  SendPlan& plan, std::string& err) {
+// Check every present channel of the file (LSB, finite samples: as to_counts, chunk by chunk)
+// and plan what is sent; nothing of the record is kept (issue 14). Exit status.
+int load_run_data(const RunOptions& o, SensorData& sd, SendPlan& plan, std::string& err) {
   bool want[kNumChannels];
   bool required[kNumChannels];
   double lsb_over[kNumChannels];
@@ -458,18 +550,23 @@ int load_run_data(const RunOptions& o, SensorData& sd, std::vector<std::int32_t>
     required[c] = c == o.chan;
     lsb_over[c] = c == o.chan ? o.lsb_opt : 0.0;
   }
-  if (!load_sensor(o.path, want, required, lsb_over, o.fs_opt, sd, err)) {
+  if (!load_sensor_meta(o.path, want, required, lsb_over, o.fs_opt, sd, err)) {
     return kExitRuntime;
   }
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     if (sd.ch[c].present) {
-      const int st = to_counts(o.path, c, sd.ch[c], counts[c], err);
+      CheckOnly sink;
+      StreamTiming tm;
+      const int st = stream_counts(o.path, c, sd.ch[c], sink, tm, err);
       if (st != kExitOk) {
         return st;
       }
     }
   }
-  if (!plan_send(sd, plan)) {
+  if (!plan_send(sd, plan, err)) {
+    return kExitRuntime;
+  }
+  if (plan.sent == 0) {
     err = o.path + ": no sample has every channel finite (nothing to send; --only-channel sends "
           "one channel)";
     return kExitRuntime;
@@ -664,10 +761,58 @@ struct Sender {
   }
 };
 
-// Send the planned samples (configuration first and every 100 samples). 0 or the status of the
-// failure, already printed.
-int send_samples(const SensorData& sd, const std::vector<std::int32_t> (&counts)[kNumChannels],
-                 const SendPlan& plan, Sender& tx) {
+// The sample with sequence number q of the planned range: the configuration first and every 100
+// samples, then the sample unless it holds a non-finite value; counts[c][i] are its counts.
+int send_one(const SensorData& sd, std::uint64_t q, std::uint64_t span,
+             std::uint64_t period_ns, bool sendable,
+             const std::vector<std::int32_t> (&counts)[kNumChannels], std::size_t i, Sender& tx) {
+  if (q % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
+    hal::encode(tx.cfg, tx.s.layout, tx.cfg_tid++, tx.fr);
+    int st = tx.send_frames(q == 0, q == 0 && tx.o.node_mode != "inproc");
+    if (st == kExitOk && q == 0 && tx.o.push_model) {
+      hal::encode(tx.o.model, false, tx.s.layout, tx.cfg_tid++, tx.fr);  // after the config
+      st = tx.send_frames(false, false);
+    }
+    if (st != kExitOk) {
+      return st;
+    }
+  }
+  if (!sendable) {
+    return kExitOk;  // a non-finite value: not sent, the node counts the sequence number missing
+  }
+  hal::SampleRecord rec{};
+  rec.seq = static_cast<std::uint32_t>(q);
+  rec.t_sensor_ns = q * period_ns;
+  rec.cfg_id = tx.cfg.cfg_id;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    rec.counts[c] = sd.ch[c].present ? counts[c][i] : 0;
+  }
+  if (tx.o.rate == "realtime") {
+    tx.pace(q, sd.fs_hz);
+  }
+  int st = tx.wait_for_credit(q);
+  if (st == kExitOk) {
+    hal::encode(rec, tx.s.layout, tx.fr);
+    st = tx.send_frames(false, false);
+  }
+  if (st != kExitOk) {
+    return st;
+  }
+  if ((q & 63U) == 63U) {
+    tx.link.drain();
+    const double now = now_s();
+    if (!tx.o.quiet && now - tx.t_send0 > 2.0 && now - tx.last_progress >= 1.0) {
+      tx.last_progress = now;
+      print_progress(tx.t_send0, q + 1, span, tx.tel, tx.tty, false);
+    }
+  }
+  return kExitOk;
+}
+
+// Send the planned samples (configuration first and every 100 samples), reading the present
+// channels chunk by chunk and quantising each chunk (issue 14). 0 or the status of the failure,
+// already printed.
+int send_samples(const SensorData& sd, const SendPlan& plan, Sender& tx) {
   tx.cfg.cfg_id = 1;
   tx.cfg.rate_hz = sd.fs_hz;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
@@ -675,46 +820,37 @@ int send_samples(const SensorData& sd, const std::vector<std::int32_t> (&counts)
   }
   const std::uint64_t span = plan.hi - plan.lo;
   const auto period_ns = static_cast<std::uint64_t>(std::llround(1e9 / sd.fs_hz));
-  for (std::size_t k = plan.lo; k < plan.hi; ++k) {
-    const std::uint64_t q = k - plan.lo;  // sequence number
-    if (q % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
-      hal::encode(tx.cfg, tx.s.layout, tx.cfg_tid++, tx.fr);
-      int st = tx.send_frames(q == 0, q == 0 && tx.o.node_mode != "inproc");
-      if (st == kExitOk && q == 0 && tx.o.push_model) {
-        hal::encode(tx.o.model, false, tx.s.layout, tx.cfg_tid++, tx.fr);  // after the config
-        st = tx.send_frames(false, false);
+  Lockstep ls;
+  std::string err;
+  if (!ls.open(sd, err)) {
+    return fail(kCmd, err);
+  }
+  std::vector<std::int32_t> counts[kNumChannels];
+  for (auto& cc : counts) {
+    cc.assign(Lockstep::kChunk, 0);
+  }
+  std::size_t base = 0;
+  for (std::size_t n = 0; base < plan.hi; base += n) {
+    if (!ls.next(n, err) || n == 0U) {
+      return fail(kCmd, err.empty() ? sd.path + ": the record ended early" : err);
+    }
+    for (std::size_t c = 0; c < kNumChannels; ++c) {
+      if (!sd.ch[c].present) {
+        continue;
       }
+      const double* v = ls.values(c);
+      for (std::size_t i = 0; i < n; ++i) {
+        counts[c][i] = std::isfinite(v[i]) ? quantize(v[i], sd.ch[c].lsb).counts : 0;
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t k = base + i;
+      if (k < plan.lo || k >= plan.hi) {
+        continue;
+      }
+      const int st = send_one(sd, k - plan.lo, span, period_ns, ls.sendable(i), counts, i, tx);
       if (st != kExitOk) {
         return st;
-      }
-    }
-    if (plan.skip[k] != 0) {
-      continue;  // a non-finite value: not sent, the node counts the sequence number missing
-    }
-    hal::SampleRecord rec{};
-    rec.seq = static_cast<std::uint32_t>(q);
-    rec.t_sensor_ns = q * period_ns;
-    rec.cfg_id = tx.cfg.cfg_id;
-    for (std::size_t c = 0; c < kNumChannels; ++c) {
-      rec.counts[c] = sd.ch[c].present ? counts[c][k] : 0;
-    }
-    if (tx.o.rate == "realtime") {
-      tx.pace(q, sd.fs_hz);
-    }
-    int st = tx.wait_for_credit(q);
-    if (st == kExitOk) {
-      hal::encode(rec, tx.s.layout, tx.fr);
-      st = tx.send_frames(false, false);
-    }
-    if (st != kExitOk) {
-      return st;
-    }
-    if ((q & 63U) == 63U) {
-      tx.link.drain();
-      const double now = now_s();
-      if (!tx.o.quiet && now - tx.t_send0 > 2.0 && now - tx.last_progress >= 1.0) {
-        tx.last_progress = now;
-        print_progress(tx.t_send0, q + 1, span, tx.tel, tx.tty, false);
       }
     }
   }
@@ -968,11 +1104,14 @@ int cmd_run(int argc, char** argv) {
   }
   const double t0 = now_s();
   SensorData sd;
-  std::vector<std::int32_t> counts[kNumChannels];
   SendPlan plan;
-  const int load_status = load_run_data(o, sd, counts, plan, err);
+  const int load_status = load_run_data(o, sd, plan, err);
   if (load_status != kExitOk) {
     return fail(kCmd, err, load_status);
+  }
+  std::vector<double> cov_prefix;  // the report's covariance check: a bounded prefix
+  if (!read_cov_prefix(o, sd, cov_prefix, err)) {
+    return fail(kCmd, err);
   }
   const double t_load = now_s() - t0;
   const std::uint64_t span = plan.hi - plan.lo;  // sequence numbers 0 .. span - 1
@@ -988,7 +1127,7 @@ int cmd_run(int argc, char** argv) {
   tx.t_send0 = now_s();
   tx.last_progress = tx.t_send0;
   tx.last_credit = tx.t_send0;
-  const int status = send_samples(sd, counts, plan, tx);
+  const int status = send_samples(sd, plan, tx);
   tel.target = span;
   if (tel.processed() >= span) {
     tel.armed = true;  // already reported: the next complete set is the final one
@@ -1021,11 +1160,12 @@ int cmd_run(int argc, char** argv) {
   ri.channel_index = o.chan;
   ri.fs_hz = sd.fs_hz;
   ri.lsb = sd.ch[o.chan].lsb;
-  ri.data = &sd.ch[o.chan].values;
+  ri.data = &cov_prefix;
+  ri.n_samples = sd.n_samples;
   ri.adev_origin = "online ADEV of the firmware node, received as telemetry over " + s.bus_used;
   ri.adev = received_adev(tel, o.chan, sd.fs_hz);
   ri.stats = chain_stats(o, sd, plan, s, link, tel);
-  ri.timing_s = {{"read MAT-file + quantize", t_load},
+  ri.timing_s = {{"check MAT-file channels + plan", t_load},
                  {"send all samples (" + o.rate + ")", t_sent},
                  {"until final telemetry", t_total}};
   ri.notes = report_notes(o, sd, plan, s, tel);

@@ -34,28 +34,39 @@ bool write_all(int fd, const unsigned char* p, std::size_t n) {
 
 }  // namespace
 
-bool write_file_atomic(const std::string& path, const void* data, std::size_t size,
-                       std::string& err) {
+AtomicFileWriter::~AtomicFileWriter() { abort(); }
+
+void AtomicFileWriter::abort() {
+  if (fd_ >= 0) {
+    (void)::close(fd_);
+    fd_ = -1;
+  }
+  if (!tmp_.empty()) {
+    (void)std::remove(tmp_.c_str());
+    tmp_.clear();
+  }
+}
+
+bool AtomicFileWriter::open(const std::string& path, std::string& err) {
+  abort();
+  path_ = path;
   std::string tmpl = path + ".tmp-XXXXXX";
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
-  const int fd = mkstemp(name.data());
-  if (fd < 0) {
+  fd_ = mkstemp(name.data());
+  if (fd_ < 0) {
     err = "cannot write '" + path + "': " + std::strerror(errno);
     return false;
   }
-  const bool wrote = write_all(fd, static_cast<const unsigned char*>(data), size);
-  const int write_errno = errno;
-  // mkstemp creates 0600; outputs are ordinary files (0644 less the umask).
-  const mode_t mask = umask(0);
-  umask(mask);
-  const bool ok = wrote && fchmod(fd, 0666 & ~mask) == 0 && fsync(fd) == 0;
-  const int sync_errno = errno;
-  const bool closed = ::close(fd) == 0;
-  if (!ok || !closed || std::rename(name.data(), path.c_str()) != 0) {
-    const int e = !wrote ? write_errno : (!ok ? sync_errno : errno);
-    (void)std::remove(name.data());
-    err = "cannot write '" + path + "': " + std::strerror(e) + " (nothing written)";
+  tmp_ = name.data();
+  return true;
+}
+
+bool AtomicFileWriter::write(const void* data, std::size_t size, std::string& err) {
+  if (fd_ < 0 || !write_all(fd_, static_cast<const unsigned char*>(data), size)) {
+    const int e = fd_ < 0 ? EBADF : errno;
+    abort();
+    err = "cannot write '" + path_ + "': " + std::strerror(e) + " (nothing written)";
     return false;
   }
   return true;
@@ -84,6 +95,34 @@ bool make_dirs(const std::string& path, std::string& err) {
     return false;
   }
   return true;
+}
+
+bool AtomicFileWriter::commit(std::string& err) {
+  if (fd_ < 0) {
+    err = "cannot write '" + path_ + "': " + std::strerror(EBADF) + " (nothing written)";
+    return false;
+  }
+  // mkstemp creates 0600; outputs are ordinary files (0644 less the umask).
+  const mode_t mask = umask(0);
+  umask(mask);
+  const bool ok = fchmod(fd_, 0666 & ~mask) == 0 && fsync(fd_) == 0;
+  const int sync_errno = errno;
+  const bool closed = ::close(fd_) == 0;
+  fd_ = -1;
+  if (!ok || !closed || std::rename(tmp_.c_str(), path_.c_str()) != 0) {
+    const int e = !ok ? sync_errno : errno;
+    abort();
+    err = "cannot write '" + path_ + "': " + std::strerror(e) + " (nothing written)";
+    return false;
+  }
+  tmp_.clear();
+  return true;
+}
+
+bool write_file_atomic(const std::string& path, const void* data, std::size_t size,
+                       std::string& err) {
+  AtomicFileWriter w;
+  return w.open(path, err) && w.write(data, size, err) && w.commit(err);
 }
 
 }  // namespace imu::cli

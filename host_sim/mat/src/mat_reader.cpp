@@ -1,7 +1,9 @@
 // MAT-file level 5 reader. See imu/mat/mat_reader.hpp for the contract.
 #include "imu/mat/mat_reader.hpp"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
@@ -1019,6 +1021,545 @@ Result<std::string> read_string(const std::string& path, std::string_view name) 
     return f.error();
   }
   return f.value().read_string(name);
+}
+
+// ---- Streaming: ChannelStream, scan_variables, stream_scalar ----
+
+namespace {
+
+// An open file descriptor, closed with its owner.
+class Fd {
+ public:
+  Fd() = default;
+  explicit Fd(int fd) : fd_(fd) {}
+  Fd(Fd&& o) noexcept : fd_(std::exchange(o.fd_, -1)) {}
+  Fd& operator=(Fd&& o) noexcept {
+    if (this != &o) {
+      reset();
+      fd_ = std::exchange(o.fd_, -1);
+    }
+    return *this;
+  }
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+  ~Fd() { reset(); }
+  [[nodiscard]] int get() const { return fd_; }
+
+ private:
+  void reset() {
+    if (fd_ >= 0) {
+      static_cast<void>(::close(fd_));
+      fd_ = -1;
+    }
+  }
+  int fd_ = -1;
+};
+
+// Up to n bytes at `off` (fewer at the end of the file or on a read error: `error` set).
+std::size_t pread_full(int fd, std::uint8_t* dst, std::size_t n, std::uint64_t off, bool& error) {
+  std::size_t got = 0;
+  while (got < n) {
+    const ssize_t r = ::pread(fd, dst + got, n - got, static_cast<off_t>(off + got));
+    if (r < 0 && errno == EINTR) {
+      continue;
+    }
+    if (r <= 0) {
+      error = error || r < 0;
+      break;
+    }
+    got += static_cast<std::size_t>(r);
+  }
+  return got;
+}
+
+// A byte range of a file as a ByteSource (pread: no shared file position).
+class FileRegion final : public ByteSource {
+ public:
+  FileRegion(int fd, std::uint64_t off, std::uint64_t n) : fd_(fd), off_(off), left_(n) {}
+  std::size_t read(std::uint8_t* dst, std::size_t n) override {
+    const auto k = static_cast<std::size_t>(std::min<std::uint64_t>(n, left_));
+    if (k == 0U) {
+      return 0;
+    }
+    const std::size_t got = pread_full(fd_, dst, k, off_, error_);
+    off_ += got;
+    left_ = got < k ? 0U : left_ - got;
+    return got;
+  }
+  [[nodiscard]] bool error() const { return error_; }
+
+ private:
+  int fd_;
+  std::uint64_t off_;
+  std::uint64_t left_;
+  bool error_ = false;
+};
+
+// Read from an InflateStream until n bytes or its end.
+std::size_t read_full(InflateStream& s, std::uint8_t* dst, std::size_t n) {
+  std::size_t got = 0;
+  while (got < n) {
+    const std::size_t k = s.read(dst + got, n - got);
+    if (k == 0U) {
+      break;
+    }
+    got += k;
+  }
+  return got;
+}
+
+// A top-level element found by the walk, with its header parsed and, for the data, where the
+// real part starts: in the file (uncompressed) or in the inflated stream (compressed, whose
+// first `peek.size()` inflated bytes are kept, the stream positioned after them).
+struct Found {
+  Element e;
+  Matrix m;
+  std::vector<std::uint8_t> peek;
+  std::size_t data_at = 0;  // offset of the real part's data in peek (may equal peek.size())
+  std::unique_ptr<FileRegion> src;
+  std::unique_ptr<InflateStream> inf;
+};
+
+// A MAT-file on disk, walked element by element with pread (never read whole).
+struct DiskFile {
+  std::string name;
+  Fd fd;
+  std::uint64_t size = 0;
+  bool swap = false;
+  ReadLimits limits{};
+
+  Status open(const std::string& path, ReadLimits lim) {
+    name = path;
+    limits = lim;
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+      return MatError{path + ": cannot open: " + std::strerror(errno)};
+    }
+    if (!S_ISREG(st.st_mode)) {
+      return MatError{path + ": is " + file_kind(st.st_mode) + ", not a MAT-file"};
+    }
+    fd = Fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));  // NOLINT(cppcoreguidelines-pro-type-vararg)
+    if (fd.get() < 0) {
+      return MatError{path + ": cannot open: " + std::strerror(errno)};
+    }
+    size = static_cast<std::uint64_t>(st.st_size);
+    // The header checks of from_memory() on the first kilobyte (the HDF5 signature may sit at
+    // byte 512).
+    std::vector<std::uint8_t> head(static_cast<std::size_t>(std::min<std::uint64_t>(size, 1024U)));
+    bool err = false;
+    head.resize(pread_full(fd.get(), head.data(), head.size(), 0, err));
+    if (err) {
+      return MatError{path + ": read error"};
+    }
+    Result<MatFile> f = MatFile::from_memory(path, head.data(), head.size(), lim);
+    if (!f.ok()) {
+      return f.error();
+    }
+    swap = f.value().big_endian();
+    return Status{};
+  }
+
+  // The element at `off`: its tag (e), and for a matrix its header (m) with the bytes peeked.
+  Status element(std::uint64_t off, Found& f) const {
+    f = Found{};
+    Element& e = f.e;
+    e.offset = static_cast<std::size_t>(off);
+    if (size - off < 8U) {
+      return MatError{name + ": truncated: " + std::to_string(size - off) +
+                      " stray bytes at offset " + std::to_string(off) + " (an element tag is 8)"};
+    }
+    std::array<std::uint8_t, 8> tag{};
+    bool err = false;
+    if (pread_full(fd.get(), tag.data(), 8, off, err) != 8U) {
+      return MatError{name + ": read error at offset " + std::to_string(off)};
+    }
+    e.type = load_u32(tag.data(), swap);
+    const std::uint64_t bytes = load_u32(tag.data() + 4, swap);
+    e.payload_off = static_cast<std::size_t>(off + 8U);
+    e.payload_bytes = static_cast<std::size_t>(bytes);
+    const std::uint64_t avail = size - off - 8U;
+    if (bytes > avail) {
+      std::vector<std::uint8_t> pre(static_cast<std::size_t>(std::min<std::uint64_t>(avail, kPeekBytes)));
+      pre.resize(pread_full(fd.get(), pre.data(), pre.size(), off + 8U, err));
+      const std::string var = name_from_prefix(pre.data(), pre.size(), e.type, swap);
+      const std::string who = var.empty() ? std::string() : "variable '" + var + "' ";
+      return MatError{name + ": truncated: " + who + "element at offset " + std::to_string(off) +
+                      " declares " + std::to_string(bytes) + " bytes, only " +
+                      std::to_string(avail) + " remain"};
+    }
+    std::uint64_t padded = bytes;
+    if (e.type != kMiCompressed) {
+      padded += (8U - bytes % 8U) % 8U;
+    }
+    e.next = static_cast<std::size_t>(padded > avail ? size : off + 8U + padded);
+    if (e.type == kMiMatrix) {
+      return peek_plain(f);
+    }
+    if (e.type == kMiCompressed) {
+      return peek_compressed(f);
+    }
+    return Status{};
+  }
+
+  Status peek_plain(Found& f) const {
+    const std::string where = name + ": element at offset " + std::to_string(f.e.offset) + ": ";
+    std::string problem;
+    Parse r = Parse::need_more;
+    for (const std::size_t cap : {kPeekBytes, kLongHeaderBytes}) {
+      const std::size_t n = std::min(cap, f.e.payload_bytes);
+      f.peek.resize(n);
+      bool err = false;
+      if (pread_full(fd.get(), f.peek.data(), n, f.e.payload_off, err) != n) {
+        return MatError{name + ": read error at offset " + std::to_string(f.e.payload_off)};
+      }
+      // As peek_header (partial: a prefix of the payload).
+      r = parse_matrix(f.peek.data(), n, swap, true, f.m, problem);
+      if (r != Parse::need_more || n == f.e.payload_bytes) {
+        break;
+      }
+    }
+    if (r != Parse::ok) {
+      return MatError{where + (r == Parse::need_more ? "matrix header is truncated" : problem)};
+    }
+    f.data_at = f.m.has_data ? static_cast<std::size_t>(f.m.data - f.peek.data()) : 0U;
+    return Status{};
+  }
+
+  Status peek_compressed(Found& f) const {
+    const std::string where = name + ": element at offset " + std::to_string(f.e.offset) + ": ";
+    f.src = std::make_unique<FileRegion>(fd.get(), f.e.payload_off, f.e.payload_bytes);
+    f.inf = std::make_unique<InflateStream>(*f.src, true);
+    std::string problem;
+    std::size_t cap = std::min(kPeekBytes, max_inflated_size(f.e.payload_bytes));
+    f.peek.resize(cap);
+    std::size_t got = read_full(*f.inf, f.peek.data(), cap);
+    f.peek.resize(got);
+    for (int attempt = 0; attempt < 2; ++attempt) {
+      if (got < cap && f.inf->status() != InflateStatus::ok) {
+        std::string subject = where;  // name the variable if the bytes before the fault show it
+        if (got >= 8U && load_u32(f.peek.data(), swap) == kMiMatrix) {
+          Matrix partial_m;
+          std::string ignored;
+          if (parse_matrix(f.peek.data() + 8, got - 8U, swap, true, partial_m, ignored) ==
+                  Parse::ok &&
+              !partial_m.name.empty()) {
+            subject = name + ": variable '" + partial_m.name + "': ";
+          }
+        }
+        return MatError{subject + "corrupt zlib stream (" + describe(f.inf->status()) + ")"};
+      }
+      if (got < 8U) {
+        return MatError{where + "compressed data holds " + std::to_string(got) +
+                        " bytes, not a matrix"};
+      }
+      const std::uint32_t inner = load_u32(f.peek.data(), swap);
+      if (inner != kMiMatrix) {
+        return MatError{where + "compressed data holds a " + type_name(inner) +
+                        " element, not miMATRIX"};
+      }
+      const std::size_t inner_bytes = load_u32(f.peek.data() + 4, swap);
+      const bool partial = got - 8U < inner_bytes;
+      const std::size_t view = std::min(inner_bytes, got - 8U);
+      const Parse r = parse_matrix(f.peek.data() + 8, view, swap, partial, f.m, problem);
+      if (r == Parse::ok) {
+        f.data_at = f.m.has_data ? static_cast<std::size_t>(f.m.data - f.peek.data()) : 0U;
+        return Status{};
+      }
+      if (r == Parse::corrupt || attempt == 1 || got < cap) {
+        return MatError{where + (r == Parse::need_more ? "matrix header is truncated" : problem)};
+      }
+      // A header longer than the peek: kLongHeaderBytes at most.
+      const std::size_t more = std::min(kLongHeaderBytes, max_inflated_size(f.e.payload_bytes));
+      f.peek.resize(more);
+      got += read_full(*f.inf, f.peek.data() + got, more - got);
+      f.peek.resize(got);
+      cap = more;
+    }
+    return MatError{where + "matrix header is truncated"};
+  }
+};
+
+constexpr std::size_t kConvertBytes = std::size_t{1} << 16U;
+
+}  // namespace
+
+struct ChannelStream::Impl {
+  DiskFile file;
+  Found f;
+  VariableInfo info;
+  std::string where;
+  std::size_t unit = 0;
+  std::uint64_t count = 0;         // samples of the column
+  std::uint64_t delivered = 0;     // samples handed out
+  std::uint64_t skip_bytes = 0;    // bytes of the columns before this one, not yet skipped
+  std::size_t peek_pos = 0;        // next unread byte of f.peek (data bytes)
+  std::uint64_t inner_bytes = 0;   // compressed: declared miMATRIX payload size
+  std::uint64_t file_pos = 0;      // uncompressed: file offset of the next data byte
+  bool checked = false;
+  std::vector<std::uint8_t> buf;
+
+  // n data bytes into dst, in order: what the peek holds after the header, then the stream.
+  Status pull(std::uint8_t* dst, std::size_t n) {
+    std::size_t got = 0;
+    if (peek_pos < f.peek.size()) {
+      got = std::min(n, f.peek.size() - peek_pos);
+      std::memcpy(dst, f.peek.data() + peek_pos, got);
+      peek_pos += got;
+    }
+    if (got == n) {
+      return Status{};
+    }
+    if (f.inf) {
+      got += read_full(*f.inf, dst + got, n - got);
+      if (got < n) {
+        return stream_error();
+      }
+      return Status{};
+    }
+    bool err = false;
+    const std::size_t k = pread_full(file.fd.get(), dst + got, n - got, file_pos, err);
+    file_pos += k;
+    if (got + k < n) {
+      return MatError{where + (err ? "read error" : "truncated: the file ended inside the data")};
+    }
+    return Status{};
+  }
+
+  Status stream_error() const {
+    if (f.src->error()) {
+      return MatError{where + "read error"};
+    }
+    if (f.inf->status() != InflateStatus::ok) {
+      return MatError{where + "corrupt zlib stream (" + describe(f.inf->status()) + ")"};
+    }
+    return MatError{where + "truncated: zlib stream inflates to " +
+                    std::to_string(f.inf->total_out()) + " bytes, the matrix declares " +
+                    std::to_string(inner_bytes + 8U)};
+  }
+
+  Status skip(std::uint64_t n) {
+    while (n > 0U) {
+      const auto k = static_cast<std::size_t>(std::min<std::uint64_t>(n, buf.size()));
+      Status st = pull(buf.data(), k);
+      if (!st.ok()) {
+        return st;
+      }
+      n -= k;
+    }
+    return Status{};
+  }
+
+  // After the last sample: a compressed variable is inflated to its end (the columns after
+  // this one, padding) and checked: no more than the declared size, Adler-32.
+  Status finish() {
+    checked = true;
+    if (!f.inf) {
+      return Status{};
+    }
+    const std::uint64_t want = inner_bytes + 8U;
+    while (f.inf->total_out() <= want && f.inf->read(buf.data(), buf.size()) > 0U) {
+    }
+    if (f.inf->total_out() > want) {  // (the peek may have read past the end already)
+      return MatError{where + "corrupt zlib stream (" + describe(InflateStatus::output_limit) +
+                      ")"};
+    }
+    if (f.inf->status() != InflateStatus::ok || f.src->error()) {
+      return stream_error();
+    }
+    if (f.inf->total_out() < want) {
+      return stream_error();
+    }
+    return Status{};
+  }
+};
+
+ChannelStream::ChannelStream(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+ChannelStream::ChannelStream(ChannelStream&& other) noexcept = default;
+ChannelStream& ChannelStream::operator=(ChannelStream&& other) noexcept = default;
+ChannelStream::~ChannelStream() = default;
+std::uint64_t ChannelStream::size() const { return impl_->count; }
+const VariableInfo& ChannelStream::info() const { return impl_->info; }
+
+namespace {
+
+VariableInfo info_of(const Found& f) {
+  VariableInfo v;
+  v.name = f.m.name;
+  v.class_name = class_name(f.m.cls, f.m.logical);
+  v.rows = f.m.rows;
+  v.cols = f.m.cols;
+  v.n_dims = static_cast<std::uint32_t>(f.m.dims.size());
+  v.complex = f.m.complex;
+  v.compressed = f.e.type == kMiCompressed;
+  v.file_offset = f.e.offset;
+  v.file_bytes = f.e.next - f.e.offset;
+  return v;
+}
+
+}  // namespace
+
+Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_view name,
+                                          std::size_t column, ReadLimits limits) {
+  auto impl = std::make_unique<Impl>();
+  Impl& s = *impl;
+  Status st = s.file.open(path, limits);
+  if (!st.ok()) {
+    return st.error();
+  }
+  std::string seen;
+  std::uint64_t off = kHeaderBytes;
+  bool found = false;
+  while (off < s.file.size) {
+    st = s.file.element(off, s.f);
+    if (!st.ok()) {
+      return st.error();
+    }
+    if ((s.f.e.type == kMiMatrix || s.f.e.type == kMiCompressed) && !s.f.m.name.empty()) {
+      if (s.f.m.name == name) {
+        found = true;
+        break;
+      }
+      seen += (seen.empty() ? "" : ", ") + s.f.m.name;
+    }
+    off = s.f.e.next;
+  }
+  if (!found) {
+    return MatError{path + ": variable '" + std::string(name) + "' not found; variables: " +
+                    (seen.empty() ? std::string("(none)") : seen)};
+  }
+  const Matrix& m = s.f.m;
+  s.where = path + ": variable '" + std::string(name) + "': ";
+  const std::string& where = s.where;
+  if (!m.has_data || m.cls == kMxChar) {
+    return MatError{where + "is a " + class_name(m.cls, m.logical) +
+                    " array, not numeric (double, single, int8..uint64)"};
+  }
+  st = check_data(where, m, numeric_size(m.data_type));
+  if (!st.ok()) {
+    return st.error();
+  }
+  if (s.f.e.type == kMiCompressed) {
+    s.inner_bytes = load_u32(s.f.peek.data() + 4, s.file.swap);
+    const std::size_t limit = max_inflated_size(s.f.e.payload_bytes);
+    if (s.inner_bytes > limit - 8U) {
+      return MatError{where + "corrupt: declares " + std::to_string(s.inner_bytes) +
+                      " bytes, more than " + std::to_string(s.f.e.payload_bytes) +
+                      " compressed bytes can hold"};
+    }
+    if (s.inner_bytes > limits.max_stream_variable_bytes) {
+      return MatError{where + "declares " + std::to_string(s.inner_bytes) +
+                      " bytes inflated, more than the reader's budget of " +
+                      std::to_string(limits.max_stream_variable_bytes) + " bytes per variable"};
+    }
+  }
+  if (m.n_elems == 0U) {
+    return MatError{where + "is empty (" + dims_text(m.dims) + ")"};
+  }
+  std::uint64_t first = 0;
+  s.count = m.n_elems;
+  if (m.rows == 1U || m.cols == 1U) {
+    if (column != 0U) {
+      return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
+                      std::to_string(column) + " does not exist"};
+    }
+  } else {
+    if (column >= m.cols) {
+      return MatError{where + "has " + std::to_string(m.cols) + " columns (" + dims_text(m.dims) +
+                      "): column " + std::to_string(column) + " does not exist"};
+    }
+    first = static_cast<std::uint64_t>(column) * m.rows;
+    s.count = m.rows;
+  }
+  s.unit = numeric_size(m.data_type);
+  s.skip_bytes = first * s.unit;
+  s.peek_pos = s.f.data_at;
+  if (!s.f.inf) {
+    // Uncompressed: the data follow in the file; the peek holds their first bytes.
+    s.file_pos = s.f.e.payload_off + s.f.peek.size();
+  }
+  s.info = info_of(s.f);
+  s.buf.resize(kConvertBytes);
+  return ChannelStream(std::move(impl));
+}
+
+Result<std::size_t> ChannelStream::read(double* out, std::size_t n) {
+  Impl& s = *impl_;
+  if (s.skip_bytes > 0U) {
+    Status st = s.skip(s.skip_bytes);
+    if (!st.ok()) {
+      return st.error();
+    }
+    s.skip_bytes = 0;
+  }
+  std::size_t done = 0;
+  while (done < n && s.delivered < s.count) {
+    const auto k = static_cast<std::size_t>(std::min<std::uint64_t>(
+        {static_cast<std::uint64_t>(n - done), s.count - s.delivered, s.buf.size() / s.unit}));
+    if (s.f.m.data_type == kMiDouble && !s.file.swap && host_little_endian()) {
+      // The file's bytes are host doubles: inflate (or read) them straight into `out`.
+      Status st = s.pull(static_cast<std::uint8_t*>(static_cast<void*>(out + done)), k * s.unit);
+      if (!st.ok()) {
+        return st.error();
+      }
+    } else {
+      Status st = s.pull(s.buf.data(), k * s.unit);
+      if (!st.ok()) {
+        return st.error();
+      }
+      convert(s.buf.data(), s.f.m.data_type, k, s.file.swap, out + done);
+    }
+    done += k;
+    s.delivered += k;
+  }
+  if (s.delivered == s.count && !s.checked && done < n) {
+    // The caller asked past the end: check the rest of the variable before saying "end".
+    Status st = s.finish();
+    if (!st.ok()) {
+      return st.error();
+    }
+  }
+  return done;
+}
+
+Result<std::vector<VariableInfo>> scan_variables(const std::string& path, ReadLimits limits) {
+  DiskFile file;
+  Status st = file.open(path, limits);
+  if (!st.ok()) {
+    return st.error();
+  }
+  std::vector<VariableInfo> vars;
+  std::uint64_t off = kHeaderBytes;
+  Found f;
+  while (off < file.size) {
+    st = file.element(off, f);
+    if (!st.ok()) {
+      return st.error();
+    }
+    if ((f.e.type == kMiMatrix || f.e.type == kMiCompressed) && !f.m.name.empty()) {
+      vars.push_back(info_of(f));
+    }
+    off = f.e.next;
+  }
+  return vars;
+}
+
+Result<double> stream_scalar(const std::string& path, std::string_view name, ReadLimits limits) {
+  Result<ChannelStream> cs = ChannelStream::open(path, name, 0, limits);
+  if (!cs.ok()) {
+    return cs.error();
+  }
+  ChannelStream& s = cs.value();
+  if (s.size() != 1U) {
+    return MatError{path + ": variable '" + std::string(name) + "': is " +
+                    std::to_string(s.info().rows) + "x" + std::to_string(s.info().cols) +
+                    ", not a scalar"};
+  }
+  std::array<double, 2> v{};
+  Result<std::size_t> r = s.read(v.data(), v.size());  // 2: asks past the end, so it is checked
+  if (!r.ok()) {
+    return r.error();
+  }
+  return v[0];
 }
 
 }  // namespace imu::mat

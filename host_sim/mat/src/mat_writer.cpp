@@ -164,6 +164,37 @@ Status MatWriter::add_matrix(std::string_view name, std::size_t rows, std::size_
   return Status{};
 }
 
+Result<std::vector<std::uint8_t>> MatWriter::column_start(std::string_view name, std::uint64_t n) {
+  Status st = check_name(name);
+  if (!st.ok()) {
+    return st.error();
+  }
+  if (options_.compress) {
+    return MatError{"variable '" + std::string(name) + "': a column in pieces is written "
+                    "uncompressed only"};
+  }
+  if (!fits_int32(static_cast<std::size_t>(n)) || n > kMaxElement / 8U) {
+    return MatError{"variable '" + std::string(name) + "': too large for a MAT v5 element"};
+  }
+  std::vector<std::uint8_t> b =
+      matrix_element(kMxDouble, name, static_cast<std::size_t>(n), 1, kMiDouble, nullptr, 0);
+  const auto data_bytes = static_cast<std::uint32_t>(8U * n);
+  set_u32(b, b.size() - 4U, data_bytes);  // the miDOUBLE tag's size: the data follow
+  set_u32(b, 4U, static_cast<std::uint32_t>(b.size() - 8U) + data_bytes);
+  names_.emplace_back(name);
+  return b;
+}
+
+void MatWriter::encode_doubles(const double* values, std::size_t n, std::uint8_t* out) {
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &values[i], 8);
+    for (unsigned k = 0; k < 8U; ++k) {
+      out[8U * i + k] = static_cast<std::uint8_t>((bits >> (8U * k)) & 0xFFU);  // little-endian
+    }
+  }
+}
+
 Status MatWriter::add_column(std::string_view name, const std::vector<double>& values) {
   return add_matrix(name, values.size(), 1, values);
 }

@@ -45,6 +45,16 @@ constexpr std::size_t kDistTableSize = (std::size_t{1} << kDistBits) + 512U;
 // The fast loop runs while this much output room is left: the longest match (258) plus the
 // overshoot of its chunked copy (< 32), plus two literals.
 constexpr std::size_t kFastRoom = 320U;
+// Streaming (InflateStream): the output buffer is the 32 KiB window plus one chunk; decoding
+// stops (at a symbol boundary) when less than the longest match is left, the consumer takes the
+// chunk, and the last 32 KiB slide to the front. The input buffer is refilled from the source
+// whenever less than kInMargin bytes are left at a symbol or block boundary: more than the
+// longest dynamic block header (< 600 bytes) or symbol, so decoding never stops inside one.
+constexpr std::size_t kInflateWindow = 32768U;
+constexpr std::size_t kStreamChunk = std::size_t{1} << 16U;
+constexpr std::size_t kStreamRoom = 258U;
+constexpr std::size_t kInMargin = 1024U;
+constexpr std::size_t kInBuffer = std::size_t{1} << 16U;
 
 // Length symbols 257..285: base length and extra bits (RFC 1951 3.2.5).
 constexpr std::array<std::uint16_t, 29> kLenBase = {3,  4,  5,  6,  7,  8,  9,  10, 11, 13,
@@ -233,35 +243,123 @@ class Inflater {
     out_.resize(cap_);
   }
 
-  // Decode blocks until the final one. Returns ok or the first error.
+  // Streaming: compressed bytes from `src` through `in_buf` (kInBuffer bytes), output into
+  // `out` (kInflateWindow + kStreamChunk bytes, never grown). Decode with pump(), take bytes
+  // from pending(), then slide().
+  Inflater(ByteSource& src, std::vector<std::uint8_t>& in_buf, std::vector<std::uint8_t>& out)
+      : Inflater(in_buf.data(), 0, kInflateWindow + kStreamChunk, InflateMode::whole, out,
+                 kInflateWindow + kStreamChunk) {
+    src_ = &src;
+    in_buf_ = &in_buf;
+    src_eof_ = false;
+  }
+
+  // Whole mode: decode blocks until the final one (or, in prefix mode, until max_out bytes).
   [[nodiscard]] InflateStatus run() {
-    bool last = false;
-    while (!last && !full_) {
-      if (!need(3)) {
-        return InflateStatus::truncated_input;
-      }
-      last = bits(1) != 0U;
-      const unsigned type = bits(2);
-      InflateStatus st = InflateStatus::ok;
-      switch (type) {
-        case 0:
-          st = stored();
-          break;
-        case 1:
-          st = fixed();
-          break;
-        case 2:
-          st = dynamic();
-          break;
-        default:
-          st = InflateStatus::bad_block_type;
-          break;
-      }
+    for (;;) {
+      const InflateStatus st = step();
       if (st != InflateStatus::ok) {
         return st;
       }
+      if (phase_ == Phase::done || full_) {
+        return InflateStatus::ok;
+      }
     }
-    return InflateStatus::ok;
+  }
+
+  // Streaming: decode until about `want` bytes more were produced (the output buffer has less
+  // than kStreamRoom bytes of room below that mark) or the final block ended. Returns ok or the
+  // first error. A small `want` (a header peek) decodes little more than asked for.
+  [[nodiscard]] InflateStatus pump(std::size_t want) {
+    // The decoder's bound is cap_: lower it to the mark (never above the buffer).
+    cap_ = std::min(out_.size(), n_out_ + std::max(want, kFastRoom) + kStreamRoom);
+    suspended_ = false;
+    for (;;) {
+      const InflateStatus st = step();
+      if (st != InflateStatus::ok) {
+        return st;
+      }
+      if (suspended_ || phase_ == Phase::done) {
+        return InflateStatus::ok;
+      }
+    }
+  }
+  [[nodiscard]] bool deflate_done() const { return phase_ == Phase::done; }
+  [[nodiscard]] bool needs_slide() const { return out_.size() - n_out_ < kStreamRoom + kFastRoom; }
+  // Output produced and not yet taken: [delivered_, n_out_).
+  [[nodiscard]] const std::uint8_t* pending(std::size_t& n) const {
+    n = n_out_ - delivered_;
+    return out_.data() + delivered_;
+  }
+  void take(std::size_t n) { delivered_ += n; }
+  // Keep the last kInflateWindow bytes (the most a distance reaches back). Precondition: all
+  // taken.
+  void slide() {
+    if (n_out_ > kInflateWindow) {
+      std::memmove(out_.data(), out_.data() + (n_out_ - kInflateWindow), kInflateWindow);
+      n_out_ = kInflateWindow;
+      delivered_ = kInflateWindow;
+    }
+  }
+  // n byte-aligned input bytes (the zlib header and trailer), partial byte bits dropped first.
+  [[nodiscard]] bool read_aligned(std::uint8_t* dst, std::size_t n) {
+    pos_ = align_and_position();
+    bitbuf_ = 0;
+    bitcnt_ = 0;
+    fill_input();
+    if (in_size_ - pos_ < n) {
+      return false;
+    }
+    std::memcpy(dst, in_ + pos_, n);
+    pos_ += n;
+    return true;
+  }
+
+  // One step of the block state machine.
+  [[nodiscard]] InflateStatus step() {
+    InflateStatus st = InflateStatus::ok;
+    switch (phase_) {
+      case Phase::block_start: {
+        if (last_) {
+          phase_ = Phase::done;
+          return InflateStatus::ok;
+        }
+        fill_input();
+        if (!need(3)) {
+          return InflateStatus::truncated_input;
+        }
+        last_ = bits(1) != 0U;
+        const unsigned type = bits(2);
+        if (type == 0U) {
+          st = stored_header();
+          phase_ = Phase::stored;
+        } else if (type == 1U) {
+          build_fixed();
+          phase_ = Phase::codes_fixed;
+        } else if (type == 2U) {
+          st = dynamic();
+          phase_ = Phase::codes_dynamic;
+        } else {
+          st = InflateStatus::bad_block_type;
+        }
+        return st;
+      }
+      case Phase::stored:
+        st = stored_copy();
+        break;
+      case Phase::codes_fixed:
+        st = codes(fixed_lit_, fixed_dist_);
+        break;
+      case Phase::codes_dynamic:
+        st = codes(lit_, dist_);
+        break;
+      case Phase::done:
+        return InflateStatus::ok;
+    }
+    if (st == InflateStatus::ok && !suspended_ && !full_) {
+      phase_ = Phase::block_start;  // the block ended
+    }
+    return st;
   }
 
   // Drop the bits of a partial byte; return the index of the next unread input byte.
@@ -288,6 +386,28 @@ class Inflater {
     while (bitcnt_ <= 56U && pos_ < in_size_) {
       bitbuf_ |= static_cast<std::uint64_t>(in_[pos_++]) << bitcnt_;
       bitcnt_ += 8U;
+    }
+  }
+  // Streaming: when less than kInMargin input bytes are left, move the rest (and the bytes still
+  // in the bit buffer) to the front and read from the source until the buffer is full or the
+  // source ends. Whole mode: nothing (src_eof_).
+  void fill_input() {
+    if (src_eof_ || in_size_ - pos_ >= kInMargin) {
+      return;
+    }
+    std::vector<std::uint8_t>& b = *in_buf_;
+    const std::size_t from = pos_ - bitcnt_ / 8U;  // whole bytes in bitbuf_ are not yet used
+    const std::size_t keep = in_size_ - from;
+    std::memmove(b.data(), b.data() + from, keep);
+    pos_ -= from;
+    in_size_ = keep;
+    while (in_size_ < b.size()) {
+      const std::size_t got = src_->read(b.data() + in_size_, b.size() - in_size_);
+      if (got == 0U) {
+        src_eof_ = true;
+        break;
+      }
+      in_size_ += std::min(got, b.size() - in_size_);
     }
   }
   [[nodiscard]] bool need(unsigned n) {
@@ -347,11 +467,11 @@ class Inflater {
     return false;
   }
 
-  InflateStatus stored() {
-    const std::size_t p = align_and_position();
-    pos_ = p;
+  InflateStatus stored_header() {
+    pos_ = align_and_position();
     bitbuf_ = 0;
     bitcnt_ = 0;
+    fill_input();
     if (in_size_ - pos_ < 4U) {
       return InflateStatus::truncated_input;
     }
@@ -361,26 +481,49 @@ class Inflater {
     if (len != (~nlen & 0xFFFFU)) {
       return InflateStatus::bad_stored_length;
     }
-    if (in_size_ - pos_ < len) {
+    if (src_eof_ && in_size_ - pos_ < len) {
       return InflateStatus::truncated_input;
     }
-    std::size_t n = len;
-    if (!room(n)) {
-      if (mode_ == InflateMode::whole) {
-        return InflateStatus::output_limit;
-      }
-      n = cap_ - n_out_;
-      full_ = true;
-    }
-    if (n > 0U) {
-      std::memcpy(out_.data() + n_out_, in_ + pos_, n);
-    }
-    n_out_ += n;
-    pos_ += len;
+    stored_left_ = len;
     return InflateStatus::ok;
   }
 
-  InflateStatus fixed() {
+  // Copy the stored block's bytes: whole mode at once (growing the output), streaming as far
+  // as the input buffer and the output room go.
+  InflateStatus stored_copy() {
+    while (stored_left_ > 0U) {
+      fill_input();
+      std::size_t n = std::min(stored_left_, in_size_ - pos_);
+      if (n == 0U) {
+        return InflateStatus::truncated_input;
+      }
+      if (src_ != nullptr) {
+        n = std::min(n, cap_ - n_out_);
+        if (n == 0U) {
+          suspended_ = true;
+          return InflateStatus::ok;
+        }
+      } else if (!room(n)) {
+        if (mode_ == InflateMode::whole) {
+          return InflateStatus::output_limit;
+        }
+        n = cap_ - n_out_;
+        full_ = true;
+      }
+      if (n > 0U) {
+        std::memcpy(out_.data() + n_out_, in_ + pos_, n);
+      }
+      n_out_ += n;
+      pos_ += n;
+      stored_left_ -= n;
+      if (full_) {
+        return InflateStatus::ok;
+      }
+    }
+    return InflateStatus::ok;
+  }
+
+  void build_fixed() {
     if (!fixed_built_) {
       std::array<std::uint8_t, kMaxLitLen> l{};
       std::fill(l.begin(), l.begin() + 144, std::uint8_t{8});
@@ -394,7 +537,6 @@ class Inflater {
       static_cast<void>(build(fixed_dist_, kDistBits, Alphabet::distance, d.data(), d.size()));
       fixed_built_ = true;
     }
-    return codes(fixed_lit_, fixed_dist_);
   }
 
   InflateStatus dynamic() {
@@ -466,7 +608,7 @@ class Inflater {
         !build(dist_, kDistBits, Alphabet::distance, lengths.data() + nlen, ndist)) {
       return InflateStatus::bad_code_lengths;
     }
-    return codes(lit_, dist_);
+    return InflateStatus::ok;
   }
 
   // Fast loop, while at least 8 input bytes remain (for the refill) and kFastRoom bytes of
@@ -478,10 +620,13 @@ class Inflater {
   // a distance before the start of the output) returns false with the state at the start of
   // that symbol: the careful path decodes it again and reports the error as it always did.
   bool fast(const LitTable& lit, const DistTable& dist) {
-    if (in_size_ - pos_ < 8U || cap_ - n_out_ < kFastRoom) {
+    // Streaming with more input to come: stop kInMargin bytes before the end of the buffer,
+    // so that codes() refills it between symbols.
+    const std::size_t reserve = src_eof_ ? 8U : kInMargin;
+    if (in_size_ - pos_ < reserve || cap_ - n_out_ < kFastRoom) {
       return false;
     }
-    const std::size_t in_last = in_size_ - 8U;  // last position an 8-byte load may start at
+    const std::size_t in_last = in_size_ - reserve;  // last position an 8-byte load may start at
     const std::size_t out_last = cap_ - kFastRoom;
     std::uint8_t* const out = out_.data();
     std::uint64_t bb = bitbuf_;
@@ -586,7 +731,18 @@ class Inflater {
 
   InflateStatus codes(const LitTable& lit, const DistTable& dist) {
     for (;;) {
+      if (src_ != nullptr) {
+        fill_input();
+        if (cap_ - n_out_ < kStreamRoom) {
+          suspended_ = true;  // the consumer takes the chunk, slide() makes room
+          return InflateStatus::ok;
+        }
+      }
       if (fast(lit, dist)) {
+        return InflateStatus::ok;
+      }
+      if (src_ != nullptr && cap_ - n_out_ < kStreamRoom) {
+        suspended_ = true;  // the fast loop left less room than the longest match
         return InflateStatus::ok;
       }
       // Careful path: one symbol with every check (near the end of the input or of the
@@ -663,6 +819,16 @@ class Inflater {
   std::size_t n_out_ = 0;
   bool full_ = false;
   bool fixed_built_ = false;
+  enum class Phase : std::uint8_t { block_start, stored, codes_fixed, codes_dynamic, done };
+  Phase phase_ = Phase::block_start;
+  bool last_ = false;             // the current block is the final one
+  std::size_t stored_left_ = 0;   // bytes of the current stored block not yet copied
+  // Streaming only:
+  ByteSource* src_ = nullptr;
+  std::vector<std::uint8_t>* in_buf_ = nullptr;
+  bool src_eof_ = true;           // whole mode: all input is in in_
+  bool suspended_ = false;        // pump() stopped for output room
+  std::size_t delivered_ = 0;     // output bytes the consumer took
   LitTable lit_{};
   DistTable dist_{};
   LitTable fixed_lit_{};
@@ -722,6 +888,119 @@ std::uint32_t adler32(const std::uint8_t* data, std::size_t size, std::uint32_t 
   }
   return (b << 16U) | a;
 }
+
+struct InflateStream::Impl {
+  Impl(ByteSource& src, bool zlib_wrapper)
+      : in_buf(kInBuffer), inf(src, in_buf, out), zlib(zlib_wrapper) {}
+  std::vector<std::uint8_t> in_buf;
+  std::vector<std::uint8_t> out;
+  Inflater inf;
+  bool zlib;
+  bool started = false;
+  bool failed = false;
+  bool checked = false;  // the trailer was read (and, once all bytes are out, compared)
+  InflateStatus status = InflateStatus::ok;
+  std::uint32_t adler = 1U;
+  std::uint32_t want_adler = 0U;
+  std::uint64_t total = 0;
+
+  void fail(InflateStatus st) {
+    failed = true;
+    status = st;
+  }
+  void start() {
+    started = true;
+    if (!zlib) {
+      return;
+    }
+    std::array<std::uint8_t, 2> h{};
+    if (!inf.read_aligned(h.data(), 2)) {
+      fail(InflateStatus::truncated_input);
+      return;
+    }
+    const unsigned cmf = h[0];
+    const unsigned flg = h[1];
+    if ((cmf & 0x0FU) != 8U || (cmf >> 4U) > 7U || ((cmf << 8U) | flg) % 31U != 0U) {
+      fail(InflateStatus::bad_zlib_header);
+    } else if ((flg & 0x20U) != 0U) {
+      fail(InflateStatus::preset_dictionary);
+    }
+  }
+  // Decode more output, about `want` bytes (after the consumer took all there was). False when
+  // nothing more comes.
+  bool produce(std::size_t want) {
+    if (failed || inf.deflate_done()) {
+      return false;
+    }
+    if (!started) {
+      start();
+      if (failed) {
+        return false;
+      }
+    }
+    if (inf.needs_slide()) {
+      inf.slide();
+    }
+    const InflateStatus st = inf.pump(want);
+    if (st != InflateStatus::ok) {
+      fail(st);
+      return false;
+    }
+    if (inf.deflate_done() && zlib) {
+      std::array<std::uint8_t, 4> t{};
+      if (!inf.read_aligned(t.data(), 4)) {
+        fail(InflateStatus::truncated_input);
+        return false;
+      }
+      want_adler = (static_cast<std::uint32_t>(t[0]) << 24U) |
+                   (static_cast<std::uint32_t>(t[1]) << 16U) |
+                   (static_cast<std::uint32_t>(t[2]) << 8U) | static_cast<std::uint32_t>(t[3]);
+    }
+    return true;
+  }
+};
+
+InflateStream::InflateStream(ByteSource& src, bool zlib_wrapper)
+    : impl_(std::make_unique<Impl>(src, zlib_wrapper)) {}
+InflateStream::InflateStream(InflateStream&&) noexcept = default;
+InflateStream& InflateStream::operator=(InflateStream&&) noexcept = default;
+InflateStream::~InflateStream() = default;
+
+std::size_t InflateStream::read(std::uint8_t* dst, std::size_t n) {
+  Impl& m = *impl_;
+  std::size_t got = 0;
+  while (got < n && !m.failed) {
+    std::size_t avail = 0;
+    const std::uint8_t* p = m.inf.pending(avail);
+    if (avail > 0U) {
+      const std::size_t k = std::min(avail, n - got);
+      std::memcpy(dst + got, p, k);
+      if (m.zlib) {
+        m.adler = adler32(p, k, m.adler);
+      }
+      m.inf.take(k);
+      got += k;
+      m.total += k;
+      continue;
+    }
+    if (!m.produce(n - got)) {
+      break;
+    }
+  }
+  std::size_t left = 0;
+  static_cast<void>(m.inf.pending(left));
+  if (!m.failed && !m.checked && left == 0U && m.inf.deflate_done()) {
+    m.checked = true;
+    if (m.zlib && m.adler != m.want_adler) {
+      m.fail(InflateStatus::adler_mismatch);
+    }
+  }
+  return got;
+}
+
+InflateStatus InflateStream::status() const { return impl_->status; }
+bool InflateStream::finished() const { return impl_->checked && !impl_->failed; }
+std::uint64_t InflateStream::total_out() const { return impl_->total; }
 
 InflateResult inflate_raw(const std::uint8_t* in, std::size_t in_size, std::size_t max_out,
                           InflateMode mode, std::vector<std::uint8_t>& out, std::size_t size_hint) {

@@ -10,6 +10,31 @@
 
 namespace imu::cli {
 
+/// The same, written in pieces (an output too long to hold in memory): open(), write() as
+/// often as needed, commit(). Until commit() succeeds the bytes are in the temporary file;
+/// destroying the writer before (or after a failure) removes it and leaves `path` as it was.
+class AtomicFileWriter {
+ public:
+  AtomicFileWriter() = default;
+  AtomicFileWriter(const AtomicFileWriter&) = delete;
+  AtomicFileWriter& operator=(const AtomicFileWriter&) = delete;
+  AtomicFileWriter(AtomicFileWriter&&) = delete;
+  AtomicFileWriter& operator=(AtomicFileWriter&&) = delete;
+  ~AtomicFileWriter();
+  /// Create the temporary file next to `path`. False with err as write_file_atomic's.
+  [[nodiscard]] bool open(const std::string& path, std::string& err);
+  /// Append `size` bytes. False (and the temporary file removed) on a write error.
+  [[nodiscard]] bool write(const void* data, std::size_t size, std::string& err);
+  /// Flush, sync and rename over `path`. False (temporary file removed) on failure.
+  [[nodiscard]] bool commit(std::string& err);
+
+ private:
+  void abort();
+  std::string path_;
+  std::string tmp_;
+  int fd_ = -1;
+};
+
 /// Write `size` bytes at `data` as the file `path`. False with a one-line err naming the path
 /// and the OS error. Cost: one write, one fsync, one rename.
 [[nodiscard]] bool write_file_atomic(const std::string& path, const void* data, std::size_t size,

@@ -28,6 +28,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -45,6 +46,11 @@ struct ReadLimits {
   /// The largest variable, as inflated (compressed) and as converted to double (8 bytes per
   /// element): 256 MiB, i.e. 2^25 = 33.5 million samples of one channel.
   std::size_t max_variable_bytes = std::size_t{1} << 28U;
+  /// ChannelStream: the largest variable it accepts, as declared inflated (2 GiB: 2^28 = 268
+  /// million double samples, 186 h at 400 Hz). Not a memory bound (a stream holds ~0.3 MB at
+  /// any length) but a cap on claims, so that a small element declaring gigabytes is refused
+  /// before any time is spent on it.
+  std::uint64_t max_stream_variable_bytes = std::uint64_t{1} << 31U;
 };
 
 /// What list_variables() reports for each top-level variable, in file order.
@@ -123,6 +129,51 @@ class MatFile {
   bool swap_ = false;  ///< file byte order differs from little-endian
   ReadLimits limits_{};
 };
+
+/// One numeric column of a MAT-file variable read from the file in pieces, inflated as it is
+/// read: constant memory whatever the length (a 64 KiB input buffer, the inflater's 32 KiB
+/// window and 64 KiB chunk, a 64 KiB conversion buffer: about 0.3 MB), the file never read
+/// whole. Same classes, conversions, checks and error messages as MatFile::read_column, except
+/// the budget: max_stream_variable_bytes instead of max_variable_bytes. POSIX (stat, pread).
+///
+/// A compressed variable's integrity (Adler-32, no data beyond the declared size) is known only
+/// at its end: read() returns the error then, after the samples before it. A consumer must not
+/// report results before read() returned 0.
+class ChannelStream {
+ public:
+  /// Find variable `name` in the file at `path` (the other variables' headers are peeked, as
+  /// MatFile::find does), check its header and declared sizes, and position at the first sample
+  /// of column `column` (a vector is column 0). Cost: one pass over the elements' tags and the
+  /// first kilobytes of each compressed variable before it.
+  [[nodiscard]] static Result<ChannelStream> open(const std::string& path, std::string_view name,
+                                                  std::size_t column = 0, ReadLimits limits = {});
+  ChannelStream(ChannelStream&& other) noexcept;
+  ChannelStream& operator=(ChannelStream&& other) noexcept;
+  ChannelStream(const ChannelStream&) = delete;
+  ChannelStream& operator=(const ChannelStream&) = delete;
+  ~ChannelStream();
+
+  /// Up to `n` samples, converted to double, into `out` (fewer only at the end). Returns the
+  /// count, 0 at the end once the variable was checked whole, or the first error (corrupt or
+  /// truncated stream, read error). Cost: O(n) plus the inflate of the bytes behind them.
+  [[nodiscard]] Result<std::size_t> read(double* out, std::size_t n);
+  /// Samples in the column (from the dimensions).
+  [[nodiscard]] std::uint64_t size() const;
+  /// The variable's name, class and dimensions.
+  [[nodiscard]] const VariableInfo& info() const;
+
+ private:
+  struct Impl;
+  explicit ChannelStream(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+/// list_variables(path) without reading the file whole: each variable's tag and header only.
+[[nodiscard]] Result<std::vector<VariableInfo>> scan_variables(const std::string& path,
+                                                               ReadLimits limits = {});
+/// read_scalar(path, name) through a ChannelStream (the file is not read whole).
+[[nodiscard]] Result<double> stream_scalar(const std::string& path, std::string_view name,
+                                           ReadLimits limits = {});
 
 /// Convenience wrappers: open `path` and do one read.
 [[nodiscard]] Result<std::vector<VariableInfo>> list_variables(const std::string& path);

@@ -46,6 +46,19 @@ class MatWriter {
   /// A 1 x N char array; `text` must be 7-bit ASCII.
   [[nodiscard]] Status add_string(std::string_view name, std::string_view text);
 
+  /// A long column written in pieces by the caller (uncompressed, -v6 layout): the bytes that
+  /// start an `n` x 1 double column (miMATRIX tag declaring its whole size, flags, dims, name,
+  /// miDOUBLE tag of 8 n bytes). The file is then: bytes() up to its 128-byte header, these
+  /// bytes, the n samples as encode_doubles() gives them (8 n bytes: already 8-byte aligned,
+  /// no padding), then bytes() after the header (this writer's other variables). Fails as
+  /// add_matrix() on a bad or duplicate name or a column too large for a MAT v5 element.
+  /// Only for a writer without compression (a miCOMPRESSED element needs its compressed size
+  /// before its data).
+  [[nodiscard]] Result<std::vector<std::uint8_t>> column_start(std::string_view name,
+                                                               std::uint64_t n);
+  /// n doubles as little-endian miDOUBLE bytes into out[0 .. 8 n).
+  static void encode_doubles(const double* values, std::size_t n, std::uint8_t* out);
+
   /// The complete file image so far (128-byte header + variables).
   [[nodiscard]] const std::vector<std::uint8_t>& bytes() const { return bytes_; }
 

@@ -24,6 +24,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace imu::mat {
@@ -68,6 +69,51 @@ struct InflateResult {
 [[nodiscard]] InflateResult inflate_raw(const std::uint8_t* in, std::size_t in_size,
                                         std::size_t max_out, InflateMode mode,
                                         std::vector<std::uint8_t>& out, std::size_t size_hint = 0);
+
+/// Where InflateStream gets its compressed bytes (a file region, a memory buffer).
+class ByteSource {
+ public:
+  ByteSource() = default;
+  ByteSource(const ByteSource&) = delete;
+  ByteSource& operator=(const ByteSource&) = delete;
+  ByteSource(ByteSource&&) = delete;
+  ByteSource& operator=(ByteSource&&) = delete;
+  virtual ~ByteSource() = default;
+  /// Up to `n` bytes into `dst`; 0 only at the end of the input (or on a read error, which the
+  /// source records for its owner).
+  [[nodiscard]] virtual std::size_t read(std::uint8_t* dst, std::size_t n) = 0;
+};
+
+/// A zlib (or raw deflate) stream inflated as it is read, in constant memory: the 32 KiB window
+/// plus a 64 KiB chunk of output, a 64 KiB input buffer refilled from the ByteSource, and the
+/// decoding tables (about 190 kB in all, whatever the stream's length). Same decoder, same
+/// validation and same errors as inflate_zlib(); the Adler-32 is checked when the last byte has
+/// been read (a consumer must look at status() after read() returned 0 before trusting the
+/// data). Cost per byte as inflate_zlib() plus one copy into the caller's buffer.
+class InflateStream {
+ public:
+  /// `src` must outlive the stream. `zlib_wrapper`: RFC 1950 header and Adler-32, else raw.
+  InflateStream(ByteSource& src, bool zlib_wrapper);
+  InflateStream(const InflateStream&) = delete;
+  InflateStream& operator=(const InflateStream&) = delete;
+  InflateStream(InflateStream&&) noexcept;
+  InflateStream& operator=(InflateStream&&) noexcept;
+  ~InflateStream();
+
+  /// Up to `n` inflated bytes into `dst` (fewer only at the end of the stream or on an error).
+  /// Returns the count; 0 once the stream is finished or failed (see status()).
+  [[nodiscard]] std::size_t read(std::uint8_t* dst, std::size_t n);
+  /// ok while running and after a complete, checked stream; else the first error.
+  [[nodiscard]] InflateStatus status() const;
+  /// The stream ended (final block, and the Adler-32 checked) and every byte was read.
+  [[nodiscard]] bool finished() const;
+  /// Inflated bytes handed out so far.
+  [[nodiscard]] std::uint64_t total_out() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// Adler-32 (RFC 1950) of `size` bytes, continuing from `adler` (1 for a new checksum).
 [[nodiscard]] std::uint32_t adler32(const std::uint8_t* data, std::size_t size,
