@@ -1069,7 +1069,7 @@ void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip
 void fill_errors(const Points& pts, const ModelParams& m, const Options& o, double ts,
                  double tau_max, ErrorStats& e) {
   const Residual all = residual(pts, m, o, ts, tau_max);
-  const Residual seed = residual(pts, m, o, ts, o.seed_tau_max_s);
+  const Residual seed = residual(pts, m, o, ts, std::min(o.seed_tau_max_s, tau_max));
   e.adev_rms_rel = all.check.rms_rel;
   e.adev_max_rel = all.check.max_rel;
   e.n_taus = all.check.n_checked;

@@ -135,7 +135,8 @@ bool resolve_channels(const imu::mat::MatFile& m, const std::string& file,
 // NAME or NAME:K (column K, 1-based as in Octave, of a matrix NAME). A matrix named without a
 // column is refused (reading its first column silently was a wrong answer).
 bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vector<double>& out,
-                  std::string& err) {
+                  bool& integer_class, std::string& err) {
+  integer_class = false;
   std::string name = spec;
   std::size_t column = 0;
   bool has_column = false;
@@ -158,9 +159,14 @@ bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vect
     return false;
   }
   for (const auto& v : vars.value()) {
+    if (v.name == name) {
+      integer_class = v.class_name.rfind("int", 0) == 0 || v.class_name.rfind("uint", 0) == 0;
+    }
     if (v.name == name && v.rows > 1 && v.cols > 1 && !has_column) {
-      err = "'" + name + "' is a " + std::to_string(v.rows) + " x " + std::to_string(v.cols) +
-            " matrix: name a column, " + name + ":1 .. " + name + ":" + std::to_string(v.cols);
+      err = "'" + name + "' is a " + std::to_string(v.rows) + " x " + std::to_string(v.cols);
+      err += " matrix: name a column, " + name;
+      err += ":1 .. " + name;
+      err += ":" + std::to_string(v.cols);
       return false;
     }
   }
@@ -181,6 +187,8 @@ std::string base_name(const std::string& spec) {
 
 struct Job {
   std::string channel;
+  bool counts_scaled = false;    // an integer variable, multiplied by its LSB
+  bool counts_unscaled = false;  // an integer variable without an LSB: counts
   std::vector<double> samples;
   Options o;
   Report r;
@@ -245,12 +253,23 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
   }
   std::vector<Job> jobs(channels.size());
   for (std::size_t i = 0; i < channels.size(); ++i) {
-    if (!read_channel(m, channels[i], jobs[i].samples, err)) {
+    bool integer_class = false;
+    if (!read_channel(m, channels[i], jobs[i].samples, integer_class, err)) {
       return fail(err, kExitRuntime);
     }
     jobs[i].channel = channels[i];
     jobs[i].o = o;
     jobs[i].o.lsb = lsb > 0.0 ? lsb : file_lsb(m, base_name(channels[i]));
+    // Integer counts (int16 from a logger) with a known LSB are counts x LSB in the channel's
+    // unit; without one they stay counts (said in the report).
+    if (integer_class && jobs[i].o.lsb > 0.0) {
+      for (double& v : jobs[i].samples) {
+        v *= jobs[i].o.lsb;
+      }
+      jobs[i].counts_scaled = true;
+    } else if (integer_class) {
+      jobs[i].counts_unscaled = true;
+    }
   }
   if (!plots.empty() && !imu::cli::make_dirs(plots, err)) {
     return fail(err, kExitRuntime);
@@ -263,6 +282,13 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
     }
     if (j.o.lsb > 0.0 && lsb <= 0.0) {
       j.r.lsb_note = "LSB from the file: " + j.r.lsb_note.substr(j.r.lsb_note.find(':') + 2);
+    }
+    if (j.counts_scaled) {
+      j.r.notes.insert(j.r.notes.begin(), "the variable holds integer counts: analysed as counts x "
+                       "LSB (" + std::to_string(j.o.lsb) + " per count)");
+    } else if (j.counts_unscaled) {
+      j.r.notes.insert(j.r.notes.begin(), "the variable holds integer counts and no LSB was found "
+                       "(--lsb, NAME_lsb, <group>_lsb, lsb): analysed in counts");
     }
     reports.push_back(std::move(j.r));
   }
