@@ -10,6 +10,7 @@
 
 #include "common.hpp"
 #include "data.hpp"
+#include "full_adev.hpp"
 #include "imu/cli/file_out.hpp"
 #include "imu/error_model.hpp"
 #include "imu/mat/mat_writer.hpp"
@@ -40,8 +41,15 @@ constexpr const char* kUsageModel =
     "usage: imu-sim model [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--fs 100]\n"
     "  the continuous and discrete first-order model in the seed's layout\n";
 constexpr const char* kUsageAdev =
-    "usage: imu-sim adev FILE [--channel acc_z] [--json OUT] [--lsb X] [--fs X]\n"
-    "  online ADEV of one channel (fw OnlineAdev<8,22>), with the time it took. NaN/Inf samples\n"
+    "usage: imu-sim adev FILE [--channel acc_z] [--json OUT] [--csv OUT] [--lsb X] [--fs X]\n"
+    "                         [--estimator online|full] [--taus octave|decade|quarter|all]\n"
+    "  ADEV of one channel, with the time it took. --estimator online (default): the firmware's\n"
+    "  fixed-memory estimator (fw OnlineAdev<8,22>, partially overlapping, constant memory);\n"
+    "  full: the fully overlapping estimator on the whole record (allantools oadev, Stable32;\n"
+    "  12 bytes per sample of memory). --taus as allantools' keywords (default: online, its own\n"
+    "  grid; full, octave): octave 1, 2, 4, ..; decade 1, 2, 4, 10, 20, 40, ..; quarter\n"
+    "  quarter octaves; all every m (full only; refused when it would sum more than 2e9\n"
+    "  terms). The table, JSON and CSV carry the averaging factor af = tau / Ts. NaN/Inf samples\n"
     "  are gaps (counted: \"gaps\" in the JSON). The LSB (--lsb, else the file's acc_lsb/gyro_lsb,\n"
     "  else 1e-6 / 1e-7) must fit the data in int32 counts and must not collapse it (refused:\n"
     "  more than 99 % of the samples in one count while the quantised std is under half the\n"
@@ -259,10 +267,11 @@ struct AdevTiming {
 
 std::string adev_json(const std::string& path, const std::string& chan_name, std::size_t chan,
                       const SensorData& sd, std::size_t n, const std::vector<AdevRow>& rows,
-                      const AdevTiming& t) {
+                      const AdevTiming& t, const std::string& estimator) {
   const ChannelData& ch = sd.ch[chan];
   std::string j = "{\n";
   j += "  \"source\": " + json_str(path) + ",\n";
+  j += "  \"estimator\": " + json_str(estimator) + ",\n";
   j += "  \"channel\": " + json_str(chan_name) + ",\n";
   j += "  \"unit\": " + json_str(channel_unit(chan)) + ",\n";
   j += "  \"fs_hz\": " + json_num(sd.fs_hz) + ",\n";
@@ -280,13 +289,28 @@ int cmd_adev(int argc, char** argv) {
   const char* cmd = "imu-sim adev";
   Args a;
   std::string err;
-  const std::vector<OptSpec> specs = {
-      {"--channel", true}, {"--json", true}, {"--lsb", true}, {"--fs", true}};
+  const std::vector<OptSpec> specs = {{"--channel", true},   {"--json", true}, {"--lsb", true},
+                                      {"--fs", true},        {"--csv", true},  {"--taus", true},
+                                      {"--estimator", true}};
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
     return fail(cmd, err, kExitUsage);
   }
   if (a.help()) {
     return print_help("adev");
+  }
+  const std::string estimator = a.get("--estimator", "online");
+  const bool full = estimator == "full";
+  if (!full && estimator != "online") {
+    return fail(cmd, "--estimator " + estimator + ": online or full", kExitUsage);
+  }
+  const std::string taus = a.get("--taus", full ? "octave" : "");
+  std::vector<std::uint64_t> probe;
+  if (!taus.empty() && !tau_grid(taus, 1000, probe)) {
+    return fail(cmd, "--taus " + taus + ": octave, decade, quarter or all", kExitUsage);
+  }
+  if (taus == "all" && !full) {
+    return fail(cmd, "--taus all needs --estimator full (the online estimator has its own grid)",
+                kExitUsage);
   }
   if (a.positional().empty()) {
     return fail(cmd, "a MAT-file is required: imu-sim adev FILE --channel C", kExitUsage);
@@ -315,20 +339,43 @@ int cmd_adev(int argc, char** argv) {
   // The channel in chunks (issue 14: memory independent of the record's length); the times of
   // the interleaved steps are summed.
   ChannelData& ch = sd.ch[chan];
-  OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
-  AdevSink sink(adev);
-  StreamTiming tm;
-  const int st = stream_counts(path, chan, ch, sink, tm, err);
-  if (st != kExitOk) {
-    return fail(cmd, err, st);
+  std::vector<std::uint64_t> grid;
+  if (!taus.empty()) {
+    (void)tau_grid(taus, sd.n_samples, grid);  // the keyword was checked above
   }
-  AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
-  const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
+  if (full && full_adev_cost(sd.n_samples, grid) > 2e9) {
+    return fail(cmd, "--taus " + taus + " on " + std::to_string(sd.n_samples) +
+                         " samples would sum " + std::to_string(full_adev_cost(sd.n_samples, grid)) +
+                         " second differences (limit 2e9): use --taus quarter or octave",
+                kExitUsage);
+  }
+  StreamTiming tm;
+  std::vector<AdevRow> rows;
+  if (full) {
+    FullAdevSink sink;
+    const int st = stream_counts(path, chan, ch, sink, tm, err);
+    if (st != kExitOk) {
+      return fail(cmd, err, st);
+    }
+    rows = full_adev(sink, grid, 1.0 / sd.fs_hz, ch.lsb);
+  } else {
+    OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
+    AdevSink sink(adev);
+    const int st = stream_counts(path, chan, ch, sink, tm, err);
+    if (st != kExitOk) {
+      return fail(cmd, err, st);
+    }
+    AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
+    const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
+    rows = rows_from_points(pts, np);
+    if (!grid.empty()) {
+      rows = rows_on_grid(rows, grid);
+    }
+  }
   const double t3 = now_s();
   const double t1 = t0 + (t3 - t0 - tm.quantize_s - tm.sink_s);  // metadata + read + inflate
   const double t2 = t1 + tm.quantize_s;
   const std::size_t n_samples = sd.n_samples;
-  const std::vector<AdevRow> rows = rows_from_points(pts, np);
   std::printf("%s %s: %zu samples at %g Hz, LSB %g %s%s\n", path.c_str(), chan_name.c_str(),
               n_samples, sd.fs_hz, ch.lsb, channel_unit(chan),
               ch.lsb_from_file ? " (from the file)" : "");
@@ -346,8 +393,11 @@ int cmd_adev(int argc, char** argv) {
   if (a.has("--json") &&
       !write_file(a.get("--json"),
                   adev_json(path, chan_name, chan, sd, n_samples, rows,
-                            AdevTiming{t1 - t0, t2 - t1, t3 - t2, t3 - t0}),
+                            AdevTiming{t1 - t0, t2 - t1, t3 - t2, t3 - t0}, estimator),
                   err)) {
+    return fail(cmd, err);
+  }
+  if (a.has("--csv") && !write_file(a.get("--csv"), adev_csv(rows), err)) {
     return fail(cmd, err);
   }
   return kExitOk;

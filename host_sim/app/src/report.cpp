@@ -117,18 +117,19 @@ std::vector<AdevRow> rows_from_points(const AdevPoint* p, std::size_t n) {
   std::vector<AdevRow> rows;
   for (std::size_t i = 0; i < n; ++i) {
     rows.push_back(AdevRow{p[i].tau_s, p[i].adev, p[i].edf, p[i].ci_lo, p[i].ci_hi,
-                           p[i].n_terms});
+                           p[i].n_terms, p[i].af});
   }
   return rows;
 }
 
 std::string format_adev_table(const std::vector<AdevRow>& rows) {
   std::string s;
-  appendf(s, "%12s %12s %12s %12s %10s %10s\n", "tau_s", "adev", "ci_lo", "ci_hi", "edf",
-          "n_terms");
+  appendf(s, "%12s %10s %12s %12s %12s %10s %10s\n", "tau_s", "af", "adev", "ci_lo", "ci_hi",
+          "edf", "n_terms");
   for (const AdevRow& r : rows) {
-    appendf(s, "%12.4g %12.4e %12.4e %12.4e %10.4g %10llu\n", r.tau_s, r.adev, r.ci_lo, r.ci_hi,
-            r.edf, static_cast<unsigned long long>(r.n_terms));
+    appendf(s, "%12.4g %10llu %12.4e %12.4e %12.4e %10.4g %10llu\n", r.tau_s,
+            static_cast<unsigned long long>(r.af), r.adev, r.ci_lo, r.ci_hi, r.edf,
+            static_cast<unsigned long long>(r.n_terms));
   }
   return s;
 }
@@ -169,7 +170,8 @@ std::string adev_json_list(const std::vector<AdevRow>& rows) {
     s += "    {\"tau_s\": " + json_num(r.tau_s) + ", \"adev\": " + json_num(r.adev) +
          ", \"edf\": " + json_num(r.edf) + ", \"ci_lo\": " + json_num(r.ci_lo) +
          ", \"ci_hi\": " + json_num(r.ci_hi) +
-         ", \"n_terms\": " + std::to_string(r.n_terms) + "}";
+         ", \"n_terms\": " + std::to_string(r.n_terms) + ", \"af\": " + std::to_string(r.af) +
+         "}";
   }
   s += rows.empty() ? "]" : "\n  ]";
   return s;

@@ -21,12 +21,13 @@ struct AdevRow {
   double ci_lo = 0.0;
   double ci_hi = 0.0;
   std::uint64_t n_terms = 0;
+  std::uint64_t af = 0;  ///< averaging factor tau / Ts
 };
 
 [[nodiscard]] std::vector<AdevRow> rows_from_points(const AdevPoint* p, std::size_t n);
 /// Fixed-width table, one line per tau.
 [[nodiscard]] std::string format_adev_table(const std::vector<AdevRow>& rows);
-/// JSON array of {"tau_s","adev","edf","ci_lo","ci_hi","n_terms"} objects.
+/// JSON array of {"tau_s","adev","edf","ci_lo","ci_hi","n_terms","af"} objects.
 [[nodiscard]] std::string adev_json_list(const std::vector<AdevRow>& rows);
 /// A JSON number (%.10g; non-finite -> null) and a JSON string literal.
 [[nodiscard]] std::string json_num(double v);
