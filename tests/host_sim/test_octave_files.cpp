@@ -66,6 +66,29 @@ TEST(OctaveFiles, AdevOfV6V7AndCapitalFsMatchesOctavesOverlappingAdev) {
   }
 }
 
+TEST(OctaveFiles, AdevReadsAnyVariableRowVectorsInt16CountsAndMatrixColumns) {
+  simtest::TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> same = {
+      {"octave_row.mat", "acc_z_row"}, {"octave_int16.mat", "acc_z_counts"},
+      {"octave_matrix.mat", "data:2"}};
+  for (const auto& [file, channel] : same) {
+    const std::string json = dir.file("x.json");
+    std::string path = kDir;
+    path += "/" + file;
+    const auto r = simtest::run({"adev", path, "--channel", channel, "--json", json});
+    ASSERT_EQ(r.status, 0) << file << ": " << r.err;
+    expect_octave_adev(simtest::read_text(json), file);
+  }
+  // A matrix without its column: refused with how to name one (exit 1); a variable the file
+  // does not hold: a usage error listing what it holds.
+  auto r = simtest::run({"adev", kDir + "/octave_matrix.mat", "--channel", "data"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("--channel data:3"), std::string::npos) << r.err;
+  r = simtest::run({"adev", kDir + "/octave_v7.mat", "--channel", "acc_q"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("variables: acc_z, fs, acc_lsb"), std::string::npos) << r.err;
+}
+
 TEST(OctaveFiles, AnalyzeReadsRowVectorsInt16CountsAndMatrixColumns) {
   simtest::TempDir dir;
   const std::string ref_json = dir.file("v7.json");

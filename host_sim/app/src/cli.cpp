@@ -265,6 +265,12 @@ struct AdevTiming {
   double read, quantize, adev, total;
 };
 
+// The unit of a channel: its slot's for acc*/gyro* names, else the file's own (unknown here).
+std::string adev_unit(const std::string& chan_name, std::size_t chan) {
+  const bool known = chan_name.rfind("acc", 0) == 0 || chan_name.rfind("gyro", 0) == 0;
+  return known ? channel_unit(chan) : "(the file's unit)";
+}
+
 std::string adev_json(const std::string& path, const std::string& chan_name, std::size_t chan,
                       const SensorData& sd, std::size_t n, const std::vector<AdevRow>& rows,
                       const AdevTiming& t, const std::string& estimator) {
@@ -273,7 +279,7 @@ std::string adev_json(const std::string& path, const std::string& chan_name, std
   j += "  \"source\": " + json_str(path) + ",\n";
   j += "  \"estimator\": " + json_str(estimator) + ",\n";
   j += "  \"channel\": " + json_str(chan_name) + ",\n";
-  j += "  \"unit\": " + json_str(channel_unit(chan)) + ",\n";
+  j += "  \"unit\": " + json_str(adev_unit(chan_name, chan)) + ",\n";
   j += "  \"fs_hz\": " + json_num(sd.fs_hz) + ",\n";
   j += "  \"lsb\": " + json_num(ch.lsb) + ",\n";
   j += "  \"n_samples\": " + std::to_string(n) + ",\n";
@@ -318,9 +324,30 @@ int cmd_adev(int argc, char** argv) {
   const std::string path = a.positional()[0];
   std::size_t chan = 0;
   const std::string chan_name = a.get("--channel", "acc_z");
+  ChannelVars vars;
+  bool renamed = false;
   if (!channel_index(chan_name, chan)) {
-    return fail(cmd, "unknown channel '" + chan_name + "' (acc_x .. gyro_z); " +
-                         channels_held(path), kExitUsage);
+    // Any variable of the file, or NAME:K for column K (1-based) of a matrix: it takes the
+    // acc_z slot (gyro* names the gyro_z slot, for the default LSB and the unit).
+    std::string name = chan_name;
+    std::size_t column = 0;
+    const std::size_t colon = chan_name.rfind(':');
+    if (colon != std::string::npos) {
+      const std::string k = chan_name.substr(colon + 1);
+      char* end = nullptr;
+      const unsigned long v = std::strtoul(k.c_str(), &end, 10);
+      if (k.empty() || *end != '\0' || v < 1 || v > 1000000) {
+        return fail(cmd, "--channel " + chan_name + ": the column after ':' must be >= 1",
+                    kExitUsage);
+      }
+      name = chan_name.substr(0, colon);
+      column = static_cast<std::size_t>(v - 1);
+      vars.column_given[chan_name.rfind("gyro", 0) == 0 ? 5 : 2] = true;
+    }
+    chan = chan_name.rfind("gyro", 0) == 0 ? 5 : 2;
+    vars.names[chan] = name;
+    vars.columns[chan] = column;
+    renamed = true;
   }
   double lsb = 0, fs = 0;
   if ((a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, lsb, err)) ||
@@ -333,8 +360,9 @@ int cmd_adev(int argc, char** argv) {
   want[chan] = true;
   lsb_over[chan] = lsb;
   SensorData sd;
-  if (!load_sensor_meta(path, want, want, lsb_over, fs, sd, err)) {
-    return fail(cmd, err);
+  if (!load_sensor_meta(path, want, want, lsb_over, fs, sd, err, renamed ? &vars : nullptr)) {
+    return fail(cmd, err, renamed && err.find("not found") != std::string::npos ? kExitUsage
+                                                                                : kExitRuntime);
   }
   // The channel in chunks (issue 14: memory independent of the record's length); the times of
   // the interleaved steps are summed.
@@ -377,7 +405,7 @@ int cmd_adev(int argc, char** argv) {
   const double t2 = t1 + tm.quantize_s;
   const std::size_t n_samples = sd.n_samples;
   std::printf("%s %s: %zu samples at %g Hz, LSB %g %s%s\n", path.c_str(), chan_name.c_str(),
-              n_samples, sd.fs_hz, ch.lsb, channel_unit(chan),
+              n_samples, sd.fs_hz, ch.lsb, adev_unit(chan_name, chan).c_str(),
               ch.lsb_from_file ? " (from the file)" : "");
   std::fputs(format_adev_table(rows).c_str(), stdout);
   std::printf("time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", t1 - t0,

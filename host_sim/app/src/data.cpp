@@ -96,8 +96,8 @@ bool check_vector(const mat::VariableInfo& v, const std::string& path, std::stri
     return true;
   }
   err = path + ": variable '" + v.name + "' is a " + std::to_string(v.rows) + "x" +
-        std::to_string(v.cols) + " matrix, not one channel: save each column as its own vector " +
-        "named acc_x .. gyro_z (e.g. in MATLAB/Octave " + v.name + " = " + v.name + "(:,3))";
+        std::to_string(v.cols) + " matrix, not one channel: name a column (--channel " + v.name +
+        ":3 for its third), or save each column as its own vector named acc_x .. gyro_z";
   return false;
 }
 
@@ -272,7 +272,7 @@ bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
 bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
                       const bool (&required)[kNumChannels],
                       const double (&lsb_override)[kNumChannels], double fs_override,
-                      SensorData& out, std::string& err) {
+                      SensorData& out, std::string& err, const ChannelVars* cv) {
   out = SensorData{};
   out.path = path;
   auto listed = mat::scan_variables(path);
@@ -289,40 +289,52 @@ bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
   }
   bool any = false;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    const mat::VariableInfo* info = find_var(vars, kChannelNames[c]);
+    const bool renamed = cv != nullptr && !cv->names[c].empty();
+    const std::string name = renamed ? cv->names[c] : std::string(kChannelNames[c]);
+    const std::size_t column = renamed ? cv->columns[c] : 0;
+    const mat::VariableInfo* info = find_var(vars, name.c_str());
     if (!want[c] || (info == nullptr && !required[c])) {
       continue;
     }
     if (info == nullptr) {
       // Missing and required: the reader's "not found; variables: ..." message.
-      auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
-      err = cs.ok() ? path + ": variable '" + kChannelNames[c] + "' not found"
-                    : cs.error().message;
+      auto cs = mat::ChannelStream::open(path, name);
+      err = cs.ok() ? path + ": variable '" + name + "' not found" : cs.error().message;
       return false;
     }
-    if (!check_vector(*info, path, err)) {
+    if (!(renamed && cv->column_given[c]) && !check_vector(*info, path, err)) {
       return false;
     }
     // Class, dimensions against the data, budget: checked by opening the stream (no data read).
-    auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+    auto cs = mat::ChannelStream::open(path, name, column);
     if (!cs.ok()) {
       err = cs.error().message;
       return false;
     }
     const auto n = static_cast<std::size_t>(cs.value().size());
     if (any && n != out.n_samples) {
-      err = path + ": variable '" + kChannelNames[c] + "' has " + std::to_string(n) +
-            " samples, others " + std::to_string(out.n_samples);
+      err = path + ": variable '" + name + "' has " + std::to_string(n) + " samples, others " +
+            std::to_string(out.n_samples);
       return false;
     }
     out.n_samples = n;
     any = true;
     ChannelData& ch = out.ch[c];
     ch.present = true;
+    ch.var = renamed ? name : std::string();
+    ch.column = column;
+    ch.integer_counts = info->class_name.rfind("int", 0) == 0 ||
+                        info->class_name.rfind("uint", 0) == 0;
     const double fl = file_lsb[c < 3 ? 0 : 1];
-    ch.lsb = lsb_override[c] > 0.0 ? lsb_override[c] : (fl > 0.0 ? fl : default_lsb(c));
     ch.lsb_from_option = lsb_override[c] > 0.0;
     ch.lsb_from_file = !ch.lsb_from_option && fl > 0.0;
+    ch.lsb = lsb_override[c] > 0.0 ? lsb_override[c] : (fl > 0.0 ? fl : default_lsb(c));
+    if (ch.integer_counts) {
+      // Counts stored as integers: with an LSB they are counts x LSB in the channel's unit;
+      // without one they stay counts (LSB 1).
+      ch.lsb = ch.lsb_from_option || ch.lsb_from_file ? ch.lsb : 1.0;
+      ch.scale = ch.lsb;
+    }
   }
   if (!any) {
     err = path + ": none of the channels acc_x .. gyro_z is in the file";
@@ -342,9 +354,10 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 // that inflating chunk k + 1 overlaps f's work on chunk k (two buffers, handed over under a
 // mutex). read_s: the time f's thread waited for data. The reader is used by that thread alone.
 template <class F>
-bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>& buf,
-                    double& read_s, std::string& err, F&& f) {
-  auto cs = mat::ChannelStream::open(path, kChannelNames[c]);
+bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& ch,
+                    std::vector<double>& buf, double& read_s, std::string& err, F&& f) {
+  auto cs = mat::ChannelStream::open(path, ch.var.empty() ? std::string(kChannelNames[c]) : ch.var,
+                                     ch.column);
   if (!cs.ok()) {
     err = cs.error().message;
     return false;
@@ -417,6 +430,11 @@ bool for_each_chunk(const std::string& path, std::size_t c, std::vector<double>&
       }
     }
     read_s += seconds_since(t0);
+    if (ch.integer_counts) {
+      for (std::size_t i = 0; i < n; ++i) {
+        slot[k].v[i] *= ch.scale;
+      }
+    }
     f(slot[k].v.data(), n);
     std::lock_guard<std::mutex> lock(m);
     slot[k].full = false;
@@ -433,7 +451,8 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
                   StreamTiming& timing, std::string& err) {
   constexpr std::size_t kChunk = 8192;
   constexpr double kMaxCounts = 2147483647.0;
-  const std::string where = path + ": variable '" + kChannelNames[c] + "': ";
+  const std::string where =
+      path + ": variable '" + (ch.var.empty() ? std::string(kChannelNames[c]) : ch.var) + "': ";
   std::vector<double> values(kChunk);
   std::vector<std::int32_t> counts(kChunk);
   std::vector<double> fin(kChunk);    // the chunk's finite values
@@ -448,7 +467,7 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
   std::uint64_t pending_gap = 0;
   ch.off_grid = 0;
   const double lsb = ch.lsb;
-  const bool ok = for_each_chunk(path, c, values, timing.read_s, err, [&](const double* v,
+  const bool ok = for_each_chunk(path, c, ch, values, timing.read_s, err, [&](const double* v,
                                                                           std::size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
     total += n;
@@ -551,7 +570,7 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
     // Only now is the exact share of the majority candidate needed: a second pass.
     std::uint64_t same = 0;
     double second_read_s = 0.0;
-    if (!for_each_chunk(path, c, values, second_read_s, err, [&](const double* v, std::size_t n) {
+    if (!for_each_chunk(path, c, ch, values, second_read_s, err, [&](const double* v, std::size_t n) {
           for (std::size_t i = 0; i < n; ++i) {
             same += std::isfinite(v[i]) && quantize(v[i], lsb).counts == cand ? 1U : 0U;
           }

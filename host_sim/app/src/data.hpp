@@ -41,6 +41,18 @@ struct ChannelData {
   bool lsb_from_option = false; ///< given on the command line (a misfit is a usage error)
   std::uint64_t off_grid = 0;   ///< finite samples not an integer multiple of lsb (> 1e-6 lsb)
   std::uint64_t non_finite = 0; ///< NaN / Inf samples: gaps
+  std::string var;              ///< the file's variable (empty: the slot's name acc_x .. gyro_z)
+  std::size_t column = 0;       ///< its column, for a matrix named NAME:K (K - 1)
+  double scale = 1.0;           ///< values x scale: integer counts (int16 ..) x their LSB
+  bool integer_counts = false;  ///< the variable is of an integer class
+};
+
+/// Any variable of the file in a channel slot (`--channel NAME` or `NAME:K` for column K of a
+/// matrix): names[c] non-empty replaces slot c's name acc_x .. gyro_z.
+struct ChannelVars {
+  std::string names[kNumChannels];
+  std::size_t columns[kNumChannels] = {};
+  bool column_given[kNumChannels] = {};
 };
 
 // NOLINTNEXTLINE(bugprone-reserved-identifier): '__i0' is the compiler's implicit array copy loop
@@ -70,10 +82,14 @@ struct SensorData {
 /// load_sensor() without the values: rate, LSBs, which channels are present and their length
 /// (n_samples), from the variables' headers and the scalars; the file is never read whole
 /// (mat::scan_variables, mat::stream_scalar). The channels are then read by stream_counts().
+/// vars: other variables in the slots (nullptr: acc_x .. gyro_z). An integer variable (int16
+/// counts from a logger) with an LSB (option or file) is read as counts x LSB; without one its
+/// LSB is 1 (counts).
 [[nodiscard]] bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
                                     const bool (&required)[kNumChannels],
                                     const double (&lsb_override)[kNumChannels],
-                                    double fs_override, SensorData& out, std::string& err);
+                                    double fs_override, SensorData& out, std::string& err,
+                                    const ChannelVars* vars = nullptr);
 
 /// Where stream_counts() delivers a channel: its finite runs as counts, in order, and each run
 /// of non-finite samples between two finite ones as one gap (those before the first and after
