@@ -299,7 +299,12 @@ bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
     if (info == nullptr) {
       // Missing and required: the reader's "not found; variables: ..." message.
       auto cs = mat::ChannelStream::open(path, name);
-      err = cs.ok() ? path + ": variable '" + name + "' not found" : cs.error().message;
+      if (cs.ok()) {
+        err = path + ": variable '";
+        err += name + "' not found";
+      } else {
+        err = cs.error().message;
+      }
       return false;
     }
     if (!(renamed && cv->column_given[c]) && !check_vector(*info, path, err)) {
@@ -313,8 +318,9 @@ bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
     }
     const auto n = static_cast<std::size_t>(cs.value().size());
     if (any && n != out.n_samples) {
-      err = path + ": variable '" + name + "' has " + std::to_string(n) + " samples, others " +
-            std::to_string(out.n_samples);
+      err = path + ": variable '";
+      err += name + "' has " + std::to_string(n);
+      err += " samples, others " + std::to_string(out.n_samples);
       return false;
     }
     out.n_samples = n;
