@@ -84,10 +84,27 @@ TEST_F(AnalyzeCli, WritesJsonWithTheFixedKeys) {
 }
 
 TEST_F(AnalyzeCli, WritesCsvPlot) {
-  const std::string dir = ::testing::TempDir();
+  // --plots DIR is created (a missing folder was an error); the CSV has the model's terms.
+  const std::string dir = tmp_path("plots/sub");
   ASSERT_EQ(call({"analyze", mat_, "--channel", "acc_x", "--plots", dir}), 0);
   const std::string csv = slurp(dir + "/acc_x_adev.csv");
   EXPECT_EQ(csv.rfind("tau_s,adev_raw,", 0), 0U);
+  EXPECT_NE(csv.find(",after_white,"), std::string::npos);
+  EXPECT_NE(csv.find(",before_GM 1,"), std::string::npos);
+  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+    GTEST_SKIP() << "gnuplot not installed: the SVG/PNG part is not checked";
+  }
+  // SVG and PNG of both figures; the script's paths are absolute (it runs from anywhere), the
+  // titles noenhanced (acc_x is no subscript), the axis has the unit.
+  for (const char* f : {"acc_x_before.svg", "acc_x_after.svg", "acc_x_before.png",
+                        "acc_x_after.png"}) {
+    EXPECT_TRUE(std::ifstream(dir + "/" + f).good()) << f;
+  }
+  const std::string gp = slurp(dir + "/acc_x_adev.gp");
+  EXPECT_NE(gp.find("plot '/"), std::string::npos) << gp;
+  EXPECT_NE(gp.find("noenhanced"), std::string::npos);
+  EXPECT_NE(gp.find("Allan deviation [m/s^2]"), std::string::npos);
+  EXPECT_NE(gp.find("fitted range"), std::string::npos);
 }
 
 TEST_F(AnalyzeCli, BadInputGivesNonZeroExit) {

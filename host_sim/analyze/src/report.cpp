@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <string>
 #include <sstream>
 
 #include "imu/analyze/analyze.hpp"
@@ -269,8 +270,68 @@ std::string to_text(const Report& r) {
   return s.str();
 }
 
+namespace {
+
+// The ADEV of each term of a model at tau (0 where the term is absent), in the order of
+// term_names: the components the plots draw under the total.
+constexpr const char* kTermNames[] = {"white",       "quantization", "GM 1", "GM 2",
+                                      "rate random walk", "ramp", "sinusoids",
+                                      "bias instability", "oscillation"};
+constexpr std::size_t kTerms = sizeof(kTermNames) / sizeof(kTermNames[0]);
+
+void term_adevs(const ModelParams& p, double tau, double (&out)[kTerms]) {
+  out[0] = p.n > 0.0 ? std::sqrt(avar_white(p.n, tau)) : 0.0;
+  out[1] = p.q > 0.0 ? std::sqrt(avar_quantization(p.q, tau)) : 0.0;
+  out[2] = p.n_gm > 0 ? std::sqrt(avar_gauss_markov(p.gm[0].sb, p.gm[0].tb_s, tau)) : 0.0;
+  out[3] = p.n_gm > 1 ? std::sqrt(avar_gauss_markov(p.gm[1].sb, p.gm[1].tb_s, tau)) : 0.0;
+  out[4] = p.k > 0.0 ? std::sqrt(avar_rrw(p.k, tau)) : 0.0;
+  out[5] = p.r > 0.0 ? std::sqrt(avar_ramp(p.r, tau)) : 0.0;
+  double sines = 0.0;
+  sines += p.sin_a > 0.0 ? avar_sinusoid(p.sin_a, p.sin_f0_hz, tau) : 0.0;
+  sines += p.sin2_a > 0.0 ? avar_sinusoid(p.sin2_a, p.sin2_f0_hz, tau) : 0.0;
+  out[6] = std::sqrt(sines);
+  out[7] = p.bi > 0.0 ? std::sqrt(avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau))
+                      : 0.0;
+  out[8] = p.osc_sigma > 0.0
+               ? std::sqrt(avar_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s, tau))
+               : 0.0;
+}
+
+// The unit of a channel from its name (acc* m/s^2, gyro* rad/s), else the file's own.
+std::string unit_of(const std::string& channel) {
+  if (channel.rfind("acc", 0) == 0) {
+    return "m/s^2";
+  }
+  if (channel.rfind("gyro", 0) == 0) {
+    return "rad/s";
+  }
+  return "unit of the data";
+}
+
+// A path made absolute (so the .gp script works from any directory).
+std::string absolute(const std::string& path) {
+  char* real = ::realpath(path.c_str(), nullptr);
+  if (real == nullptr) {
+    return path;
+  }
+  std::string out(real);
+  std::free(real);  // NOLINT(cppcoreguidelines-no-malloc): realpath's buffer
+  return out;
+}
+
+// Single quotes for a gnuplot string.
+std::string gq(const std::string& s) {
+  std::string o = "'";
+  for (const char c : s) {
+    o += c == '\'' ? std::string("''") : std::string(1, c);
+  }
+  return o + "'";
+}
+
+}  // namespace
+
 bool write_plots(const Report& r, const std::string& dir, std::string& message) {
-  const std::string base = dir + "/" + r.channel;
+  const std::string base = absolute(dir) + "/" + r.channel;
   const std::string csv = base + "_adev.csv";
   {
     std::ofstream f(csv);
@@ -279,42 +340,100 @@ bool write_plots(const Report& r, const std::string& dir, std::string& message) 
       return false;
     }
     f << "tau_s,adev_raw,ci_lo_raw,ci_hi_raw,adev_clean,ci_lo_clean,ci_hi_clean,model_before,"
-         "model_after\n";
+         "model_after";
+    for (const char* t : kTermNames) {
+      f << ",after_" << t;
+    }
+    for (const char* t : kTermNames) {
+      f << ",before_" << t;
+    }
+    f << "\n";
     for (std::size_t i = 0; i < r.adev.size(); ++i) {
       const AdevPoint& p = r.adev[i];
       const AdevPoint& c = i < r.adev_clean.size() ? r.adev_clean[i] : p;
       f << num(p.tau_s) << ',' << num(p.adev) << ',' << num(p.ci_lo) << ',' << num(p.ci_hi) << ','
         << num(c.adev) << ',' << num(c.ci_lo) << ',' << num(c.ci_hi) << ','
         << num(model_adev(r.model_before, p.tau_s)) << ','
-        << num(model_adev(r.model_after, p.tau_s)) << '\n';
+        << num(model_adev(r.model_after, p.tau_s));
+      double after[kTerms];
+      double before[kTerms];
+      term_adevs(r.model_after, p.tau_s, after);
+      term_adevs(r.model_before, p.tau_s, before);
+      for (const double v : after) {
+        f << ',' << num(v);
+      }
+      for (const double v : before) {
+        f << ',' << num(v);
+      }
+      f << '\n';
     }
   }
   message = "wrote " + csv;
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
-    message += "; gnuplot not found: no SVG (install gnuplot-nox)";
+    message += "; gnuplot not found: no SVG/PNG (install gnuplot-nox)";
     return true;
   }
+  // One script draws both figures in SVG and PNG; every path in it is absolute and titles are
+  // noenhanced (a channel name like acc_z is not a subscript).
   const std::string gp = base + "_adev.gp";
+  const double tau_fit_hi = r.error_after.tau_max_s;
+  const double tau_fit_lo = r.error_after.tau_min_s;
   {
     std::ofstream g(gp);
-    g << "set datafile separator ','\nset terminal svg size 900,600\nset logscale xy\n"
-         "set format y '%.0e'\nset grid\nset key bottom left\nset xlabel 'tau [s]'\n"
-         "set ylabel 'ADEV'\n";
-    g << "set output '" << base << "_before.svg'\n";
-    g << "set title '" << r.channel << ": before (white + GM over [Ts, 100 s]), band = 68 % interval'\n";
-    g << "plot '" << csv << "' skip 1 using 1:2:3:4 with yerrorbars title 'data ADEV', '' skip 1 "
-         "using 1:8 with lines lw 2 title 'model before'\n";
-    g << "set output '" << base << "_after.svg'\n";
-    g << "set title '" << r.channel << ": after (joint fit with the effects found)'\n";
-    g << "plot '" << csv << "' skip 1 using 1:5:6:7 with yerrorbars title 'data ADEV (cleaned)', "
-         "'' skip 1 using 1:9 with lines lw 2 title 'model after'\n";
+    g << "# ADEV of " << r.channel << ": data with its 68 % interval, the model and its terms.\n"
+      << "# Run from any directory: gnuplot " << gq(gp) << "\n"
+      << "set datafile separator ','\nset logscale xy\nset format y '%.0e'\nset grid\n"
+      << "set key bottom left noenhanced\nset xlabel 'tau [s]'\n"
+      << "set ylabel " << gq("Allan deviation [" + unit_of(r.channel) + "]") << "\n"
+      << "set style line 9 lc rgb '#888888' dt 2\n"
+      << "set arrow 1 from " << num(tau_fit_lo) << ", graph 0 to " << num(tau_fit_lo)
+      << ", graph 1 nohead ls 9\n"
+      << "set arrow 2 from " << num(tau_fit_hi) << ", graph 0 to " << num(tau_fit_hi)
+      << ", graph 1 nohead ls 9\n"
+      << "set label 1 'fitted range' at " << num(tau_fit_lo) << ", graph 0.97 offset 1,0\n";
+    // Only the terms the model holds are drawn (and keyed).
+    const auto present = [&r](const ModelParams& m, std::size_t t) {
+      for (const AdevPoint& p : r.adev) {
+        double v[kTerms];
+        term_adevs(m, p.tau_s, v);
+        if (v[t] > 0.0) {
+          return true;
+        }
+      }
+      return false;
+    };
+    const auto figure = [&](const char* which, int data_col, int model_col, int first_term,
+                            const ModelParams& m, const char* title) {
+      for (const char* term : {"svg size 900,600", "pngcairo size 900,600"}) {
+        const bool svg = std::string(term).rfind("svg", 0) == 0;
+        g << "set terminal " << term << "\nset output "
+          << gq(base + "_" + which + (svg ? ".svg" : ".png")) << "\n"
+          << "set title " << gq(r.channel + ": " + title) << " noenhanced\n"
+          << "plot " << gq(csv) << " skip 1 using 1:" << data_col << ":" << data_col + 1 << ":"
+          << data_col + 2 << " with yerrorbars title 'data (68 % interval)', '' skip 1 using 1:"
+          << model_col << " with lines lw 2 title 'model'";
+        for (std::size_t t = 0; t < kTerms; ++t) {
+          if (!present(m, t)) {
+            continue;
+          }
+          g << ", '' skip 1 using 1:($" << first_term + static_cast<int>(t) << " > 0 ? $"
+            << first_term + static_cast<int>(t) << " : 1/0) with lines dt 2 title "
+            << gq(kTermNames[t]);
+        }
+        g << "\n";
+      }
+    };
+    figure("before", 2, 8, 10 + static_cast<int>(kTerms), r.model_before,
+           "before (white + GM over [Ts, 100 s])");
+    figure("after", 5, 9, 10, r.model_after,
+           "after (joint fit with the effects found; data cleaned)");
   }
-  const std::string cmd = "gnuplot '" + gp + "' 2>/dev/null";
+  const std::string cmd = "gnuplot " + gq(gp) + " 2>/dev/null";
   if (std::system(cmd.c_str()) != 0) {
     message += "; gnuplot failed on " + gp;
     return true;
   }
-  message += ", " + base + "_before.svg, " + base + "_after.svg";
+  message += ", " + base + "_{before,after}.{svg,png} (" + gp + ")";
   return true;
 }
 
