@@ -1738,7 +1738,18 @@ class Analysis {
     if (o.lsb > 0.0) {
       out.lsb_note = "LSB given: " + fmt("%.6g", o.lsb);
     } else {
-      out.lsb = derive_lsb(y0, out.lsb_note);
+      // From the recorded samples only: the values filled into gaps (local means) are not on
+      // the data's lattice.
+      std::vector<double> finite;
+      if (out.gap_samples > 0) {
+        finite.reserve(y_in.size() - out.gap_samples);
+        for (const double v : y_in) {
+          if (std::isfinite(v)) {
+            finite.push_back(v);
+          }
+        }
+      }
+      out.lsb = derive_lsb(out.gap_samples > 0 ? finite : y0, out.lsb_note);
     }
     lsb = out.lsb;
     counts = to_counts(y0, offset, lsb, sat);  // of y below, kept current

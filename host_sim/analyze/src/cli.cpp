@@ -15,6 +15,7 @@
 #include "imu/analyze/analyze.hpp"
 #include "imu/cli/args.hpp"
 #include "imu/cli/file_out.hpp"
+#include "imu/cli/text_input.hpp"
 #include "imu/mat/mat_reader.hpp"
 
 namespace imu::analyze {
@@ -189,6 +190,7 @@ struct Job {
   std::string channel;
   bool counts_scaled = false;    // an integer variable, multiplied by its LSB
   bool counts_unscaled = false;  // an integer variable without an LSB: counts
+  std::string text_note;         // where a text file's rate and gaps came from
   std::vector<double> samples;
   Options o;
   Report r;
@@ -228,49 +230,10 @@ void run_jobs(std::vector<Job>& jobs) {
   }
 }
 
-// The run-time part: read, analyse (in parallel), print, write. Exit status.
-int analyze_file(const std::string& file, const std::string& channel_spec, double fs, double lsb,
-                 const std::string& json, const std::string& plots, const std::string& yaml) {
-  auto mf = imu::mat::MatFile::open(file);
-  if (!mf) {
-    return fail(mf.error().message, kExitRuntime);
-  }
-  const imu::mat::MatFile& m = mf.value();
+// Analyse the jobs (in parallel), print, write. Exit status.
+int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const std::string& json,
+           const std::string& plots, const std::string& yaml) {
   std::string err;
-  std::vector<std::string> channels;
-  if (!resolve_channels(m, file, channel_spec, channels, err)) {
-    return fail(err, kExitRuntime);
-  }
-  if (lsb > 0.0 && channels.size() > 1) {
-    return fail("--lsb applies to one channel; with several, each takes its LSB from the file",
-                kExitRuntime);
-  }
-  Options o;
-  if (fs > 0.0) {
-    o.fs_hz = fs;
-  } else if (!file_rate(m, file, o.fs_hz, err)) {
-    return fail(err, kExitRuntime);
-  }
-  std::vector<Job> jobs(channels.size());
-  for (std::size_t i = 0; i < channels.size(); ++i) {
-    bool integer_class = false;
-    if (!read_channel(m, channels[i], jobs[i].samples, integer_class, err)) {
-      return fail(err, kExitRuntime);
-    }
-    jobs[i].channel = channels[i];
-    jobs[i].o = o;
-    jobs[i].o.lsb = lsb > 0.0 ? lsb : file_lsb(m, base_name(channels[i]));
-    // Integer counts (int16 from a logger) with a known LSB are counts x LSB in the channel's
-    // unit; without one they stay counts (said in the report).
-    if (integer_class && jobs[i].o.lsb > 0.0) {
-      for (double& v : jobs[i].samples) {
-        v *= jobs[i].o.lsb;
-      }
-      jobs[i].counts_scaled = true;
-    } else if (integer_class) {
-      jobs[i].counts_unscaled = true;
-    }
-  }
   if (!plots.empty() && !imu::cli::make_dirs(plots, err)) {
     return fail(err, kExitRuntime);
   }
@@ -278,10 +241,13 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
   std::vector<Report> reports;
   for (Job& j : jobs) {
     if (!j.ok) {
-      return fail((channels.size() > 1 ? j.channel + ": " : std::string()) + j.err, kExitRuntime);
+      return fail((jobs.size() > 1 ? j.channel + ": " : std::string()) + j.err, kExitRuntime);
     }
     if (j.o.lsb > 0.0 && lsb <= 0.0) {
       j.r.lsb_note = "LSB from the file: " + j.r.lsb_note.substr(j.r.lsb_note.find(':') + 2);
+    }
+    if (!j.text_note.empty()) {
+      j.r.notes.insert(j.r.notes.begin(), j.text_note);
     }
     if (j.counts_scaled) {
       j.r.notes.insert(j.r.notes.begin(), "the variable holds integer counts: analysed as counts x "
@@ -332,6 +298,117 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
     }
   }
   return kExitOk;
+}
+
+// A text file's channels as jobs: NAME, a comma list, or all (the IMU channels it holds, else
+// every column but the time column). The rate: --fs, else the time column's.
+bool text_jobs(const std::string& file, const std::string& spec, double fs, double lsb,
+               std::vector<Job>& jobs, std::string& err) {
+  imu::cli::TextTable table;
+  if (!imu::cli::read_text_table(file, table, err)) {
+    return false;
+  }
+  std::vector<std::string> names;
+  if (spec == "all") {
+    for (const char* n : kImuChannels) {
+      if (std::find(table.names.begin(), table.names.end(), n) != table.names.end()) {
+        names.emplace_back(n);
+      }
+    }
+    if (names.empty()) {
+      for (const auto& n : table.names) {
+        if (n != "t" && n != "time" && n != "timestamp") {
+          names.push_back(n);
+        }
+      }
+    }
+  } else {
+    std::size_t pos = 0;
+    while (pos <= spec.size()) {
+      const std::size_t comma = spec.find(',', pos);
+      names.push_back(spec.substr(pos, comma == std::string::npos ? std::string::npos
+                                                                  : comma - pos));
+      if (comma == std::string::npos) {
+        break;
+      }
+      pos = comma + 1;
+    }
+  }
+  for (const auto& n : names) {
+    imu::cli::TextChannel tc;
+    if (!imu::cli::text_channel(table, n, fs, tc, err)) {
+      err.insert(0, file + ": ");
+      return false;
+    }
+    Job j;
+    j.channel = n;
+    j.samples = std::move(tc.samples);
+    j.o.fs_hz = tc.fs_hz;
+    j.o.lsb = lsb;
+    if (!tc.time_column.empty()) {
+      j.text_note = "text input: rate " + std::to_string(tc.fs_hz) + " Hz" +
+                    (fs > 0.0 ? " (--fs)" : " from the time column '" + tc.time_column + "'");
+      if (tc.time_gap_samples > 0) {
+        j.text_note += "; its steps left " + std::to_string(tc.time_gap_samples) +
+                       " samples missing (gaps)";
+      }
+    }
+    jobs.push_back(std::move(j));
+  }
+  return true;
+}
+
+// The run-time part: read, analyse (in parallel), print, write. Exit status.
+int analyze_file(const std::string& file, const std::string& channel_spec, double fs, double lsb,
+                 const std::string& json, const std::string& plots, const std::string& yaml) {
+  std::string err;
+  if (imu::cli::looks_like_text(file)) {
+    std::vector<Job> jobs;
+    if (!text_jobs(file, channel_spec, fs, lsb, jobs, err)) {
+      return fail(err, kExitRuntime);
+    }
+    return finish(file, jobs, lsb, json, plots, yaml);
+  }
+  auto mf = imu::mat::MatFile::open(file);
+  if (!mf) {
+    return fail(mf.error().message, kExitRuntime);
+  }
+  const imu::mat::MatFile& m = mf.value();
+  std::vector<std::string> channels;
+  if (!resolve_channels(m, file, channel_spec, channels, err)) {
+    return fail(err, kExitRuntime);
+  }
+  if (lsb > 0.0 && channels.size() > 1) {
+    return fail("--lsb applies to one channel; with several, each takes its LSB from the file",
+                kExitRuntime);
+  }
+  Options o;
+  if (fs > 0.0) {
+    o.fs_hz = fs;
+  } else if (!file_rate(m, file, o.fs_hz, err)) {
+    return fail(err, kExitRuntime);
+  }
+  std::vector<Job> jobs(channels.size());
+  for (std::size_t i = 0; i < channels.size(); ++i) {
+    bool integer_class = false;
+    if (!read_channel(m, channels[i], jobs[i].samples, integer_class, err)) {
+      return fail(err, kExitRuntime);
+    }
+    jobs[i].channel = channels[i];
+    jobs[i].o = o;
+    jobs[i].o.lsb = lsb > 0.0 ? lsb : file_lsb(m, base_name(channels[i]));
+    // Integer counts (int16 from a logger) with a known LSB are counts x LSB in the channel's
+    // unit; without one they stay counts (said in the report).
+    if (integer_class && jobs[i].o.lsb > 0.0) {
+      for (double& v : jobs[i].samples) {
+        v *= jobs[i].o.lsb;
+      }
+      jobs[i].counts_scaled = true;
+    } else if (integer_class) {
+      jobs[i].counts_unscaled = true;
+    }
+  }
+  return finish(file, jobs, lsb, json, plots, yaml);
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "data.hpp"
 #include "full_adev.hpp"
 #include "imu/cli/file_out.hpp"
+#include "imu/cli/text_input.hpp"
 #include "imu/error_model.hpp"
 #include "imu/mat/mat_writer.hpp"
 #include "imu/model_text.hpp"
@@ -360,10 +361,72 @@ int cmd_adev(int argc, char** argv) {
   want[chan] = true;
   lsb_over[chan] = lsb;
   SensorData sd;
-  if (!load_sensor_meta(path, want, want, lsb_over, fs, sd, err, renamed ? &vars : nullptr)) {
+  // Text input (CSV/TSV/blank-separated with a header; imu/cli/text_input.hpp): the column is
+  // read whole (text files are not streamed), its rate from --fs or a time column.
+  const bool text = imu::cli::looks_like_text(path);
+  if (text) {
+    imu::cli::TextTable table;
+    imu::cli::TextChannel tc;
+    if (!imu::cli::read_text_table(path, table, err) ||
+        !imu::cli::text_channel(table, chan_name, fs, tc, err)) {
+      const bool usage = err.rfind("no column", 0) == 0;  // like a MAT variable not found
+      return fail(cmd, err.rfind(path, 0) == 0 ? err : path + ": " + err,
+                  usage ? kExitUsage : kExitRuntime);
+    }
+    sd.path = path;
+    sd.fs_hz = tc.fs_hz;
+    sd.n_samples = tc.samples.size();
+    ChannelData& tch = sd.ch[chan];
+    tch.present = true;
+    tch.values = std::move(tc.samples);
+    tch.lsb = lsb > 0.0 ? lsb : default_lsb(chan);
+    tch.lsb_from_option = lsb > 0.0;
+    if (!(sd.fs_hz >= kMinFsHz && sd.fs_hz <= kMaxFsHz)) {
+      return fail(cmd, path + ": the time column gives " + std::to_string(sd.fs_hz) +
+                           " Hz, outside [1e-3, 1e6] Hz (give --fs)");
+    }
+  } else if (!load_sensor_meta(path, want, want, lsb_over, fs, sd, err,
+                               renamed ? &vars : nullptr)) {
     return fail(cmd, err, renamed && err.find("not found") != std::string::npos ? kExitUsage
                                                                                 : kExitRuntime);
   }
+  // The counts into a sink: streamed from a MAT-file, or from a text column's values (finite
+  // runs as counts, each run of missing samples between two finite ones as one gap, as
+  // stream_counts does).
+  const auto feed = [&](CountSink& sink, StreamTiming& timing) {
+    ChannelData& c = sd.ch[chan];
+    if (!text) {
+      return stream_counts(path, chan, c, sink, timing, err);
+    }
+    std::vector<std::int32_t> counts;
+    const int st = to_counts(path, chan, c, counts, err);
+    if (st != kExitOk) {
+      return st;
+    }
+    std::size_t i = 0;
+    const std::size_t n = c.values.size();
+    while (i < n && !std::isfinite(c.values[i])) {
+      ++i;
+    }
+    std::size_t end = n;
+    while (end > i && !std::isfinite(c.values[end - 1])) {
+      --end;
+    }
+    while (i < end) {
+      std::size_t j = i;
+      const bool finite = std::isfinite(c.values[i]);
+      while (j < end && std::isfinite(c.values[j]) == finite) {
+        ++j;
+      }
+      if (finite) {
+        sink.push(counts.data() + i, j - i);
+      } else {
+        sink.gap(j - i);
+      }
+      i = j;
+    }
+    return kExitOk;
+  };
   // The channel in chunks (issue 14: memory independent of the record's length); the times of
   // the interleaved steps are summed.
   ChannelData& ch = sd.ch[chan];
@@ -381,7 +444,7 @@ int cmd_adev(int argc, char** argv) {
   std::vector<AdevRow> rows;
   if (full) {
     FullAdevSink sink;
-    const int st = stream_counts(path, chan, ch, sink, tm, err);
+    const int st = feed(sink, tm);
     if (st != kExitOk) {
       return fail(cmd, err, st);
     }
@@ -389,7 +452,7 @@ int cmd_adev(int argc, char** argv) {
   } else {
     OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
     AdevSink sink(adev);
-    const int st = stream_counts(path, chan, ch, sink, tm, err);
+    const int st = feed(sink, tm);
     if (st != kExitOk) {
       return fail(cmd, err, st);
     }
