@@ -1,6 +1,10 @@
 # imu_apply_fw_rules(<target> [SYMBOL_TEST <test name>]): the firmware rules, in one place, for
 # every target whose code runs on the co-processor (fw/, the node, the hal codec, the M4 image):
 #  * -fno-exceptions -fno-rtti;
+#  * -ffp-contract=off: no fused multiply-add contraction, so float/double results are the same
+#    bits on every target (the Cortex-M4's VFMA.F32 and aarch64's FMADD would otherwise round
+#    differently from x86-64; the M4 node image's telemetry is compared with the host's byte
+#    for byte). Cost: a separate multiply and add where one fused instruction would do;
 #  * fw/src/fw_prelude.hpp force-included in every translation unit: it includes the only
 #    standard headers fw code may use and then poisons heap, exception, RTTI, stdio and OS
 #    identifiers (a use is a compile error);
@@ -15,7 +19,7 @@ set(IMU_FW_SYMBOL_CHECK ${CMAKE_CURRENT_LIST_DIR}/check_fw_symbols.cmake)
 
 function(imu_apply_fw_rules target)
   cmake_parse_arguments(ARG "" "SYMBOL_TEST" "" ${ARGN})
-  target_compile_options(${target} PRIVATE -fno-exceptions -fno-rtti
+  target_compile_options(${target} PRIVATE -fno-exceptions -fno-rtti -ffp-contract=off
     "SHELL:-include ${IMU_FW_PRELUDE}")
   target_link_libraries(${target} PRIVATE imu_warnings)
   get_target_property(type ${target} TYPE)
