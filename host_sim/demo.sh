@@ -53,8 +53,8 @@ field() { grep -o "\"$2\": [^,}]*" "$1" | head -1 | sed 's/.*: //'; }
       "$(field "$node" nis_mean)" "$(field "$node" whiteness_ratio)" "$(field "$node" cusum_alarm)"
     rm -f "$node"
   done
-  echo "(the CUSUM, slack 0.5 and threshold 10, latched, alarms on this 10^6-sample record with"
-  echo " the true model too: host_sim/README.md, 'Pushing the analysis' model to the node')"
+  echo "(CUSUM slack 0.025, threshold 247.4 for an in-control run length of 1e8 updates, latched:"
+  echo " fw/include/imu/residual_monitor.hpp)"
 } | tee "$out/node_models.txt"
 
 echo

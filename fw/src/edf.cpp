@@ -178,6 +178,32 @@ double edf_greenhall(int alpha, int d, double m, double stride_factor, double n_
   return 1.0 / inv_edf;
 }
 
+double log_gamma(double a) {
+  if (!(a > 0.0) || !std::isfinite(a)) {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
+  // Lanczos approximation, g = 7, 9 terms (relative error of Gamma ~1e-15 for a > 0), with the
+  // reflection formula below 1/2. Not std::lgamma: newlib's writes the sign to
+  // _REENT->_gamma_signgam, which on the arm-none-eabi toolchain here lies past the linked
+  // impure_data: a stray 4-byte write into the image's RAM (found in the M4 node image, where it
+  // hit the input frames).
+  constexpr double kPi = 3.14159265358979323846;
+  if (a < 0.5) {
+    return std::log(kPi / std::sin(kPi * a)) - log_gamma(1.0 - a);
+  }
+  constexpr double kG = 7.0;
+  constexpr double kC[9] = {0.99999999999980993,  676.5203681218851,     -1259.1392167224028,
+                            771.32342877765313,   -176.61502916214059,   12.507343278686905,
+                            -0.13857109526572012, 9.9843695780195716e-6, 1.5056327351493116e-7};
+  const double x = a - 1.0;
+  double sum = kC[0];
+  for (int i = 1; i < 9; ++i) {
+    sum += kC[i] / (x + static_cast<double>(i));
+  }
+  const double t = x + kG + 0.5;
+  return 0.5 * std::log(2.0 * kPi) + (x + 0.5) * std::log(t) - t + std::log(sum);
+}
+
 double gamma_p(double a, double x) {
   if (!(a > 0.0) || !(x >= 0.0)) {
     return 0.0;
@@ -187,7 +213,7 @@ double gamma_p(double a, double x) {
   }
   constexpr int kMaxIter = 2000;
   constexpr double kEps = 1e-16;
-  const double log_prefactor = -x + a * std::log(x) - std::lgamma(a);
+  const double log_prefactor = -x + a * std::log(x) - log_gamma(a);
   if (x < a + 1.0) {  // series
     double ap = a;
     double del = 1.0 / a;
@@ -245,7 +271,7 @@ double chi2_quantile(double p, double dof) {
   if (!(x > lo) || !(x < hi)) {
     x = 0.5 * (lo + hi);
   }
-  const double lg = std::lgamma(a);
+  const double lg = log_gamma(a);
   for (int it = 0; it < 200; ++it) {
     const double f = gamma_p(a, 0.5 * x) - p;
     if (f < 0.0) {

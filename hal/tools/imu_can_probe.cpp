@@ -12,7 +12,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "imu/hal/can_socket.hpp"
+#include "imu/hal/linux/can_socket.hpp"
 #include "imu/hal/rx_pump.hpp"
 
 namespace {

@@ -10,7 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/linux/gpio_line.hpp"
 
 namespace {
 

@@ -21,7 +21,60 @@ TEST(ResidualMonitor, RejectsBadConfig) {
   imu::WhitenessMonitor<4> w;
   EXPECT_EQ(w.configure(8), imu::MonitorStatus::kBadConfig);  // < 4 kLags
   imu::Cusum c;
-  EXPECT_EQ(c.configure(0.5F, 0.0F), imu::MonitorStatus::kBadConfig);
+  EXPECT_EQ(c.configure_threshold(0.5F, 0.0F), imu::MonitorStatus::kBadConfig);
+  EXPECT_EQ(c.configure(0.5F, 1.0), imu::MonitorStatus::kBadConfig);    // ARL0 < 10
+  EXPECT_EQ(c.configure(-0.1F, 1e6), imu::MonitorStatus::kBadConfig);   // negative slack
+  EXPECT_EQ(c.configure(0.5F, 1e300), imu::MonitorStatus::kBadConfig);  // ARL0 > 1e15
+}
+
+TEST(ResidualMonitor, CusumThresholdIsSizedFromTheStatedArl0) {
+  // Siegmund's approximation against the classical ARL table of the two-sided tabular CUSUM
+  // with k = 1/2 (Montgomery, "Introduction to Statistical Quality Control"): in control 168
+  // (h = 4) and 465 (h = 5); the formula gives 169.0 and 469.1: within 2.5 %.
+  EXPECT_NEAR(imu::cusum_arl0_two_sided(0.5, 4.0), 168.0, 4.0);
+  EXPECT_NEAR(imu::cusum_arl0_two_sided(0.5, 5.0), 465.0, 10.0);
+  // 1-sigma shift, h = 5: table 10.4 (the far side adds nothing); the formula gives 10.34.
+  EXPECT_NEAR(imu::cusum_arl_one_sided(1.0, 0.5, 5.0), 10.4, 0.3);
+  // ARL0 = 1e8 updates at k = 0.5 is h = 17.25 (two-sided ARL0 = e^b - b - 1 for k = 0.5:
+  // b = ln(1e8 + b + 1) = 18.42 by hand, h = b - 1.166); the inversion reproduces the ARL it
+  // was asked for. The default design (k = 0.025, ARL0 = 1e8) has h = 247.4: 2 ARL0 2 k^2 =
+  // e^{2 k b} - 2 k b - 1 gives 0.05 b = ln(2.5e5 + 0.05 b + 1) = 12.43 by hand, b = 248.6.
+  imu::Cusum c;
+  ASSERT_EQ(c.configure(0.5F), imu::MonitorStatus::kOk);
+  EXPECT_NEAR(c.threshold(), 17.25F, 0.01F);
+  EXPECT_NEAR(imu::cusum_arl0_two_sided(0.5, static_cast<double>(c.threshold())) / 1e8, 1.0,
+              1e-4);  // float h: 1e-7 relative in h is ~2e-6 in the ARL
+  ASSERT_EQ(c.configure(), imu::MonitorStatus::kOk);
+  EXPECT_FLOAT_EQ(c.slack(), 0.025F);
+  EXPECT_NEAR(c.threshold(), 247.4F, 0.1F);
+  for (const double arl0 : {1e3, 1e6, 1e10}) {
+    double h = 0.0;
+    ASSERT_EQ(imu::cusum_threshold_for_arl0(0.25, arl0, h), imu::MonitorStatus::kOk);
+    EXPECT_NEAR(imu::cusum_arl0_two_sided(0.25, h) / arl0, 1.0, 1e-5) << arl0;
+  }
+}
+
+TEST(ResidualMonitor, CusumFalseAlarmCountMatchesItsDesignArl0) {
+  // White N(0,1) input, threshold sized for ARL0 = 2000 updates, re-armed after each alarm:
+  // 2e6 updates give ~1000 alarms (sd ~32 for a near-geometric run length). The band 850..1150
+  // holds the formula's few % error; a threshold not derived from ARL0 (k = 0.5: h = 10 gives
+  // ~28 alarms, h = 5 ~4300) fails it. Both the fast slack and the default small one.
+  for (const float k : {0.5F, imu::Cusum::kDefaultSlack}) {
+    imu::GaussianRng rng(23);
+    imu::Cusum c;
+    ASSERT_EQ(c.configure(k, 2000.0), imu::MonitorStatus::kOk);
+    std::uint32_t alarms = 0;
+    for (int i = 0; i < 2000000; ++i) {
+      if (c.push(static_cast<float>(rng.normal()))) {
+        ++alarms;
+        c.reset();
+      }
+    }
+    std::printf("CUSUM k = %.3f, h = %.3f (ARL0 2000): %u alarms in 2e6 updates\n",
+                static_cast<double>(k), static_cast<double>(c.threshold()), alarms);
+    EXPECT_GT(alarms, 850U) << k;
+    EXPECT_LT(alarms, 1150U) << k;
+  }
 }
 
 TEST(ResidualMonitor, NisBoundsAreTheChiSquareQuantiles) {
@@ -38,7 +91,7 @@ TEST(ResidualMonitor, WhiteInputRaisesFewAlarmsAndScaledInputIsFlagged) {
   imu::GaussianRng rng(17);
   imu::ResidualMonitors<4> mon;
   ASSERT_EQ(mon.configure(1000), imu::MonitorStatus::kOk);
-  ASSERT_EQ(mon.cusum.configure(0.5F, 5.0F), imu::MonitorStatus::kOk);  // short ARL: countable
+  ASSERT_EQ(mon.cusum.configure_threshold(0.5F, 5.0F), imu::MonitorStatus::kOk);  // short ARL: countable
   constexpr int kBlocks = 400;
   std::uint32_t cusum_alarms = 0;
   for (int i = 0; i < kBlocks * 1000; ++i) {
@@ -95,7 +148,7 @@ TEST(ResidualMonitor, CorrelatedInnovationsAreFlagged) {
 TEST(ResidualMonitor, CusumFindsAStepAndItsTime) {
   imu::GaussianRng rng(8);
   imu::Cusum c;
-  ASSERT_EQ(c.configure(0.5F, 5.0F), imu::MonitorStatus::kOk);
+  ASSERT_EQ(c.configure_threshold(0.5F, 5.0F), imu::MonitorStatus::kOk);
   std::uint64_t alarm_at = 0;
   for (int i = 1; i <= 3000; ++i) {
     const double step = i > 2000 ? -1.5 : 0.0;  // downward 1.5-sigma step after update 2000
@@ -125,11 +178,11 @@ TEST(ResidualMonitor, CusumReconfiguredCountsFromZero) {
   // A step right at the start of a reconfigured monitor: its time is update 0 of the new
   // configuration, not a count left over from before.
   imu::Cusum c;
-  ASSERT_EQ(c.configure(), imu::MonitorStatus::kOk);
+  ASSERT_EQ(c.configure_threshold(0.5F, 10.0F), imu::MonitorStatus::kOk);
   for (int i = 0; i < 100; ++i) {
     c.push(0.0F);
   }
-  ASSERT_EQ(c.configure(), imu::MonitorStatus::kOk);
+  ASSERT_EQ(c.configure_threshold(0.5F, 10.0F), imu::MonitorStatus::kOk);
   for (int i = 0; i < 20 && !c.alarm(); ++i) {
     c.push(3.0F);
   }
@@ -173,10 +226,10 @@ TEST(ResidualMonitor, FilterOnSeedDataWithABiasStepRaisesTheCusum) {
   std::printf("bias step 0.02 m/s^2 (0.6 sigma of the innovation) at sample 300000: CUSUM alarm "
               "at %d, %u false alarms before\n", detected_at, false_alarms);
   ASSERT_GE(detected_at, 300000);
-  // 0.6-sigma step, k = 0.5, h = 10: drift 0.1/update (the filter absorbs the step only over
-  // ~1/K = 2500 updates), so the alarm comes after ~110 updates; 1000 is the stated limit.
+  // 0.6-sigma step, default k = 0.025, h = 247.4: Siegmund's mean delay ~430 updates if the
+  // shift stayed (the filter absorbs it only over ~1/K = 2500 updates); 1000 is the limit.
   EXPECT_LT(detected_at, 301000);
-  EXPECT_LT(false_alarms, 20U);  // default h = 10: ARL ~7e4, ~4 expected in 3e5 updates
+  EXPECT_LT(false_alarms, 2U);  // default ARL0 1e8: 3e5 updates give 0.003 expected
 }
 
 }  // namespace

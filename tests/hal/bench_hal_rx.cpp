@@ -15,7 +15,7 @@
 #include <thread>
 #include <vector>
 
-#include "imu/hal/can_socket.hpp"
+#include "imu/hal/linux/can_socket.hpp"
 #include "imu/hal/rx_pump.hpp"
 
 namespace {

@@ -1,7 +1,7 @@
 // imu/hal/can_socket.hpp + rx_pump.hpp over the loopback transport (AF_UNIX SEQPACKET): the
 // same recvmmsg/cmsg reader that serves SocketCAN, fed with every robustness case. The kernel
 // paths of SocketCAN itself (vcan) are exercised in the VM tests.
-#include "imu/hal/can_socket.hpp"
+#include "imu/hal/linux/can_socket.hpp"
 
 #include <gtest/gtest.h>
 #include <sys/socket.h>

@@ -1,7 +1,8 @@
 // imu/hal/gpio_line.hpp. There is no GPIO chip on the build machines: these tests cover the
 // start-up errors (missing chip or line must be a clear error naming it) and the interfaces.
 // Requesting real lines is tested in the VM against gpio-sim (imu-gpio-probe).
-#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/linux/gpio_line.hpp"
+#include "imu/hal/sim/memory_line.hpp"
 
 #include <gtest/gtest.h>
 

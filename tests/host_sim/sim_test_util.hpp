@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "imu/node/fw_main.hpp"
 #include "imu/sim/cli.hpp"
 
 namespace simtest {
@@ -37,7 +38,7 @@ inline CliResult run(const std::vector<std::string>& args, bool fw = false) {
   argv.push_back(nullptr);
   testing::internal::CaptureStdout();
   testing::internal::CaptureStderr();
-  const int st = fw ? imu::sim::fw_main(static_cast<int>(store.size()), argv.data())
+  const int st = fw ? imu::node::fw_main(static_cast<int>(store.size()), argv.data())
                     : imu::sim::cli_main(static_cast<int>(store.size()), argv.data());
   CliResult r{st, testing::internal::GetCapturedStdout(), testing::internal::GetCapturedStderr()};
   return r;

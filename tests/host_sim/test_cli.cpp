@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -244,11 +245,12 @@ TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
 
 }  // namespace
 
-/// Issue 12 items 2-3 on the demo's synthetic data (synth defaults: the seed's model + RRW):
-/// the seed's model on the node raises the CUSUM alarm, and the model `imu-sim analyze` finds,
-/// pushed with `run --model`, is the one the node reports it runs, with an NIS mean in
-/// [0.8, 1.25] (the issue's band). The issue's "no CUSUM alarm with the pushed model" does NOT
-/// hold yet: see DISABLED_PushedAnalysisModelGivesNoCusumAlarm.
+/// Issue 12's criterion on the demo's synthetic data (synth defaults: the seed's model + RRW,
+/// 1e6 samples): the seed's model on the node raises the CUSUM alarm, and the model
+/// `imu-sim analyze` finds, pushed with `run --model`, is the one the node reports it runs,
+/// gives no CUSUM alarm and an NIS mean in [0.8, 1.25] (the issue's band). The CUSUM threshold
+/// is sized for an in-control ARL of 1e8 updates (imu/residual_monitor.hpp), so a correct model
+/// has a ~1 % chance of a false alarm over this record; the seed's model is not one.
 namespace {
 void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::string& push_json) {
   const std::string mat = dir.file("synth.mat");
@@ -274,7 +276,7 @@ void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::str
 }
 }  // namespace
 
-TEST(SimCli, PushedAnalysisModelRunsOnTheNodeOnTheDemoData) {
+TEST(SimCli, SeedModelAlarmsAndPushedAnalysisModelIsQuietOnTheDemoData) {
   SKIP_IF_EMULATED();
   simtest::TempDir dir;
   std::string seed_json;
@@ -285,24 +287,17 @@ TEST(SimCli, PushedAnalysisModelRunsOnTheNodeOnTheDemoData) {
       << "the seed's model raises the CUSUM alarm on the demo data";
   EXPECT_NE(push_json.find("\"origin\": \"pushed\""), std::string::npos) << push_json;
   EXPECT_NE(push_json.find("\"model_pushed\": true"), std::string::npos);
+  EXPECT_NE(push_json.find("\"cusum_alarm\": false"), std::string::npos)
+      << "the pushed analysis model gives no CUSUM alarm";
   const double nis = simtest::json_number_in(push_json, "node", "nis_mean");
+  std::printf("seed: cusum_alarm %s; pushed: cusum_alarm %s, nis_mean %.4f\n",
+              seed_json.find("\"cusum_alarm\": true") != std::string::npos ? "true" : "false",
+              push_json.find("\"cusum_alarm\": true") != std::string::npos ? "true" : "false",
+              nis);
   EXPECT_GE(nis, 0.8);
   EXPECT_LE(nis, 1.25);
   EXPECT_EQ(simtest::json_number_in(push_json, "node", "model_rejected"), 0.0);
   EXPECT_GE(simtest::json_number_in(push_json, "node", "n_states"), 1.0);
-}
-
-// The issue's criterion, kept and disabled because it fails today: the CUSUM (slack 0.5,
-// threshold 10, latched) alarms with the pushed model and even with the true model (seed GM +
-// RRW K = 1.4e-4, 2 states). Its in-control ARL is about 1.4e5 samples per side (Siegmund's
-// approximation), shorter than the 10^6-sample record: it is the CUSUM's sizing, not the
-// model, that decides this alarm.
-TEST(SimCli, DISABLED_PushedAnalysisModelGivesNoCusumAlarm) {
-  simtest::TempDir dir;
-  std::string seed_json;
-  std::string push_json;
-  run_seed_and_pushed(dir, seed_json, push_json);
-  EXPECT_NE(push_json.find("\"cusum_alarm\": false"), std::string::npos);
 }
 
 /// The model record (v1) has no slot for the narrowband oscillation: `run --model` gives its

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "imu/hal/can_socket.hpp"
+#include "imu/hal/linux/can_socket.hpp"
 #include "imu/hal/codec.hpp"
 #include "sim_test_util.hpp"
 

@@ -14,11 +14,27 @@
 //   usual 95 % band), and a Box-Pierce portmanteau Q = window * sum r_l^2 against
 //   chi2_c(kLags) (one combined flag with the stated false-alarm rate 1 - c).
 // * Cusum: two-sided CUSUM for a step in the mean of nu: g+ = max(0, g+ + nu - k),
-//   g- = max(0, g- - nu - k); alarm when either exceeds h. Defaults k = 0.5, h = 10: two-sided
-//   in-control average run length ~7e4 updates (Siegmund's approximation; ~12 min at 100 Hz),
-//   detection of a 1-sigma step in ~22 updates (h = 5: ARL ~470, ~11 updates). The estimated
-//   step time is the update index at which the alarming sum last left zero. The alarm latches
-//   until reset().
+//   g- = max(0, g- - nu - k); alarm when either exceeds h. The alarm latches until reset(), so
+//   over a record of n updates the false-alarm probability is ~1 - exp(-n / ARL0): h is sized
+//   from a stated in-control average run length ARL0, not picked by hand. Design: Siegmund's
+//   approximation (D. Siegmund, "Sequential Analysis", Springer 1985; also in Basseville &
+//   Nikiforov, "Detection of Abrupt Changes", 1993): for N(mu, 1) input one side has
+//     ARL(mu) ~ (exp(-2 D b) + 2 D b - 1) / (2 D^2),  D = mu - k,  b = h + 1.166
+//   (b^2 when D = 0; 1.166 = 2 x 0.583 is the Gaussian overshoot correction), and the two sides
+//   combine as 1/ARL = 1/ARL+ + 1/ARL-. cusum_threshold_for_arl0() inverts this at configure().
+//   Defaults: ARL0 = 1e8 updates (~11.6 days at 100 Hz; 100x a 1e6-update record, i.e. a ~1 %
+//   false-alarm probability over such a record) and k = 0.025, half the smallest persistent mean
+//   shift worth detecting, delta = 0.05 sd: the innovation mean of a bias estimate that is off by
+//   ~2 of the filter's own standard deviations (sqrt(P/S) = 0.022 for the seed's accelerometer
+//   model at 100 Hz). That is the scale of a wrong model: a missing random walk or a too short
+//   Gauss-Markov time pulls the estimate by a few hundredths of an sd for minutes, which a
+//   k = 0.5 CUSUM cannot tell from noise. Then h = 247.4, b = 248.6, and the mean delays are
+//   (same formula): 0.05 sd ~9100 updates, 0.1 sd ~3200, 0.6 sd ~430, 1 sd ~250 (k = 0.5 with
+//   the same ARL0: h = 17.25, 1 sd in ~35 updates but 0.05 sd in ~4e7; a fast step detector
+//   would be a second instance with its own share of the false-alarm budget). The design
+//   assumes white N(0, 1) innovations (a correct model); the whiteness monitor says whether
+//   they are. The estimated step time is the update index at which the alarming sum last left
+//   zero.
 // Cost per update: NIS 3 flops, whiteness kLags + 3 multiply-adds, CUSUM 4 flops; end of block
 // O(kLags). No heap, not re-entrant on one instance.
 #ifndef IMU_RESIDUAL_MONITOR_HPP
@@ -184,10 +200,69 @@ class WhitenessMonitor {
   std::uint32_t flagged_blocks_ = 0;
 };
 
+/// Siegmund's approximation of the average run length of ONE side of a CUSUM with slack k >= 0
+/// and threshold h > 0 (units of the input's sd) for N(mean_shift, 1) input (header comment).
+/// Not finite (inf) when it overflows a double. Constant time.
+[[nodiscard]] inline double cusum_arl_one_sided(double mean_shift, double slack,
+                                                double threshold) {
+  const double b = threshold + 1.166;
+  const double d = mean_shift - slack;
+  if (std::fabs(d) < 1e-9) {
+    return b * b;  // the limit D -> 0 of the expression below
+  }
+  return (std::exp(-2.0 * d * b) + 2.0 * d * b - 1.0) / (2.0 * d * d);
+}
+
+/// In-control (mean 0) average run length of the two-sided CUSUM: 1 / (1/ARL+ + 1/ARL-), both
+/// sides equal by symmetry.
+[[nodiscard]] inline double cusum_arl0_two_sided(double slack, double threshold) {
+  return 0.5 * cusum_arl_one_sided(0.0, slack, threshold);
+}
+
+/// The threshold h at which the two-sided in-control ARL equals arl0_updates, for slack k.
+/// k in [0, 4], arl0_updates in [10, 1e15]; kBadConfig otherwise. Bisection on the monotone
+/// ARL(h) to 1e-9 relative in h: ~40 evaluations, once per configure(), not per update.
+[[nodiscard]] inline MonitorStatus cusum_threshold_for_arl0(double slack, double arl0_updates,
+                                                            double& threshold) {
+  if (!(slack >= 0.0 && slack <= 4.0) || !(arl0_updates >= 10.0 && arl0_updates <= 1e15)) {
+    return MonitorStatus::kBadConfig;
+  }
+  double lo = 1e-3;  // ARL(lo) < 10 for every k in range
+  double hi = 1e-3;
+  while (cusum_arl0_two_sided(slack, hi) < arl0_updates) {
+    hi *= 2.0;  // ARL grows at least like h^2 / 2: a few doublings (k = 0: h ~ 4.5e7 max)
+    if (hi > 1e9) {
+      return MonitorStatus::kBadConfig;
+    }
+  }
+  for (int i = 0; i < 200 && hi - lo > 1e-9 * hi; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (cusum_arl0_two_sided(slack, mid) < arl0_updates ? lo : hi) = mid;
+  }
+  threshold = hi;
+  return MonitorStatus::kOk;
+}
+
 class Cusum {
  public:
-  /// slack k >= 0 and threshold h > 0, in units of the innovation's standard deviation.
-  [[nodiscard]] MonitorStatus configure(float slack = 0.5F, float threshold = 10.0F) {
+  static constexpr float kDefaultSlack = 0.025F;
+  /// Default in-control two-sided ARL (updates): see the header comment.
+  static constexpr double kDefaultArl0Updates = 1e8;
+
+  /// The design configuration: slack k (sd units) and the in-control two-sided average run
+  /// length ARL0 (updates) the threshold is sized for. Resets the monitor.
+  [[nodiscard]] MonitorStatus configure(float slack = kDefaultSlack,
+                                        double arl0_updates = kDefaultArl0Updates) {
+    double h = 0.0;
+    if (!std::isfinite(slack) ||
+        cusum_threshold_for_arl0(static_cast<double>(slack), arl0_updates, h) !=
+            MonitorStatus::kOk) {
+      return MonitorStatus::kBadConfig;
+    }
+    return configure_threshold(slack, static_cast<float>(h));
+  }
+  /// An explicit threshold h > 0 (sd units) instead of an ARL0 (e.g. a short-ARL test).
+  [[nodiscard]] MonitorStatus configure_threshold(float slack, float threshold) {
     if (!(slack >= 0.0F) || !(threshold > 0.0F) || !std::isfinite(slack + threshold)) {
       return MonitorStatus::kBadConfig;
     }
@@ -237,10 +312,12 @@ class Cusum {
   /// number step_index() (valid while alarm()).
   [[nodiscard]] std::uint64_t step_index() const { return step_index_; }
   [[nodiscard]] std::uint64_t updates() const { return n_; }
+  [[nodiscard]] float slack() const { return k_; }
+  [[nodiscard]] float threshold() const { return h_; }
 
  private:
-  float k_ = 0.5F;
-  float h_ = 10.0F;
+  float k_ = kDefaultSlack;
+  float h_ = 247.4F;  // configure() sizes it; this is the default design's value
   float gp_ = 0.0F;
   float gm_ = 0.0F;
   std::uint64_t n_ = 0;

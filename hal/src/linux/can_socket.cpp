@@ -1,5 +1,5 @@
 // CanSocket: SocketCAN and AF_UNIX SEQPACKET loopback behind one read/write path.
-#include "imu/hal/can_socket.hpp"
+#include "imu/hal/linux/can_socket.hpp"
 
 #include <linux/can.h>
 #include <linux/can/error.h>

@@ -2,7 +2,7 @@
 #include <cstdio>
 #include <cstring>
 
-#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/linux/gpio_line.hpp"
 
 namespace imu::hal {
 

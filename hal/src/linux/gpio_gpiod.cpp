@@ -6,7 +6,7 @@
 #include <cerrno>
 #include <cstdio>
 
-#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/linux/gpio_line.hpp"
 
 namespace imu::hal {
 

@@ -2,7 +2,7 @@
 // with kUnavailable and a message, so the rest of the program builds and runs without GPIO.
 #include <cstdio>
 
-#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/linux/gpio_line.hpp"
 
 namespace imu::hal {
 

@@ -1,9 +1,9 @@
-// Entry points of the host executables, callable in-process (tests) as well as from main().
+// Entry point of imu-sim, callable in-process (tests) as well as from main():
 //
 //   imu-sim synth | model | adev | run | analyze ...   (cli_main; see host_sim/README.md)
-//   imu-fw --bus loopback|vcan0|can0 [...]              (fw_main)
 //
-// Both return the process exit status: 0 success, 1 a run-time failure (bad file, bus error,
+// (imu-fw's is imu/node/fw_main.hpp, host_sim/node.) It returns the process exit status:
+// 0 success, 1 a run-time failure (bad file, bus error,
 // no telemetry), 2 a command-line error. Every failure prints one line on stderr that names the
 // command and the problem. Host code: allocates, uses the OS, never lets an exception escape.
 #ifndef IMU_SIM_CLI_HPP
@@ -13,9 +13,6 @@ namespace imu::sim {
 
 /// imu-sim. argv[0] is the program name; argv[1] the subcommand.
 [[nodiscard]] int cli_main(int argc, char** argv);
-
-/// imu-fw. argv[0] is the program name.
-[[nodiscard]] int fw_main(int argc, char** argv);
 
 }  // namespace imu::sim
 

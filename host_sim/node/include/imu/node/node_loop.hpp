@@ -8,7 +8,7 @@
 #include <atomic>
 #include <cstdint>
 
-#include "imu/hal/can_socket.hpp"
+#include "imu/hal/linux/can_socket.hpp"
 #include "imu/node/node.hpp"
 
 namespace imu::node {

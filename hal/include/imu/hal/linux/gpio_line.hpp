@@ -3,33 +3,23 @@
 // with kernel edge timestamps. Chip and line names are configuration (LineConfig), never
 // constants; a missing chip or line is reported at open() with a message naming both.
 //
-// Narrow interfaces: DigitalInput, DigitalOutput (what the application needs), implemented by
-// GpioLine (libgpiod 1.6 C API, RAII) and MemoryLine (in-memory, for simulation and tests).
+// Linux backend of the digital-line port (imu/hal/digital_line.hpp: DigitalInput,
+// DigitalOutput): GpioLine (libgpiod 1.6 C API, RAII). The simulation backend is MemoryLine
+// (imu/hal/sim/memory_line.hpp).
 // The GpioLine backend is chosen by CMake: with libgpiod found it uses it; without (e.g. a
 // cross build lacking the arm64 libgpiod) every open() returns kUnavailable with a message.
 // No exceptions cross this boundary; every call returns a GpioStatus.
-#ifndef IMU_HAL_GPIO_LINE_HPP
-#define IMU_HAL_GPIO_LINE_HPP
+#ifndef IMU_HAL_LINUX_GPIO_LINE_HPP
+#define IMU_HAL_LINUX_GPIO_LINE_HPP
 
 #include <cstdint>
+
+#include "imu/hal/digital_line.hpp"
 
 struct gpiod_chip;
 struct gpiod_line;
 
 namespace imu::hal {
-
-enum class GpioStatus : std::uint8_t {
-  kOk,
-  kUnavailable,     ///< built without libgpiod
-  kNoSuchChip,
-  kNoSuchLine,
-  kLineBusy,        ///< requested by another consumer
-  kNotOpen,
-  kWrongDirection,  ///< write() on an input, read of edges on a non-edge line, ...
-  kTimeout,
-  kBadArgument,
-  kSysError,
-};
 
 [[nodiscard]] const char* to_string(GpioStatus s);
 
@@ -52,18 +42,6 @@ struct LineConfig {
 struct EdgeEvent {
   bool rising;  ///< towards active (after active_low inversion)
   std::uint64_t time_ns;
-};
-
-class DigitalInput {
- public:
-  virtual ~DigitalInput() = default;
-  [[nodiscard]] virtual GpioStatus read(bool& active) = 0;
-};
-
-class DigitalOutput {
- public:
-  virtual ~DigitalOutput() = default;
-  [[nodiscard]] virtual GpioStatus write(bool active) = 0;
 };
 
 /// A line requested through libgpiod. Move-only; releases the line and closes the chip when
@@ -106,27 +84,6 @@ class GpioLine final : public DigitalInput, public DigitalOutput {
   char error_[192] = {};
 };
 
-/// In-memory line: reads what was last written or set by set(). For simulation and tests of
-/// code that takes a DigitalInput / DigitalOutput.
-class MemoryLine final : public DigitalInput, public DigitalOutput {
- public:
-  [[nodiscard]] GpioStatus read(bool& active) override {
-    active = value_;
-    return GpioStatus::kOk;
-  }
-  [[nodiscard]] GpioStatus write(bool active) override {
-    value_ = active;
-    ++writes_;
-    return GpioStatus::kOk;
-  }
-  void set(bool active) { value_ = active; }
-  [[nodiscard]] std::uint64_t writes() const { return writes_; }
-
- private:
-  bool value_ = false;
-  std::uint64_t writes_ = 0;
-};
-
 }  // namespace imu::hal
 
-#endif  // IMU_HAL_GPIO_LINE_HPP
+#endif  // IMU_HAL_LINUX_GPIO_LINE_HPP

@@ -45,7 +45,7 @@
 #include "imu/error_model.hpp"
 #include "imu/hal/codec.hpp"
 #include "imu/hal/frame_io.hpp"
-#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/digital_line.hpp"
 #include "imu/hal/receiver.hpp"
 #include "imu/online_adev.hpp"
 #include "imu/residual_monitor.hpp"

@@ -1,4 +1,4 @@
-// Tests of the firmware node core (host_sim/node/node.hpp) through its public API: frames in,
+// Tests of the firmware node (fw/node, imu/node/node.hpp) through its public API: frames in,
 // telemetry frames out through a capturing FrameSink, GPIO through hal::MemoryLine.
 #include "imu/node/node.hpp"
 
@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "imu/hal/codec.hpp"
+#include "imu/hal/sim/memory_line.hpp"
 #include "imu/hal/receiver.hpp"
 #include "imu/noise_sim.hpp"
 

@@ -4,22 +4,104 @@
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "common.hpp"
-#include "imu/hal/can_socket.hpp"
-#include "imu/hal/gpio_line.hpp"
+#include "imu/hal/linux/can_socket.hpp"
+#include "imu/hal/linux/gpio_line.hpp"
+#include "imu/node/fw_main.hpp"
 #include "imu/node/node.hpp"
 #include "imu/node/node_loop.hpp"
-#include "imu/sim/cli.hpp"
-#include "report.hpp"
 
-namespace imu::sim {
+namespace imu::node {
 namespace {
 
 constexpr const char* kCmd = "imu-fw";
+constexpr const char* const kChannelNames[kChannels] = {"acc_x",  "acc_y",  "acc_z",
+                                                        "gyro_x", "gyro_y", "gyro_z"};
+
+int fail(const char* cmd, const std::string& msg, int status = 1) {
+  std::fprintf(stderr, "%s: %s\n", cmd, msg.c_str());
+  return status;
+}
+
+struct OptSpec {
+  const char* name;
+  bool has_value;
+};
+
+/// imu-fw's command line: `--name VALUE`, `--name=VALUE`, `--flag`; no positionals. Errors are
+/// one line without the command's name.
+class Args {
+ public:
+  bool parse(int argc, char** argv, const std::vector<OptSpec>& specs, std::string& err) {
+    for (int i = 1; i < argc; ++i) {
+      std::string arg = argv[i];
+      std::string value;
+      bool inline_value = false;
+      const std::size_t eq = arg.find('=');
+      if (arg.rfind("--", 0) == 0 && eq != std::string::npos) {
+        value = arg.substr(eq + 1);
+        arg = arg.substr(0, eq);
+        inline_value = true;
+      }
+      if (arg == "-h") {
+        arg = "--help";
+      }
+      const OptSpec* spec = nullptr;
+      for (const OptSpec& sp : specs) {
+        if (arg == sp.name) {
+          spec = &sp;
+        }
+      }
+      if (spec == nullptr) {
+        err = "unknown option or argument '" + arg + "'";
+        return false;
+      }
+      if (spec->has_value && !inline_value) {
+        if (i + 1 >= argc) {
+          err = arg + " needs a value";
+          return false;
+        }
+        value = argv[++i];
+      } else if (!spec->has_value && inline_value) {
+        err = arg + " takes no value";
+        return false;
+      }
+      opts_[arg] = value;
+    }
+    return true;
+  }
+  [[nodiscard]] bool has(const std::string& name) const { return opts_.count(name) != 0; }
+  [[nodiscard]] std::string get(const std::string& name, const std::string& def = "") const {
+    const auto it = opts_.find(name);
+    return it == opts_.end() ? def : it->second;
+  }
+  /// def if absent; false (with err) unless the whole value is a finite number.
+  [[nodiscard]] bool number(const std::string& name, double def, double& out,
+                            std::string& err) const {
+    const auto it = opts_.find(name);
+    if (it == opts_.end()) {
+      out = def;
+      return true;
+    }
+    const char* b = it->second.c_str();
+    char* e = nullptr;
+    const double v = std::strtod(b, &e);
+    if (e == b || *e != '\0' || !std::isfinite(v)) {
+      err = name + ": '" + it->second + "' is not a finite number";
+      return false;
+    }
+    out = v;
+    return true;
+  }
+
+ private:
+  std::map<std::string, std::string> opts_;
+};
 
 std::atomic<bool> g_stop{false};
 
@@ -50,7 +132,7 @@ int fw_main(int argc, char** argv) {
       {"--status-period", true},
       {"--adev-period", true}, {"--init-samples", true}, {"--quiet", false},
       {"--help", false}};
-  if (!a.parse(argc, argv, 1, specs, 0, err)) {
+  if (!a.parse(argc, argv, specs, err)) {
     std::fputs(kFwUsage, stderr);
     return fail(kCmd, err, 2);
   }
@@ -64,7 +146,7 @@ int fw_main(int argc, char** argv) {
   }
   const std::string bus = a.get("--bus");
   const bool is_loopback = bus == "loopback" || bus.rfind("loopback:", 0) == 0;
-  node::NodeConfig nc;
+  NodeConfig nc;
   double v[6] = {};
   double idle_ms = 0, exit_idle_s = 0, peer_timeout_s = 0, status_p = 0, adev_p = 0, init_n = 0;
   if (!a.number("--N", 3.3e-3, v[0], err) || !a.number("--B", 9e-4, v[1], err) ||
@@ -192,9 +274,15 @@ int fw_main(int argc, char** argv) {
         continue;  // channel not carried by this stream (all zero counts)
       }
       std::printf("\nfinal ADEV of %s [%s] (bias %.4e, std %.2e, alarm %s):\n", kChannelNames[c],
-                  channel_unit(c), static_cast<double>(n.bias(c)),
+                  c < 3 ? "m/s^2" : "rad/s", static_cast<double>(n.bias(c)),
                   std::sqrt(static_cast<double>(n.bias_var(c))), n.alarm() ? "on" : "off");
-      std::fputs(format_adev_table(rows_from_points(pts, np)).c_str(), stdout);
+      std::printf("%12s %12s %12s %12s %10s %10s\n", "tau_s", "adev", "ci_lo", "ci_hi", "edf",
+                  "n_terms");
+      for (std::size_t i = 0; i < np; ++i) {
+        std::printf("%12.4g %12.4e %12.4e %12.4e %10.4g %10llu\n", pts[i].tau_s, pts[i].adev,
+                    pts[i].ci_lo, pts[i].ci_hi, pts[i].edf,
+                    static_cast<unsigned long long>(pts[i].n_terms));
+      }
     }
   }
   if (end == node::LoopEnd::kError) {
@@ -209,4 +297,4 @@ int fw_main(int argc, char** argv) {
   return 0;
 }
 
-}  // namespace imu::sim
+}  // namespace imu::node

@@ -1,4 +1,0 @@
-// imu-fw executable: see imu/sim/cli.hpp and host_sim/README.md.
-#include "imu/sim/cli.hpp"
-
-int main(int argc, char** argv) { return imu::sim::fw_main(argc, argv); }

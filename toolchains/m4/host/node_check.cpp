@@ -1,0 +1,103 @@
+// Host twin of the M4 node image (issue 12 item 4): runs the same node workload
+// (toolchains/m4/src/node_workload.cpp, the same Node and codec built for the host) and
+//   node_check              prints its lines (what the target must print);
+//   node_check --compare LOG  compares every T and END line of a qemu-system-arm log with its
+//                           own, byte for byte: telemetry equal to the host's. Prints
+//                           "NODE-CHECK PASS" (exit 0) or the first differences (exit 1), and
+//                           the target's cost per sample per channel from its COST line.
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "node_workload.hpp"
+
+namespace {
+
+void collect(const char* line, void* ctx) {
+  static_cast<std::vector<std::string>*>(ctx)->emplace_back(line);
+}
+
+bool relevant(const std::string& l) {
+  return l.rfind("T ", 0) == 0 || l.rfind("IMU-NODE END", 0) == 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> host;
+  const imu::m4::NodeRunStatus st = imu::m4::run_node_workload(collect, nullptr, &host);
+  if (st != imu::m4::NodeRunStatus::kOk) {
+    std::printf("NODE-CHECK FAIL: host run status %d\n", static_cast<int>(st));
+    return 1;
+  }
+  if (argc < 3 || std::strcmp(argv[1], "--compare") != 0) {
+    for (const std::string& l : host) {
+      std::fputs(l.c_str(), stdout);
+    }
+    return 0;
+  }
+  std::ifstream in(argv[2]);
+  if (!in) {
+    std::printf("NODE-CHECK FAIL: cannot read %s\n", argv[2]);
+    return 1;
+  }
+  std::vector<std::string> target;
+  std::string l;
+  unsigned long long ticks = 0;
+  unsigned long long cal_ticks = 0;
+  unsigned long long cal_insns = 0;
+  while (std::getline(in, l)) {
+    l += "\n";
+    if (relevant(l)) {
+      target.push_back(l);
+    }
+    if (l.rfind("IMU-NODE BEGIN", 0) == 0 || l.rfind("IMU-M4 STACK", 0) == 0) {
+      std::printf("target: %s", l.c_str());
+    }
+    std::sscanf(l.c_str(), "IMU-NODE COST ticks=%llu cal_ticks=%llu cal_insns=%llu", &ticks,
+                &cal_ticks, &cal_insns);
+  }
+  std::vector<std::string> want;
+  for (const std::string& h : host) {
+    if (h.rfind("IMU-NODE BEGIN", 0) == 0) {
+      std::printf("host:   %s", h.c_str());
+    }
+    if (relevant(h)) {
+      want.push_back(h);
+    }
+  }
+  std::size_t diffs = 0;
+  const std::size_t n = want.size() > target.size() ? want.size() : target.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string a = i < want.size() ? want[i] : std::string("(none)\n");
+    const std::string b = i < target.size() ? target[i] : std::string("(none)\n");
+    if (a != b) {
+      if (++diffs <= 5) {
+        std::printf("line %zu differs:\n  host:   %s  target: %s", i, a.c_str(), b.c_str());
+      }
+    }
+  }
+  std::size_t frames = 0;
+  for (const std::string& w : want) {
+    frames += w.rfind("T ", 0) == 0 ? 1U : 0U;
+  }
+  std::printf("node-check: %zu lines compared (%zu telemetry frames), %zu differ\n", n, frames,
+              diffs);
+  if (cal_ticks > 0 && ticks > 0) {
+    const double insns = static_cast<double>(ticks) * static_cast<double>(cal_insns) /
+                         static_cast<double>(cal_ticks);
+    std::printf("node-check: target cost %.0f instructions for %u samples x 6 channels = %.0f "
+                "instructions per sample per channel (SysTick under -icount shift=0, "
+                "calibrated: %llu ticks for %llu instructions)\n",
+                insns, imu::m4::kNodeSamples, insns / (imu::m4::kNodeSamples * 6.0), cal_ticks,
+                cal_insns);
+  }
+  if (diffs != 0 || target.empty()) {
+    std::printf("NODE-CHECK FAIL\n");
+    return 1;
+  }
+  std::printf("NODE-CHECK PASS\n");
+  return 0;
+}

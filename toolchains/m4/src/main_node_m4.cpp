@@ -1,0 +1,92 @@
+// Bare-metal program of the node image (imu_m4_main, called by startup.cpp): runs the node
+// workload (node_workload.hpp), prints through semihosting, and measures the node's cost with
+// the SysTick counter. Under `qemu-system-arm -icount shift=0` the virtual clock advances one
+// step per guest instruction, so SysTick ticks are proportional to instructions executed; the
+// ratio is calibrated on a loop of known length (2 instructions per iteration: subs, bne).
+// Extra lines (target only):
+//   IMU-NODE COST ticks=<samples phase> cal_ticks=<calibration loop> cal_insns=<its instructions>
+//   IMU-M4 STACK used=<bytes> of=<bytes>
+#include <cstdint>
+
+#include "line.hpp"
+#include "node_workload.hpp"
+#include "semihost.hpp"
+#include "startup.hpp"
+
+namespace {
+
+constexpr std::uintptr_t kSystCsr = 0xE000E010u;
+constexpr std::uintptr_t kSystRvr = 0xE000E014u;
+constexpr std::uintptr_t kSystCvr = 0xE000E018u;
+constexpr std::uint32_t kSystMask = 0x00FFFFFFu;  // 24-bit down-counter
+
+volatile std::uint32_t& reg(std::uintptr_t a) {
+  return *reinterpret_cast<volatile std::uint32_t*>(a);  // NOLINT: memory-mapped register
+}
+
+void systick_start() {
+  reg(kSystRvr) = kSystMask;
+  reg(kSystCvr) = 0;
+  reg(kSystCsr) = 0x5u;  // ENABLE | CLKSOURCE = processor clock, no interrupt
+}
+
+/// Elapsed ticks, accumulated across wraps: must be called at least once per 2^24 ticks.
+struct TickCounter {
+  std::uint32_t last = 0;
+  std::uint64_t total = 0;
+  void start() {
+    last = reg(kSystCvr) & kSystMask;
+    total = 0;
+  }
+  void poll() {
+    const std::uint32_t now = reg(kSystCvr) & kSystMask;
+    total += (last - now) & kSystMask;  // down-counter: elapsed = last - now (mod 2^24)
+    last = now;
+  }
+};
+
+TickCounter g_ticks;
+
+void write_semihost(const char* text, void* /*ctx*/) { imu::m4::semihost_write0(text); }
+
+void mark(int phase, void* /*ctx*/) {
+  if (phase == 0) {
+    g_ticks.start();
+  } else {
+    g_ticks.poll();
+  }
+}
+
+constexpr std::uint32_t kCalIterations = 1000000;
+
+std::uint64_t calibrate() {
+  TickCounter t;
+  t.start();
+  std::uint32_t n = kCalIterations;
+  asm volatile(
+      "1:\n\t"
+      "subs %0, %0, #1\n\t"
+      "bne 1b\n\t"
+      : "+r"(n)
+      :
+      : "cc");
+  t.poll();
+  return t.total;
+}
+
+}  // namespace
+
+extern "C" int imu_m4_main() {
+  systick_start();
+  const std::uint64_t cal = calibrate();
+  const imu::m4::NodeRunStatus st = imu::m4::run_node_workload(write_semihost, mark, nullptr);
+  imu::m4::Line<> line;
+  line.str("IMU-NODE COST ticks=").u64(g_ticks.total).str(" cal_ticks=").u64(cal);
+  line.str(" cal_insns=").u64(2ULL * kCalIterations).str("\n");
+  imu::m4::semihost_write0(line.c_str());
+  line.clear();
+  line.str("IMU-M4 STACK used=").u64(imu::m4::stack_high_water_bytes());
+  line.str(" of=").u64(imu::m4::stack_size_bytes()).str("\n");
+  imu::m4::semihost_write0(line.c_str());
+  return st == imu::m4::NodeRunStatus::kOk ? 0 : 1;
+}
