@@ -61,10 +61,23 @@ bool parse_field(const std::string& f, double& v) {
 }  // namespace
 
 bool looks_like_text(const std::string& path) {
+  // A MAT-file starts with "MATLAB" text or carries its endian mark "IM"/"MI" at byte 126; any
+  // NUL byte in the first 512 makes it binary too (the MAT reader then says what is wrong).
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) {
+    return false;  // never open a FIFO or a device to look (the MAT reader refuses it by stat)
+  }
   std::ifstream f(path, std::ios::binary);
-  char head[20] = {};
+  char head[512] = {};
   f.read(head, sizeof head);
-  return !(f.gcount() >= 10 && std::memcmp(head, "MATLAB 5.0", 10) == 0);
+  const auto n = static_cast<std::size_t>(f.gcount());
+  if (n >= 6 && std::memcmp(head, "MATLAB", 6) == 0) {
+    return false;
+  }
+  if (n >= 128 && ((head[126] == 'I' && head[127] == 'M') || (head[126] == 'M' && head[127] == 'I'))) {
+    return false;
+  }
+  return n > 0 && std::memchr(head, '\0', n) == nullptr;
 }
 
 bool read_text_table(const std::string& path, TextTable& table, std::string& err,

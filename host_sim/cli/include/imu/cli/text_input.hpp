@@ -17,7 +17,9 @@ struct TextTable {
   std::vector<std::vector<double>> cols;   ///< one vector per column, NaN where missing
 };
 
-/// True if the file is text rather than a MAT-file (no "MATLAB 5.0 MAT-file" header).
+/// True if the file is text rather than a MAT-file: no "MATLAB" header text, no MAT endian mark
+/// at byte 126, no NUL byte in its first 512 bytes (an empty or binary file goes to the MAT
+/// reader, which says what is wrong with it).
 [[nodiscard]] bool looks_like_text(const std::string& path);
 
 /// Read the whole table. Refused with a one-line err (naming the line): not a regular file,
