@@ -276,12 +276,13 @@ int fw_main(int argc, char** argv) {
       std::printf("\nfinal ADEV of %s [%s] (bias %.4e, std %.2e, alarm %s):\n", kChannelNames[c],
                   c < 3 ? "m/s^2" : "rad/s", static_cast<double>(n.bias(c)),
                   std::sqrt(static_cast<double>(n.bias_var(c))), n.alarm() ? "on" : "off");
-      std::printf("%12s %12s %12s %12s %10s %10s\n", "tau_s", "adev", "ci_lo", "ci_hi", "edf",
-                  "n_terms");
+      // The same columns as `imu-sim adev` (the VM test compares the two tables line by line).
+      std::printf("%12s %10s %12s %12s %12s %10s %10s\n", "tau_s", "af", "adev", "ci_lo",
+                  "ci_hi", "edf", "n_terms");
       for (std::size_t i = 0; i < np; ++i) {
-        std::printf("%12.4g %12.4e %12.4e %12.4e %10.4g %10llu\n", pts[i].tau_s, pts[i].adev,
-                    pts[i].ci_lo, pts[i].ci_hi, pts[i].edf,
-                    static_cast<unsigned long long>(pts[i].n_terms));
+        std::printf("%12.4g %10llu %12.4e %12.4e %12.4e %10.4g %10llu\n", pts[i].tau_s,
+                    static_cast<unsigned long long>(pts[i].af), pts[i].adev, pts[i].ci_lo,
+                    pts[i].ci_hi, pts[i].edf, static_cast<unsigned long long>(pts[i].n_terms));
       }
     }
   }
