@@ -56,7 +56,9 @@ if check "aarch64 configure" cmake -S . -B "$a64" "${gen[@]}" \
      -DCMAKE_TOOLCHAIN_FILE=toolchains/aarch64-linux-gnu.cmake -DCMAKE_BUILD_TYPE=Release >/dev/null &&
    check "aarch64 build" cmake --build "$a64" -j"$jobs"; then
   stage "aarch64: unit tests under qemu-aarch64"
-  check "aarch64 unit tests" ctest --test-dir "$a64" -L unit -j"$jobs" --output-on-failure
+  # qemu-aarch64 user mode hangs on a second thread here: the tools run single-threaded.
+  check "aarch64 unit tests" env IMU_NO_THREADS=1 ctest --test-dir "$a64" -L unit -j"$jobs" \
+    --output-on-failure
 fi
 fi  # aarch64
 

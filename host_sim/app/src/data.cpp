@@ -6,6 +6,7 @@
 #include <cmath>
 #include <condition_variable>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <mutex>
 #include <string_view>
@@ -402,11 +403,9 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
       }
     }
   };
-  std::thread reader;
-  try {
-    reader = std::thread(read_ahead);
-  } catch (const std::system_error&) {
-    // No thread to be had (limits): read and work in turn on this one.
+  // Read and work in turn on this thread: when no thread is to be had (limits), or when
+  // IMU_NO_THREADS is set (qemu-aarch64 user mode hangs on a second thread: the cross tests).
+  const auto in_turn = [&]() {
     for (;;) {
       const auto t0 = std::chrono::steady_clock::now();
       const auto r = cs.value().read(slot[0].v.data(), slot[0].v.size());
@@ -416,8 +415,22 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
         buf.swap(slot[0].v);
         return r.ok();
       }
+      if (ch.integer_counts) {
+        for (std::size_t i = 0; i < r.value(); ++i) {
+          slot[0].v[i] *= ch.scale;
+        }
+      }
       f(slot[0].v.data(), r.value());
     }
+  };
+  if (std::getenv("IMU_NO_THREADS") != nullptr) {
+    return in_turn();
+  }
+  std::thread reader;
+  try {
+    reader = std::thread(read_ahead);
+  } catch (const std::system_error&) {
+    return in_turn();
   }
   bool ok = true;
   for (std::size_t k = 0;; k ^= 1U) {
