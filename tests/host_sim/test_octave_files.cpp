@@ -54,6 +54,27 @@ void expect_octave_adev(const std::string& json, const std::string& what) {
   }
 }
 
+// The acc_z samples stored as a row vector, as int16 counts x acc_lsb and as column 2 of a
+// matrix, through `cmd`: each gives Octave's ADEV. The row vector (acc_*) finds acc_lsb: its
+// report says `lsb_text`.
+void expect_same_samples_everywhere(const char* cmd, const std::string& lsb_text,
+                                    simtest::TempDir& dir) {
+  const std::vector<std::pair<std::string, std::string>> same = {
+      {"octave_row.mat", "acc_z_row"}, {"octave_int16.mat", "acc_z_counts"},
+      {"octave_matrix.mat", "data:2"}};
+  for (const auto& [file, channel] : same) {
+    const std::string json = dir.file("x.json");
+    std::string path = kDir;
+    path += "/" + file;
+    const auto r = simtest::run({cmd, path, "--channel", channel, "--json", json});
+    ASSERT_EQ(r.status, 0) << cmd << " " << file << ": " << r.err;
+    expect_octave_adev(simtest::read_text(json), file);
+    if (channel == "acc_z_row") {
+      EXPECT_NE(r.out.find(lsb_text), std::string::npos) << r.out;
+    }
+  }
+}
+
 TEST(OctaveFiles, AdevOfV6V7AndCapitalFsMatchesOctavesOverlappingAdev) {
   simtest::TempDir dir;
   for (const char* f : {"octave_v6.mat", "octave_v7.mat", "octave_capital_fs.mat"}) {
@@ -68,22 +89,15 @@ TEST(OctaveFiles, AdevOfV6V7AndCapitalFsMatchesOctavesOverlappingAdev) {
 
 TEST(OctaveFiles, AdevReadsAnyVariableRowVectorsInt16CountsAndMatrixColumns) {
   simtest::TempDir dir;
-  const std::vector<std::pair<std::string, std::string>> same = {
-      {"octave_row.mat", "acc_z_row"}, {"octave_int16.mat", "acc_z_counts"},
-      {"octave_matrix.mat", "data:2"}};
-  for (const auto& [file, channel] : same) {
-    const std::string json = dir.file("x.json");
-    std::string path = kDir;
-    path += "/" + file;
-    const auto r = simtest::run({"adev", path, "--channel", channel, "--json", json});
-    ASSERT_EQ(r.status, 0) << file << ": " << r.err;
-    expect_octave_adev(simtest::read_text(json), file);
-  }
+  expect_same_samples_everywhere("adev", "LSB 0.01 m/s^2 (from the file)", dir);
   // A matrix without its column: refused with how to name one (exit 1); a variable the file
   // does not hold: a usage error listing what it holds.
   auto r = simtest::run({"adev", kDir + "/octave_matrix.mat", "--channel", "data"});
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("--channel data:3"), std::string::npos) << r.err;
+  r = simtest::run({"adev", kDir + "/octave_matrix.mat", "--channel", "data:x"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("the column after ':' must be a number"), std::string::npos) << r.err;
   r = simtest::run({"adev", kDir + "/octave_v7.mat", "--channel", "acc_q"});
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("variables: acc_z, fs, acc_lsb"), std::string::npos) << r.err;
@@ -98,20 +112,7 @@ TEST(OctaveFiles, AnalyzeReadsRowVectorsInt16CountsAndMatrixColumns) {
   const std::string ref = simtest::read_text(ref_json);
   expect_octave_adev(ref, "analyze v7");
   // The same samples as a row vector, as int16 counts x acc_lsb, and as column 2 of a matrix.
-  const std::vector<std::pair<std::string, std::string>> same = {
-      {"octave_row.mat", "acc_z_row"}, {"octave_int16.mat", "acc_z_counts"},
-      {"octave_matrix.mat", "data:2"}};
-  for (const auto& [file, channel] : same) {
-    const std::string json = dir.file("x.json");
-    std::string path = kDir;
-    path += "/" + file;
-    r = simtest::run({"analyze", path, "--channel", channel, "--json", json});
-    ASSERT_EQ(r.status, 0) << file << ": " << r.err;
-    expect_octave_adev(simtest::read_text(json), file);
-    if (channel == "acc_z_row") {  // acc_* finds acc_lsb
-      EXPECT_NE(r.out.find("LSB from the file: 0.01"), std::string::npos) << r.out;
-    }
-  }
+  expect_same_samples_everywhere("analyze", "LSB from the file: 0.01", dir);
   r = simtest::run({"analyze", kDir + "/octave_int16.mat", "--channel", "acc_z_counts"});
   EXPECT_NE(r.out.find("integer counts: analysed as counts x LSB"), std::string::npos) << r.out;
   // A matrix named without its column is refused, with the columns to choose from.

@@ -138,22 +138,13 @@ bool resolve_channels(const imu::mat::MatFile& m, const std::string& file,
 bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vector<double>& out,
                   bool& integer_class, std::string& err) {
   integer_class = false;
-  std::string name = spec;
-  std::size_t column = 0;
-  bool has_column = false;
-  const std::size_t colon = spec.rfind(':');
-  if (colon != std::string::npos) {
-    const std::string k = spec.substr(colon + 1);
-    char* end = nullptr;
-    const unsigned long v = std::strtoul(k.c_str(), &end, 10);
-    if (k.empty() || end == nullptr || *end != '\0' || v < 1 || v > 1000000) {
-      err = "--channel " + spec + ": the column after ':' must be a number >= 1";
-      return false;
-    }
-    name = spec.substr(0, colon);
-    column = static_cast<std::size_t>(v - 1);
-    has_column = true;
+  imu::cli::ChannelSpec cs;
+  if (!imu::cli::parse_channel_spec(spec, cs, err)) {
+    return false;
   }
+  const std::string& name = cs.name;
+  const std::size_t column = cs.column;
+  const bool has_column = cs.has_column;
   auto vars = m.list_variables();
   if (!vars) {
     err = vars.error().message;
@@ -182,8 +173,9 @@ bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vect
 
 // The LSB's file name for a channel spec: the base name of NAME:K.
 std::string base_name(const std::string& spec) {
-  const std::size_t colon = spec.rfind(':');
-  return colon == std::string::npos ? spec : spec.substr(0, colon);
+  imu::cli::ChannelSpec cs;
+  std::string unused;
+  return imu::cli::parse_channel_spec(spec, cs, unused) ? cs.name : spec;
 }
 
 struct Job {

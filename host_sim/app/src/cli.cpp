@@ -330,24 +330,14 @@ int cmd_adev(int argc, char** argv) {
   if (!channel_index(chan_name, chan)) {
     // Any variable of the file, or NAME:K for column K (1-based) of a matrix: it takes the
     // acc_z slot (gyro* names the gyro_z slot, for the default LSB and the unit).
-    std::string name = chan_name;
-    std::size_t column = 0;
-    const std::size_t colon = chan_name.rfind(':');
-    if (colon != std::string::npos) {
-      const std::string k = chan_name.substr(colon + 1);
-      char* end = nullptr;
-      const unsigned long v = std::strtoul(k.c_str(), &end, 10);
-      if (k.empty() || *end != '\0' || v < 1 || v > 1000000) {
-        return fail(cmd, "--channel " + chan_name + ": the column after ':' must be >= 1",
-                    kExitUsage);
-      }
-      name = chan_name.substr(0, colon);
-      column = static_cast<std::size_t>(v - 1);
-      vars.column_given[chan_name.rfind("gyro", 0) == 0 ? 5 : 2] = true;
+    imu::cli::ChannelSpec cs;
+    if (!imu::cli::parse_channel_spec(chan_name, cs, err)) {
+      return fail(cmd, err, kExitUsage);
     }
     chan = chan_name.rfind("gyro", 0) == 0 ? 5 : 2;
-    vars.names[chan] = name;
-    vars.columns[chan] = column;
+    vars.names[chan] = cs.name;
+    vars.columns[chan] = cs.column;
+    vars.column_given[chan] = cs.has_column;
     renamed = true;
   }
   double lsb = 0, fs = 0;

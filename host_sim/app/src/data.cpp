@@ -403,6 +403,15 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
       }
     }
   };
+  // A chunk to f, integer counts first scaled to the channel's unit.
+  const auto deliver = [&ch, &f](double* v, std::size_t n) {
+    if (ch.integer_counts) {
+      for (std::size_t i = 0; i < n; ++i) {
+        v[i] *= ch.scale;
+      }
+    }
+    f(v, n);
+  };
   // Read and work in turn on this thread: when no thread is to be had (limits), or when
   // IMU_NO_THREADS is set (qemu-aarch64 user mode hangs on a second thread: the cross tests).
   const auto in_turn = [&]() {
@@ -415,12 +424,7 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
         buf.swap(slot[0].v);
         return r.ok();
       }
-      if (ch.integer_counts) {
-        for (std::size_t i = 0; i < r.value(); ++i) {
-          slot[0].v[i] *= ch.scale;
-        }
-      }
-      f(slot[0].v.data(), r.value());
+      deliver(slot[0].v.data(), r.value());
     }
   };
   if (std::getenv("IMU_NO_THREADS") != nullptr) {
@@ -449,12 +453,7 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
       }
     }
     read_s += seconds_since(t0);
-    if (ch.integer_counts) {
-      for (std::size_t i = 0; i < n; ++i) {
-        slot[k].v[i] *= ch.scale;
-      }
-    }
-    f(slot[k].v.data(), n);
+    deliver(slot[k].v.data(), n);
     std::lock_guard<std::mutex> lock(m);
     slot[k].full = false;
     cv.notify_all();

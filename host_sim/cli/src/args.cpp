@@ -121,4 +121,24 @@ bool Args::integer(const std::string& name, std::uint64_t def, std::uint64_t lo,
   return true;
 }
 
+bool parse_channel_spec(const std::string& text, ChannelSpec& out, std::string& err) {
+  out = ChannelSpec{};
+  out.name = text;
+  const std::size_t colon = text.rfind(':');
+  if (colon == std::string::npos) {
+    return true;
+  }
+  const std::string k = text.substr(colon + 1);
+  char* end = nullptr;
+  const unsigned long v = std::strtoul(k.c_str(), &end, 10);
+  if (k.empty() || end == nullptr || *end != '\0' || v < 1 || v > 1000000) {
+    err = "--channel " + text + ": the column after ':' must be a number in [1, 1e6]";
+    return false;
+  }
+  out.name = text.substr(0, colon);
+  out.column = static_cast<std::size_t>(v - 1);
+  out.has_column = true;
+  return true;
+}
+
 }  // namespace imu::cli

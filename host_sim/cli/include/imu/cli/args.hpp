@@ -59,6 +59,17 @@ class Args {
   bool help_ = false;
 };
 
+/// A channel named on the command line: NAME, or NAME:K for column K (1-based, as in Octave)
+/// of a matrix NAME.
+struct ChannelSpec {
+  std::string name;         ///< the file's variable
+  std::size_t column = 0;   ///< 0-based
+  bool has_column = false;  ///< :K was given
+};
+
+/// Parse NAME or NAME:K; false with a one-line err when K is not a number in [1, 1e6].
+[[nodiscard]] bool parse_channel_spec(const std::string& text, ChannelSpec& out, std::string& err);
+
 }  // namespace imu::cli
 
 #endif  // IMU_CLI_ARGS_HPP
