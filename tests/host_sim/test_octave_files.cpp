@@ -1,7 +1,7 @@
 // Files written by GNU Octave 7.3 (tests/host_sim/octave/make_fixtures.m; the .mat files and
 // octave_ref.txt are committed, CI does not install Octave), read through imu-sim as a user
 // would: save -v6 and -v7, `Fs` for the rate, a row vector, int16 counts with an LSB, a matrix
-// column, a struct. The ADEV is checked against Octave's own fully overlapping ADEV at
+// column, struct fields (nested too). The ADEV is checked against Octave's own fully overlapping ADEV at
 // m = 1, 2, 4, 8 (octave_ref.txt), where the online estimator is the fully overlapping one.
 #include <gtest/gtest.h>
 
@@ -122,13 +122,34 @@ TEST(OctaveFiles, AnalyzeReadsRowVectorsInt16CountsAndMatrixColumns) {
       << r.err;
 }
 
-// Struct fields (`imu.acc_z`) are not read yet: refused with the reason, exit 1, one line.
-TEST(OctaveFiles, StructFieldsAreRefusedWithTheReason) {
-  const auto r = simtest::run({"analyze", kDir + "/octave_struct.mat", "--channel", "imu.acc_z",
-                               "--fs", "100"});
+// Struct fields: `imu.acc_z` (save -v7: compressed, a field before it) and `rec.imu.acc_z`
+// (save -v6: uncompressed, nested) give Octave's ADEV through adev and analyze, with the rate
+// from the struct's `fs` and the LSB from the top-level acc_lsb. A field the struct lacks: the
+// struct's fields listed (adev: a usage error, as for any name the file does not hold).
+TEST(OctaveFiles, StructFieldsAreReadByDottedName) {
+  simtest::TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"octave_struct.mat", "imu.acc_z"}, {"octave_struct_v6.mat", "rec.imu.acc_z"}};
+  for (const auto& [file, channel] : cases) {
+    for (const char* cmd : {"adev", "analyze"}) {
+      SCOPED_TRACE(std::string(cmd) + " " + file + " " + channel);
+      const std::string json = dir.file("s.json");
+      const auto r = simtest::run({cmd, kDir + "/" + file, "--channel", channel, "--json", json});
+      ASSERT_EQ(r.status, 0) << r.err;
+      const std::string j = simtest::read_text(json);
+      EXPECT_EQ(simtest::json_number_in(j, "fs_hz", "fs_hz"), 100.0);
+      expect_octave_adev(j, file);
+    }
+  }
+  auto r = simtest::run({"adev", kDir + "/octave_struct_v6.mat", "--channel", "rec.imu.acc_q"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("variable 'rec.imu': field 'acc_q' not found; fields: acc_x, acc_z, fs"),
+            std::string::npos) << r.err;
+  r = simtest::run({"analyze", kDir + "/octave_struct.mat", "--channel", "imu.acc_q"});
   EXPECT_EQ(r.status, 1);
   EXPECT_EQ(simtest::count_lines(r.err), 1U) << r.err;
-  EXPECT_NE(r.err.find("imu"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("field 'acc_q' not found; fields: acc_x, acc_z, fs"), std::string::npos)
+      << r.err;
 }
 
 }  // namespace

@@ -47,37 +47,51 @@ int fail(const std::string& msg, int status) {
 }
 
 // The rate: --fs, else the file's `fs`, else its `Fs`.
-bool file_rate(const imu::mat::MatFile& m, const std::string& file, double& fs_hz,
-               std::string& err) {
-  for (const char* name : {"fs", "Fs"}) {
+// `scope`: the struct holding the channels (`imu` of `imu.acc_z`): its fs/Fs come first.
+bool file_rate(const imu::mat::MatFile& m, const std::string& file, const std::string& scope,
+               double& fs_hz, std::string& err) {
+  const std::string in = scope.empty() ? std::string() : scope + ".";
+  std::string found;
+  for (const std::string& name : {in + "fs", in + "Fs", std::string("fs"), std::string("Fs")}) {
     auto f = m.read_scalar(name);
     if (f.ok()) {
       fs_hz = f.value();
-      if (!(fs_hz >= 1e-3 && fs_hz <= 1e6)) {
-        err = file + ": " + name + " = " + std::to_string(fs_hz) +
-              " Hz is not a rate in [0.001, 1e+06] Hz (give --fs)";
-        return false;
-      }
-      return true;
+      found = name;
+      break;
     }
+  }
+  if (!found.empty() && !(fs_hz >= 1e-3 && fs_hz <= 1e6)) {
+    err = file + ": " + found + " = " + std::to_string(fs_hz) +
+          " Hz is not a rate in [0.001, 1e+06] Hz (give --fs)";
+    return false;
+  }
+  if (!found.empty()) {
+    return true;
   }
   err = file + ": no --fs given and no scalar 'fs' or 'Fs' in the file";
   return false;
 }
 
-// acc_x -> acc_lsb, gyro_z -> gyro_lsb; also NAME_lsb and lsb. 0 if none.
+// acc_x -> acc_lsb, gyro_z -> gyro_lsb; also NAME_lsb and lsb. 0 if none. A struct field
+// (`imu.acc_z`) looks in its struct first (imu.acc_lsb, imu.acc_z_lsb, imu.lsb), then at the
+// top level.
 double file_lsb(const imu::mat::MatFile& m, const std::string& channel) {
-  const std::size_t us = channel.find('_');
-  const std::string names[3] = {
-      us != std::string::npos ? channel.substr(0, us) + "_lsb" : std::string(),
-      channel + "_lsb", "lsb"};
-  for (const auto& n : names) {
-    if (n.empty()) {
-      continue;
-    }
-    auto v = m.read_scalar(n);
-    if (v && v.value() > 0.0 && std::isfinite(v.value())) {
-      return v.value();
+  const std::size_t dot = channel.rfind('.');
+  const std::string field = dot == std::string::npos ? channel : channel.substr(dot + 1);
+  const std::size_t us = field.find('_');
+  const std::string own[3] = {
+      us != std::string::npos ? field.substr(0, us) + "_lsb" : std::string(), field + "_lsb",
+      "lsb"};
+  for (const std::string& scope :
+       {dot == std::string::npos ? std::string() : channel.substr(0, dot + 1), std::string()}) {
+    for (const auto& n : own) {
+      if (n.empty()) {
+        continue;
+      }
+      auto v = m.read_scalar(scope + n);
+      if (v && v.value() > 0.0 && std::isfinite(v.value())) {
+        return v.value();
+      }
     }
   }
   return 0.0;
@@ -150,7 +164,17 @@ bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vect
     err = vars.error().message;
     return false;
   }
-  for (const auto& v : vars.value()) {
+  std::vector<imu::mat::VariableInfo> listed = std::move(vars.value());
+  if (name.find('.') != std::string::npos) {
+    // A struct field: its class and size from the reader's descent (not a top-level variable).
+    auto field = imu::mat::ChannelStream::open(m.display_name(), name, column);
+    if (!field) {
+      err = field.error().message;
+      return false;
+    }
+    listed.push_back(field.value().info());
+  }
+  for (const auto& v : listed) {
     if (v.name == name) {
       integer_class = v.class_name.rfind("int", 0) == 0 || v.class_name.rfind("uint", 0) == 0;
     }
@@ -378,9 +402,11 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
                 kExitRuntime);
   }
   Options o;
+  const std::size_t dot = base_name(channels[0]).rfind('.');
+  const std::string scope = dot == std::string::npos ? std::string() : channels[0].substr(0, dot);
   if (fs > 0.0) {
     o.fs_hz = fs;
-  } else if (!file_rate(m, file, o.fs_hz, err)) {
+  } else if (!file_rate(m, file, scope, o.fs_hz, err)) {
     return fail(err, kExitRuntime);
   }
   std::vector<Job> jobs(channels.size());

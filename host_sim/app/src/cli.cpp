@@ -268,7 +268,8 @@ struct AdevTiming {
 
 // The unit of a channel: its slot's for acc*/gyro* names, else the file's own (unknown here).
 std::string adev_unit(const std::string& chan_name, std::size_t chan) {
-  const bool known = chan_name.rfind("acc", 0) == 0 || chan_name.rfind("gyro", 0) == 0;
+  const std::string field = chan_name.substr(chan_name.rfind('.') + 1);  // imu.acc_z: acc_z
+  const bool known = field.rfind("acc", 0) == 0 || field.rfind("gyro", 0) == 0;
   return known ? channel_unit(chan) : "(the file's unit)";
 }
 
@@ -334,7 +335,7 @@ int cmd_adev(int argc, char** argv) {
     if (!imu::cli::parse_channel_spec(chan_name, cs, err)) {
       return fail(cmd, err, kExitUsage);
     }
-    chan = chan_name.rfind("gyro", 0) == 0 ? 5 : 2;
+    chan = chan_name.substr(chan_name.rfind('.') + 1).rfind("gyro", 0) == 0 ? 5 : 2;
     vars.names[chan] = cs.name;
     vars.columns[chan] = cs.column;
     vars.column_given[chan] = cs.has_column;

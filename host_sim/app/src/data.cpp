@@ -43,17 +43,26 @@ struct StreamScalars {
 };
 
 // The rate: fs_override, else the file's `fs`, else its `Fs`, within [kMinFsHz, kMaxFsHz].
-// Reader: mat::MatFile or StreamScalars.
+// `scope`: the struct that holds the channels (`imu` for `imu.acc_z`), whose `fs`/`Fs` come
+// first; "" for top-level channels. Reader: mat::MatFile or StreamScalars.
 template <class Reader>
 bool read_rate(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
-               const std::string& path, double fs_override, double& fs_hz, std::string& err) {
+               const std::string& path, double fs_override, const std::string& scope,
+               double& fs_hz, std::string& err) {
   if (fs_override > 0.0) {
     fs_hz = fs_override;
     return true;
   }
-  const char* name = find_var(vars, "fs") == nullptr && find_var(vars, "Fs") != nullptr ? "Fs"
+  std::string name = find_var(vars, "fs") == nullptr && find_var(vars, "Fs") != nullptr ? "Fs"
                                                                                        : "fs";
   auto fs = mf.read_scalar(name);
+  for (const char* in_scope : {".Fs", ".fs"}) {
+    auto v = scope.empty() ? fs : mf.read_scalar(scope + in_scope);
+    if (v.ok() && !scope.empty()) {
+      fs = v;
+      name = scope + in_scope;
+    }
+  }
   if (!fs.ok()) {
     err = fs.error().message + " (give --fs)";
     return false;
@@ -67,23 +76,35 @@ bool read_rate(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
   return true;
 }
 
-// acc_lsb and gyro_lsb if present (0 if absent).
+// acc_lsb and gyro_lsb if present (0 if absent): in `scope` (a struct, see read_rate) first.
 template <class Reader>
 bool read_file_lsbs(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
-                    const std::string& path, double (&file_lsb)[2], std::string& err) {
+                    const std::string& path, const std::string& scope, double (&file_lsb)[2],
+                    std::string& err) {
   const char* lsb_names[2] = {"acc_lsb", "gyro_lsb"};
   for (std::size_t g = 0; g < 2; ++g) {
     file_lsb[g] = 0.0;
-    if (find_var(vars, lsb_names[g]) == nullptr) {
+    std::string name = lsb_names[g];
+    std::string scoped = scope;
+    scoped += ".";
+    scoped += name;
+    auto l = mf.read_scalar(scope.empty() ? name : scoped);
+    if (!scope.empty() && l.ok()) {
+      name = scoped;
+    } else if (find_var(vars, lsb_names[g]) != nullptr) {
+      l = mf.read_scalar(name);
+    } else {
       continue;
     }
-    auto l = mf.read_scalar(lsb_names[g]);
     if (!l.ok()) {
       err = l.error().message;
       return false;
     }
     if (!(l.value() > 0.0) || !std::isfinite(l.value())) {
-      err = path + ": " + lsb_names[g] + " is not a positive number";
+      err = path;
+      err += ": ";
+      err += name;
+      err += " is not a positive number";
       return false;
     }
     file_lsb[g] = l.value();
@@ -211,64 +232,6 @@ void count_spread(const std::vector<double>& values, const std::vector<std::int3
 
 }  // namespace
 
-bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
-                 const bool (&required)[kNumChannels], const double (&lsb_override)[kNumChannels],
-                 double fs_override, SensorData& out, std::string& err) {
-  out = SensorData{};
-  out.path = path;
-  auto file = mat::MatFile::open(path);
-  if (!file.ok()) {
-    err = file.error().message;
-    return false;
-  }
-  const mat::MatFile& mf = file.value();
-  auto listed = mf.list_variables();
-  if (!listed.ok()) {
-    err = listed.error().message;
-    return false;
-  }
-  const std::vector<mat::VariableInfo>& vars = listed.value();
-  double file_lsb[2] = {0.0, 0.0};
-  if (!read_rate(mf, vars, path, fs_override, out.fs_hz, err) ||
-      !read_file_lsbs(mf, vars, path, file_lsb, err)) {
-    return false;
-  }
-  bool any = false;
-  for (std::size_t c = 0; c < kNumChannels; ++c) {
-    const mat::VariableInfo* info = find_var(vars, kChannelNames[c]);
-    if (!want[c] || (info == nullptr && !required[c])) {
-      continue;
-    }
-    if (info != nullptr && !check_vector(*info, path, err)) {
-      return false;
-    }
-    ChannelData& ch = out.ch[c];
-    auto col = mf.read_column(kChannelNames[c]);
-    if (!col.ok()) {
-      err = col.error().message;
-      return false;
-    }
-    ch.values = std::move(col.value());
-    if (any && ch.values.size() != out.n_samples) {
-      err = path + ": variable '" + kChannelNames[c] + "' has " +
-            std::to_string(ch.values.size()) + " samples, others " +
-            std::to_string(out.n_samples);
-      return false;
-    }
-    out.n_samples = ch.values.size();
-    any = true;
-    ch.present = true;
-    const double fl = file_lsb[c < 3 ? 0 : 1];
-    ch.lsb = lsb_override[c] > 0.0 ? lsb_override[c] : (fl > 0.0 ? fl : default_lsb(c));
-    ch.lsb_from_option = lsb_override[c] > 0.0;
-    ch.lsb_from_file = !ch.lsb_from_option && fl > 0.0;
-  }
-  if (!any) {
-    err = path + ": none of the channels acc_x .. gyro_z is in the file";
-    return false;
-  }
-  return true;
-}
 
 bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
                       const bool (&required)[kNumChannels],
@@ -284,8 +247,14 @@ bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
   const std::vector<mat::VariableInfo>& vars = listed.value();
   const StreamScalars mf{path};
   double file_lsb[2] = {0.0, 0.0};
-  if (!read_rate(mf, vars, path, fs_override, out.fs_hz, err) ||
-      !read_file_lsbs(mf, vars, path, file_lsb, err)) {
+  // Channels in a struct (`imu.acc_z`): its fs and LSBs come before the top-level ones.
+  std::string scope;
+  for (std::size_t c = 0; cv != nullptr && c < kNumChannels && scope.empty(); ++c) {
+    const std::size_t dot = want[c] ? cv->names[c].rfind('.') : std::string::npos;
+    scope = dot == std::string::npos ? std::string() : cv->names[c].substr(0, dot);
+  }
+  if (!read_rate(mf, vars, path, fs_override, scope, out.fs_hz, err) ||
+      !read_file_lsbs(mf, vars, path, scope, file_lsb, err)) {
     return false;
   }
   bool any = false;
@@ -294,6 +263,16 @@ bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
     const std::string name = renamed ? cv->names[c] : std::string(kChannelNames[c]);
     const std::size_t column = renamed ? cv->columns[c] : 0;
     const mat::VariableInfo* info = find_var(vars, name.c_str());
+    mat::VariableInfo field;  // a struct field's: from its stream (not a top-level variable)
+    if (info == nullptr && want[c] && name.find('.') != std::string::npos) {
+      auto fcs = mat::ChannelStream::open(path, name, column);
+      if (!fcs.ok()) {
+        err = fcs.error().message;
+        return false;
+      }
+      field = fcs.value().info();
+      info = &field;
+    }
     if (!want[c] || (info == nullptr && !required[c])) {
       continue;
     }

@@ -63,15 +63,6 @@ struct SensorData {
   ChannelData ch[kNumChannels];
 };
 
-/// Read `fs` (or `Fs`) and the wanted channels (want[c]; a wanted channel that is absent is an
-/// error only if required[c]). LSB: lsb_override[c] if > 0, else the file's acc_lsb / gyro_lsb,
-/// else default_lsb(c). fs: fs_override if > 0, else the file's. err is one line naming the
-/// file. Cost: one inflate per channel read.
-[[nodiscard]] bool load_sensor(const std::string& path, const bool (&want)[kNumChannels],
-                               const bool (&required)[kNumChannels],
-                               const double (&lsb_override)[kNumChannels], double fs_override,
-                               SensorData& out, std::string& err);
-
 /// Counts of channel c of file `path` (imu::quantize with its LSB; 0 for a non-finite sample), after checking
 /// that the LSB represents the data (see the top of this file). Returns the exit status: 0, or
 /// kExitUsage when an LSB given as an option does not fit, kExitRuntime for bad data (no finite
@@ -79,10 +70,12 @@ struct SensorData {
 [[nodiscard]] int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
                             std::vector<std::int32_t>& counts, std::string& err);
 
-/// load_sensor() without the values: rate, LSBs, which channels are present and their length
+/// Read the rate (`fs`/`Fs`, or fs_override if > 0), the LSBs (lsb_override[c] if > 0, else the
+/// file's acc_lsb / gyro_lsb, else default_lsb(c)), which channels are present and their length
 /// (n_samples), from the variables' headers and the scalars; the file is never read whole
 /// (mat::scan_variables, mat::stream_scalar). The channels are then read by stream_counts().
-/// vars: other variables in the slots (nullptr: acc_x .. gyro_z). An integer variable (int16
+/// vars: other variables in the slots (nullptr: acc_x .. gyro_z); a struct field (`imu.acc_z`)
+/// takes its struct's fs/Fs and acc_lsb/gyro_lsb before the top-level ones. An integer variable (int16
 /// counts from a logger) with an LSB (option or file) is read as counts x LSB; without one its
 /// LSB is 1 (counts).
 [[nodiscard]] bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],

@@ -36,6 +36,7 @@ constexpr std::uint32_t kMiUtf16 = 17;
 constexpr std::uint32_t kMiUtf32 = 18;
 
 // Array classes.
+constexpr std::uint32_t kMxStruct = 2;
 constexpr std::uint32_t kMxChar = 4;
 constexpr std::uint32_t kMxDouble = 6;
 constexpr std::uint32_t kMxUint64 = 15;
@@ -327,6 +328,9 @@ struct Matrix {
   std::uint32_t data_type = 0;
   std::size_t data_bytes = 0;
   const std::uint8_t* data = nullptr;  // only after a full parse
+  const std::uint8_t* payload = nullptr;  // the parsed bytes (p of parse_matrix)
+  std::size_t payload_bytes = 0;          // and their count (a prefix when partial)
+  std::size_t header_end = 0;             // offset in the payload after the name
 };
 }  // namespace detail
 
@@ -407,6 +411,9 @@ Parse parse_matrix(const std::uint8_t* p, std::size_t n, bool big_endian, bool p
   if (nul != std::string::npos) {
     m.name.resize(nul);
   }
+  m.payload = p;
+  m.payload_bytes = n;
+  m.header_end = s.next;
 
   m.has_data = false;
   const bool numeric = (m.cls >= kMxDouble && m.cls <= kMxUint64) || m.cls == kMxChar;
@@ -708,6 +715,126 @@ std::size_t data_unit(const Matrix& m) {
   return m.cls == kMxChar ? char_unit_size(m.data_type) : numeric_size(m.data_type);
 }
 
+std::string join_names(const std::vector<std::string>& names) {
+  std::string out;
+  for (const auto& n : names) {
+    out += (out.empty() ? "" : ", ") + n;
+  }
+  return out.empty() ? std::string("(none)") : out;
+}
+
+// "<at>[corrupt: ]field 'NAME': WHAT", for the struct walks' errors.
+MatError field_error(const std::string& at, std::string_view name, std::string_view what,
+                     bool corrupt) {
+  std::string m = at;
+  m += corrupt ? "corrupt: field '" : "field '";
+  m += name;
+  m += "': ";
+  m += what;
+  return MatError{m};
+}
+
+// The field names of a struct, from its sub-elements at `off` in p[0..n) (after the name): the
+// field-name length (one miINT32) and the names (miINT8, length x fields, NUL-padded). `next`:
+// the offset of the first field's miMATRIX tag.
+Parse struct_field_names(const std::uint8_t* p, std::size_t n, std::size_t off, bool big_endian,
+                         std::vector<std::string>& names, std::size_t& next,
+                         std::string& problem) {
+  Sub s;
+  Parse r = read_sub(p, n, off, big_endian, false, false, s, problem);
+  if (r != Parse::ok) {
+    return r;
+  }
+  if (s.type != kMiInt32 || s.bytes != 4U) {
+    problem = "the struct's field-name length is not one miINT32";
+    return Parse::corrupt;
+  }
+  const std::uint32_t len = load_u32(p + s.data_off, big_endian);
+  r = read_sub(p, n, s.next, big_endian, false, false, s, problem);
+  if (r != Parse::ok) {
+    return r;
+  }
+  if ((s.type != kMiInt8 && s.type != kMiUint8) || (len == 0U && s.bytes != 0U) ||
+      (len != 0U && s.bytes % len != 0U)) {
+    problem = "the struct's field names are not miINT8 names of the declared length";
+    return Parse::corrupt;
+  }
+  names.clear();
+  for (std::size_t i = 0; len != 0U && i < s.bytes / len; ++i) {
+    std::string name(reinterpret_cast<const char*>(p + s.data_off + i * len), len);  // NOLINT
+    name.resize(std::min(name.find('\0'), name.size()));
+    names.push_back(std::move(name));
+  }
+  next = s.next;
+  return Parse::ok;
+}
+
+// A dotted name (`imu.acc_z`) as its top-level variable and its field path.
+void split_dotted(std::string_view name, std::string_view& top, std::string_view& fields) {
+  const std::size_t dot = name.find('.');
+  top = name.substr(0, dot);
+  fields = dot == std::string_view::npos ? std::string_view() : name.substr(dot + 1);
+}
+
+// The next field of a field path (`a.b` -> `a`, rest `b`).
+std::string_view next_field(std::string_view& rest) {
+  const std::size_t dot = rest.find('.');
+  const std::string_view field = rest.substr(0, dot);
+  rest = dot == std::string_view::npos ? std::string_view() : rest.substr(dot + 1);
+  return field;
+}
+
+// A struct can be descended into: class struct, one element.
+Status check_struct(const Matrix& st, std::string_view field, const std::string& where) {
+  if (st.cls != kMxStruct) {
+    return MatError{where + "is a " + class_name(st.cls, st.logical) +
+                    " array, not a struct: no field '" + std::string(field) + "'"};
+  }
+  if (st.n_elems != 1U) {
+    return MatError{where + "is a " + dims_text(st.dims) +
+                    " struct array: only the fields of a 1x1 struct are read"};
+  }
+  return Status{};
+}
+
+// Field `field` of struct `st`, whose payload is whole in memory, parsed into `out`.
+Status struct_field(const Matrix& st, std::string_view field, bool big_endian,
+                    const std::string& where, Matrix& out) {
+  Status ok = check_struct(st, field, where);
+  if (!ok.ok()) {
+    return ok;
+  }
+  std::vector<std::string> names;
+  std::size_t off = 0;
+  std::string problem;
+  if (struct_field_names(st.payload, st.payload_bytes, st.header_end, big_endian, names, off,
+                         problem) != Parse::ok) {
+    return MatError{where + "corrupt: " + problem};
+  }
+  for (const auto& name : names) {
+    Sub s;
+    if (read_sub(st.payload, st.payload_bytes, off, big_endian, false, false, s, problem) !=
+        Parse::ok) {
+      return field_error(where, name, problem, true);
+    }
+    if (s.type != kMiMatrix) {
+      return field_error(where, name, std::string("a ") + type_name(s.type) +
+                                          " element, not miMATRIX", true);
+    }
+    if (name == field) {
+      if (parse_matrix(st.payload + s.data_off, s.bytes, big_endian, false, out, problem) !=
+          Parse::ok) {
+        return field_error(where, name, problem, true);
+      }
+      out.name = name;
+      return Status{};
+    }
+    off = s.next;
+  }
+  return MatError{where + "field '" + std::string(field) + "' not found; fields: " +
+                  join_names(names)};
+}
+
 }  // namespace
 
 Result<std::vector<VariableInfo>> MatFile::list_variables() const {
@@ -807,8 +934,8 @@ Status MatFile::load(std::string_view name, const Element& elem, std::vector<std
                       " bytes, more than " + std::to_string(elem.payload_bytes) +
                       " compressed bytes can hold"};
     }
-    if (!m.has_data) {
-      return Status{};  // cell, struct, ...: the caller rejects the class, nothing to inflate
+    if (!m.has_data && m.cls != kMxStruct) {
+      return Status{};  // cell, object, ...: the caller rejects the class, nothing to inflate
     }
     if (inner_bytes > limits_.max_variable_bytes) {
       return MatError{where + "declares " + std::to_string(inner_bytes) +
@@ -898,12 +1025,24 @@ Result<std::vector<double>> MatFile::read_column(std::string_view name, std::siz
 
 Status MatFile::find_and_load(std::string_view name, std::vector<std::uint8_t>& scratch,
                               Matrix& m) const {
+  std::string_view top;
+  std::string_view rest;
+  split_dotted(name, top, rest);
   Element elem;
-  Status st = find(name, elem);
-  if (!st.ok()) {
-    return st;
+  Status st = find(top, elem);
+  if (st.ok()) {
+    st = load(top, elem, scratch, m);
   }
-  return load(name, elem, scratch, m);
+  // A struct field (`imu.acc_z`, nested `a.b.c`): the struct is loaded whole, then descended.
+  std::string path(top);
+  while (st.ok() && !rest.empty()) {
+    const std::string_view field = next_field(rest);
+    Matrix f;
+    st = struct_field(m, field, swap_, name_ + ": variable '" + path + "': ", f);
+    m = std::move(f);
+    path += "." + std::string(field);
+  }
+  return st;
 }
 
 Result<double> MatFile::read_scalar(std::string_view name) const {
@@ -1349,6 +1488,92 @@ struct ChannelStream::Impl {
     return Status{};
   }
 
+  // One whole sub-element (tag and padded data) appended to `out`: at most `cap` data bytes.
+  Status pull_sub(std::vector<std::uint8_t>& out, std::size_t cap, const char* what) {
+    const std::size_t at = out.size();
+    out.resize(at + 8U);
+    Status st = pull(out.data() + at, 8U);
+    if (!st.ok()) {
+      return st;
+    }
+    const std::uint32_t w0 = load_u32(out.data() + at, file.swap);
+    if ((w0 >> 16U) != 0U) {
+      return Status{};  // small data element: tag and data in 8 bytes
+    }
+    const std::size_t bytes = load_u32(out.data() + at + 4U, file.swap);
+    if (bytes > cap) {
+      return MatError{where + "corrupt: " + what + " declare " + std::to_string(bytes) + " bytes"};
+    }
+    out.resize(at + 8U + bytes + (8U - bytes % 8U) % 8U);
+    return pull(out.data() + at + 8U, out.size() - at - 8U);
+  }
+
+  // Descend from the struct f.m, positioned after its name, into its field `field`: the
+  // fields before it are skipped (inflated and dropped), the field's header is parsed and the
+  // stream left at its real part. f.peek becomes the field's header followed by what was left
+  // unread of the old peek, so that pull() keeps the byte order.
+  Status descend(std::string_view field, const std::string& at) {
+    Status st = check_struct(f.m, field, at);
+    if (!st.ok()) {
+      return st;
+    }
+    std::vector<std::uint8_t> head;
+    if (!(st = pull_sub(head, 8U, "the field-name length")).ok() ||
+        !(st = pull_sub(head, kLongHeaderBytes, "the field names")).ok()) {
+      return st;
+    }
+    std::vector<std::string> names;
+    std::size_t unused = 0;
+    std::string problem;
+    if (struct_field_names(head.data(), head.size(), 0, file.swap, names, unused, problem) !=
+        Parse::ok) {
+      return MatError{at + "corrupt: " + problem};
+    }
+    for (const auto& name : names) {
+      std::array<std::uint8_t, 8> tag{};
+      if (!(st = pull(tag.data(), tag.size())).ok()) {
+        return st;
+      }
+      if (load_u32(tag.data(), file.swap) != kMiMatrix) {
+        return field_error(at, name, "not a miMATRIX element", true);
+      }
+      const std::uint64_t bytes = load_u32(tag.data() + 4, file.swap);
+      if (name != field) {
+        if (!(st = skip(bytes + (8U - bytes % 8U) % 8U)).ok()) {
+          return st;
+        }
+        continue;
+      }
+      std::vector<std::uint8_t> hdr(static_cast<std::size_t>(
+          std::min<std::uint64_t>(bytes, kLongHeaderBytes)));
+      if (!(st = pull(hdr.data(), hdr.size())).ok()) {
+        return st;
+      }
+      Matrix fm;
+      const Parse r = parse_matrix(hdr.data(), hdr.size(), file.swap, hdr.size() < bytes, fm,
+                                   problem);
+      if (r != Parse::ok) {
+        return field_error(at, name, r == Parse::need_more ? "matrix header is truncated" : problem,
+                           false);
+      }
+      fm.name = name;
+      const std::size_t resume = fm.has_data ? static_cast<std::size_t>(fm.data - hdr.data())
+                                             : fm.header_end;
+      hdr.insert(hdr.end(), f.peek.begin() + static_cast<std::ptrdiff_t>(peek_pos), f.peek.end());
+      // fm's pointers stay valid: inserting may move hdr's bytes, so they are re-based.
+      fm.payload = hdr.data();
+      fm.data = fm.has_data ? hdr.data() + resume : nullptr;
+      fm.payload_bytes = hdr.size();
+      f.peek = std::move(hdr);
+      f.m = std::move(fm);
+      peek_pos = resume;
+      f.data_at = resume;
+      return Status{};
+    }
+    return MatError{at + "field '" + std::string(field) + "' not found; fields: " +
+                    join_names(names)};
+  }
+
   // After the last sample: a compressed variable is inflated to its end (the columns after
   // this one, padding) and checked: no more than the declared size, Adler-32.
   Status finish() {
@@ -1406,6 +1631,9 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
   if (!st.ok()) {
     return st.error();
   }
+  std::string_view top;
+  std::string_view rest;
+  split_dotted(name, top, rest);
   std::string seen;
   std::uint64_t off = kHeaderBytes;
   bool found = false;
@@ -1415,7 +1643,7 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
       return st.error();
     }
     if ((s.f.e.type == kMiMatrix || s.f.e.type == kMiCompressed) && !s.f.m.name.empty()) {
-      if (s.f.m.name == name) {
+      if (s.f.m.name == top) {
         found = true;
         break;
       }
@@ -1424,20 +1652,11 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
     off = s.f.e.next;
   }
   if (!found) {
-    return MatError{path + ": variable '" + std::string(name) + "' not found; variables: " +
+    return MatError{path + ": variable '" + std::string(top) + "' not found; variables: " +
                     (seen.empty() ? std::string("(none)") : seen)};
   }
-  const Matrix& m = s.f.m;
   s.where = path + ": variable '" + std::string(name) + "': ";
   const std::string& where = s.where;
-  if (!m.has_data || m.cls == kMxChar) {
-    return MatError{where + "is a " + class_name(m.cls, m.logical) +
-                    " array, not numeric (double, single, int8..uint64)"};
-  }
-  st = check_data(where, m, numeric_size(m.data_type));
-  if (!st.ok()) {
-    return st.error();
-  }
   if (s.f.e.type == kMiCompressed) {
     s.inner_bytes = load_u32(s.f.peek.data() + 4, s.file.swap);
     const std::size_t limit = max_inflated_size(s.f.e.payload_bytes);
@@ -1451,6 +1670,38 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
                       " bytes inflated, more than the reader's budget of " +
                       std::to_string(limits.max_stream_variable_bytes) + " bytes per variable"};
     }
+  }
+  s.buf.resize(kConvertBytes);
+  if (!s.f.inf) {
+    // Uncompressed: the data follow in the file; the peek holds their first bytes.
+    s.file_pos = s.f.e.payload_off + s.f.peek.size();
+  }
+  s.peek_pos = s.f.data_at;
+  // A struct field (`imu.acc_z`, nested `a.b.c`): descended in the stream, constant memory.
+  std::string at(top);
+  while (!rest.empty()) {
+    if (s.f.m.cls == kMxStruct) {
+      s.peek_pos = static_cast<std::size_t>(s.f.m.payload + s.f.m.header_end - s.f.peek.data());
+    }
+    const std::string_view field = next_field(rest);
+    std::string where_at = path;
+    where_at += ": variable '";
+    where_at += at;
+    where_at += "': ";
+    st = s.descend(field, where_at);
+    if (!st.ok()) {
+      return st.error();
+    }
+    at += "." + std::string(field);
+  }
+  const Matrix& m = s.f.m;
+  if (!m.has_data || m.cls == kMxChar) {
+    return MatError{where + "is a " + class_name(m.cls, m.logical) +
+                    " array, not numeric (double, single, int8..uint64)"};
+  }
+  st = check_data(where, m, numeric_size(m.data_type));
+  if (!st.ok()) {
+    return st.error();
   }
   if (m.n_elems == 0U) {
     return MatError{where + "is empty (" + dims_text(m.dims) + ")"};
@@ -1472,13 +1723,8 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
   }
   s.unit = numeric_size(m.data_type);
   s.skip_bytes = first * s.unit;
-  s.peek_pos = s.f.data_at;
-  if (!s.f.inf) {
-    // Uncompressed: the data follow in the file; the peek holds their first bytes.
-    s.file_pos = s.f.e.payload_off + s.f.peek.size();
-  }
   s.info = info_of(s.f);
-  s.buf.resize(kConvertBytes);
+  s.info.name = std::string(name);
   return ChannelStream(std::move(impl));
 }
 

@@ -3,9 +3,11 @@
 // Supported: little- and big-endian files ("IM"/"MI"), compressed (miCOMPRESSED, zlib) and
 // uncompressed (miMATRIX) variables; numeric classes double, single, int8..int64, uint8..uint64
 // (and logical) with any numeric storage type (e.g. class double stored as miUINT8 is
-// converted); char arrays (miUTF8, miUINT16/miUTF16, miUINT8, miUTF32). Other classes (cell,
-// struct, object, sparse, function handles) are listed and skipped by their byte size; reading
-// one is an error. Complex arrays are an error ("complex not supported"). N-d arrays are seen as
+// converted); char arrays (miUTF8, miUINT16/miUTF16, miUINT8, miUTF32); the fields of a 1x1
+// struct by dotted name (`imu.acc_z`, nested `rec.imu.acc_z`: every read_*() and ChannelStream;
+// a missing field's error lists the struct's fields). Other classes (cell, object, sparse,
+// function handles, struct arrays) are listed and skipped by their byte size; reading one is an
+// error. Complex arrays are an error ("complex not supported"). N-d arrays are seen as
 // rows = dims[0], cols = product of the other dimensions. int64/uint64 values beyond 2^53 are
 // rounded to the nearest double.
 //
