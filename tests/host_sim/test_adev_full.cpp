@@ -71,6 +71,60 @@ TEST(AdevFull, MatchesAllantoolsOadevOnTheSharedData) {
   }
 }
 
+// A whole IMU in one call (issue 13 item 3): `--channel all` gives each of the six channels
+// allantools' oadev, in one JSON keyed by channel and one CSV with a channel column; a comma
+// list gives those channels, in the order named.
+TEST(AdevFull, WholeImuInOneCallMatchesAllantools) {
+  const std::string dir = std::string(IMU_SHARED_DIR);
+  if (!std::ifstream(dir + "/data/adis16405_imu2.mat").good()) {
+    GTEST_SKIP() << "shared data not found in " << dir;
+  }
+  simtest::TempDir tmp;
+  const std::string json = tmp.file("all.json");
+  const std::string csv = tmp.file("all.csv");
+  const std::vector<std::string> chans = {"acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z"};
+  auto r = simtest::run({"adev", dir + "/data/adis16405_imu2.mat", "--channel", "all",
+                         "--estimator", "full", "--json", json, "--csv", csv});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string j = simtest::read_text(json);
+  const std::string c = simtest::read_text(csv);
+  std::size_t last = 0;
+  for (const auto& ch : chans) {
+    SCOPED_TRACE(ch);
+    const std::size_t at = j.find("\"" + ch + "\": {");
+    ASSERT_NE(at, std::string::npos) << j.substr(0, 300);
+    EXPECT_GT(at, last);  // in the usual order
+    last = at;
+    const auto ours = simtest::json_adev(j.substr(at));
+    std::map<double, imu::test::GoldenRow> gold;
+    std::string golden = dir;
+    golden += "/golden/oadev_adis16405_imu2_";
+    golden += ch;
+    golden += ".csv";
+    for (const auto& g : imu::test::read_golden(golden)) {
+      gold[g.af] = g;
+    }
+    std::size_t matched = 0;
+    for (const auto& o : ours) {
+      const auto it = gold.find(static_cast<double>(std::llround(o.tau_s * 100.0)));
+      if (it != gold.end()) {
+        ++matched;
+        EXPECT_NEAR(o.adev, it->second.adev, 1e-8 * it->second.adev) << o.tau_s;
+      }
+    }
+    EXPECT_GE(matched, 18U);
+    EXPECT_NE(c.find("\n" + ch + ",0.01,1,"), std::string::npos);
+  }
+  EXPECT_EQ(c.rfind("channel,tau_s,af,adev,", 0), 0U) << c.substr(0, 80);
+  r = simtest::run({"adev", dir + "/data/adis16405_imu2.mat", "--channel", "gyro_z,acc_x",
+                    "--json", json});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string two = simtest::read_text(json);
+  EXPECT_LT(two.find("\"gyro_z\": {"), two.find("\"acc_x\": {"));
+  EXPECT_EQ(two.find("\"acc_y\""), std::string::npos);
+  EXPECT_LT(r.out.find(" gyro_z: "), r.out.find(" acc_x: "));
+}
+
 TEST(AdevFull, OctaveFixtureGridsAndCsv) {
   simtest::TempDir tmp;
   const std::string mat = std::string(IMU_OCTAVE_DIR) + "/octave_v7.mat";

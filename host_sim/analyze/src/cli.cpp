@@ -97,52 +97,23 @@ double file_lsb(const imu::mat::MatFile& m, const std::string& channel) {
   return 0.0;
 }
 
-constexpr const char* kImuChannels[] = {"acc_x", "acc_y", "acc_z", "gyro_x", "gyro_y", "gyro_z"};
-
 // --channel: NAME, a comma list, or `all` (the IMU channels the file holds, in the usual order).
 bool resolve_channels(const imu::mat::MatFile& m, const std::string& file,
                       const std::string& spec, std::vector<std::string>& out, std::string& err) {
-  out.clear();
+  std::vector<std::string> held;
   if (spec == "all") {
     auto vars = m.list_variables();
     if (!vars) {
       err = vars.error().message;
       return false;
     }
-    std::string held;
-    for (const char* name : kImuChannels) {
-      for (const auto& v : vars.value()) {
-        if (v.name == name) {
-          out.emplace_back(name);
-        }
-      }
+    for (const auto& v : vars.value()) {
+      held.push_back(v.name);
     }
-    if (out.empty()) {
-      for (const auto& v : vars.value()) {
-        held += (held.empty() ? "" : ", ") + v.name;
-      }
-      err = file + ": --channel all: none of acc_x..gyro_z in the file (it holds: " + held +
-            "); name the channels";
-      return false;
-    }
-    return true;
   }
-  std::size_t pos = 0;
-  while (pos <= spec.size()) {
-    const std::size_t comma = spec.find(',', pos);
-    const std::string name = spec.substr(pos, comma == std::string::npos ? std::string::npos
-                                                                          : comma - pos);
-    if (name.empty()) {
-      err = "--channel '" + spec + "': an empty name in the list";
-      return false;
-    }
-    if (std::find(out.begin(), out.end(), name) == out.end()) {
-      out.push_back(name);
-    }
-    if (comma == std::string::npos) {
-      break;
-    }
-    pos = comma + 1;
+  if (!imu::cli::expand_channels(spec, held, out, err)) {
+    err = file + ": " + err;
+    return false;
   }
   return true;
 }
@@ -214,39 +185,19 @@ struct Job {
   bool ok = false;
 };
 
-// Each channel's analysis is independent: at most hardware_concurrency() threads take jobs in
-// turn. An exception (out of memory) in one job is that job's error.
+// Each channel's analysis is independent (imu::cli::parallel_for: the machine's cores). An
+// exception (out of memory) in one job is that job's error.
 void run_jobs(std::vector<Job>& jobs) {
-  std::atomic<std::size_t> next{0};
-  const auto work = [&jobs, &next]() {
-    for (std::size_t i = next++; i < jobs.size(); i = next++) {
-      Job& j = jobs[i];
-      try {
-        j.ok = analyze(j.samples, j.channel, j.o, j.r, j.err);
-      } catch (const std::bad_alloc&) {
-        j.ok = false;
-        j.err = "out of memory";
-      }
-      j.samples = std::vector<double>{};
-    }
-  };
-  // IMU_NO_THREADS: one thread (qemu-aarch64 user mode hangs on a second one: the cross tests).
-  const std::size_t cores = std::getenv("IMU_NO_THREADS") != nullptr
-                                ? 1U
-                                : std::max(1U, std::thread::hardware_concurrency());
-  const std::size_t n_threads = std::min(cores, jobs.size());
-  std::vector<std::thread> pool;
-  for (std::size_t t = 1; t < n_threads; ++t) {
+  imu::cli::parallel_for(jobs.size(), [&jobs](std::size_t i) {
+    Job& j = jobs[i];
     try {
-      pool.emplace_back(work);
-    } catch (const std::system_error&) {
-      break;  // no more threads: the ones running (and this one) take the rest
+      j.ok = analyze(j.samples, j.channel, j.o, j.r, j.err);
+    } catch (const std::bad_alloc&) {
+      j.ok = false;
+      j.err = "out of memory";
     }
-  }
-  work();
-  for (auto& t : pool) {
-    t.join();
-  }
+    j.samples = std::vector<double>{};
+  });
 }
 
 // Analyse the jobs (in parallel), print, write. Exit status.
@@ -328,30 +279,9 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     return false;
   }
   std::vector<std::string> names;
-  if (spec == "all") {
-    for (const char* n : kImuChannels) {
-      if (std::find(table.names.begin(), table.names.end(), n) != table.names.end()) {
-        names.emplace_back(n);
-      }
-    }
-    if (names.empty()) {
-      for (const auto& n : table.names) {
-        if (n != "t" && n != "time" && n != "timestamp") {
-          names.push_back(n);
-        }
-      }
-    }
-  } else {
-    std::size_t pos = 0;
-    while (pos <= spec.size()) {
-      const std::size_t comma = spec.find(',', pos);
-      names.push_back(spec.substr(pos, comma == std::string::npos ? std::string::npos
-                                                                  : comma - pos));
-      if (comma == std::string::npos) {
-        break;
-      }
-      pos = comma + 1;
-    }
+  if (!imu::cli::text_channels(table, spec, names, err)) {
+    err.insert(0, file + ": ");
+    return false;
   }
   for (const auto& n : names) {
     imu::cli::TextChannel tc;

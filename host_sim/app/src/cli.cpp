@@ -14,6 +14,7 @@
 #include "imu/cli/file_out.hpp"
 #include "imu/cli/text_input.hpp"
 #include "imu/error_model.hpp"
+#include "imu/mat/mat_reader.hpp"
 #include "imu/mat/mat_writer.hpp"
 #include "imu/model_text.hpp"
 #include "imu/noise_sim.hpp"
@@ -42,10 +43,16 @@ constexpr const char* kUsageModel =
     "usage: imu-sim model [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--fs 100]\n"
     "  the continuous and discrete first-order model in the seed's layout\n";
 constexpr const char* kUsageAdev =
-    "usage: imu-sim adev FILE [--channel acc_z] [--json OUT] [--csv OUT] [--lsb X] [--fs X]\n"
-    "                         [--estimator online|full] [--taus octave|decade|quarter|all]\n"
-    "  ADEV of one channel, with the time it took. --estimator online (default): the firmware's\n"
-    "  fixed-memory estimator (fw OnlineAdev<8,22>, partially overlapping, constant memory);\n"
+    "usage: imu-sim adev FILE [--channel acc_z|all|A,B] [--json OUT] [--csv OUT] [--lsb X]\n"
+    "                         [--fs X] [--estimator online|full]\n"
+    "                         [--taus octave|decade|quarter|all]\n"
+    "  ADEV of a channel, with the time it took. --channel: a variable (NAME, NAME:K column K\n"
+    "  of a matrix, imu.acc_z a struct field), a comma list, or all (the channels acc_x..gyro_z\n"
+    "  the file holds; a text file without them: every column but the time): the channels in\n"
+    "  parallel on the machine's cores, one table each, one JSON ({\"source\", \"estimator\",\n"
+    "  \"channels\": {NAME: ...}}), one CSV with a channel column. --estimator online\n"
+    "  (default): the firmware's fixed-memory estimator (fw OnlineAdev<8,22>, partially\n"
+    "  overlapping, constant memory);\n"
     "  full: the fully overlapping estimator on the whole record (allantools oadev, Stable32;\n"
     "  12 bytes per sample of memory). --taus as allantools' keywords (default: online, its own\n"
     "  grid; full, octave): octave 1, 2, 4, ..; decade 1, 2, 4, 10, 20, 40, ..; quarter\n"
@@ -266,31 +273,314 @@ struct AdevTiming {
   double read, quantize, adev, total;
 };
 
-// The unit of a channel: its slot's for acc*/gyro* names, else the file's own (unknown here).
+// The unit of a channel: its slot's for acc*/gyro* names (the last field of a struct's), else
+// the file's own (unknown here).
 std::string adev_unit(const std::string& chan_name, std::size_t chan) {
   const std::string field = chan_name.substr(chan_name.rfind('.') + 1);  // imu.acc_z: acc_z
   const bool known = field.rfind("acc", 0) == 0 || field.rfind("gyro", 0) == 0;
   return known ? channel_unit(chan) : "(the file's unit)";
 }
 
-std::string adev_json(const std::string& path, const std::string& chan_name, std::size_t chan,
-                      const SensorData& sd, std::size_t n, const std::vector<AdevRow>& rows,
-                      const AdevTiming& t, const std::string& estimator) {
-  const ChannelData& ch = sd.ch[chan];
-  std::string j = "{\n";
-  j += "  \"source\": " + json_str(path) + ",\n";
-  j += "  \"estimator\": " + json_str(estimator) + ",\n";
-  j += "  \"channel\": " + json_str(chan_name) + ",\n";
-  j += "  \"unit\": " + json_str(adev_unit(chan_name, chan)) + ",\n";
-  j += "  \"fs_hz\": " + json_num(sd.fs_hz) + ",\n";
-  j += "  \"lsb\": " + json_num(ch.lsb) + ",\n";
-  j += "  \"n_samples\": " + std::to_string(n) + ",\n";
-  j += "  \"gaps\": " + std::to_string(ch.non_finite) + ",\n";
-  j += "  \"adev\": " + adev_json_list(rows) + ",\n";
-  j += "  \"timing_s\": {\"read\": " + json_num(t.read) + ", \"quantize\": " +
-       json_num(t.quantize) + ", \"adev\": " + json_num(t.adev) + ", \"total\": " +
-       json_num(t.total) + "}\n}\n";
+// The options of adev, checked (usage errors) before any file is opened.
+struct AdevOptions {
+  std::string path;
+  std::string spec;  // --channel: NAME, NAME:K, a comma list or `all`
+  std::string estimator;
+  std::string taus;  // "" : the online estimator's own grid
+  bool full = false;
+  double lsb = 0.0;  // 0: the file's or the default
+  double fs = 0.0;   // 0: the file's
+};
+
+bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
+  o.estimator = a.get("--estimator", "online");
+  o.full = o.estimator == "full";
+  if (!o.full && o.estimator != "online") {
+    err = "--estimator " + o.estimator + ": online or full";
+    return false;
+  }
+  o.taus = a.get("--taus", o.full ? "octave" : "");
+  std::vector<std::uint64_t> probe;
+  if (!o.taus.empty() && !tau_grid(o.taus, 1000, probe)) {
+    err = "--taus " + o.taus + ": octave, decade, quarter or all";
+    return false;
+  }
+  if (o.taus == "all" && !o.full) {
+    err = "--taus all needs --estimator full (the online estimator has its own grid)";
+    return false;
+  }
+  if (a.positional().empty()) {
+    err = "a MAT-file or text file is required: imu-sim adev FILE --channel C";
+    return false;
+  }
+  o.path = a.positional()[0];
+  o.spec = a.get("--channel", "acc_z");
+  return (!a.has("--lsb") || a.number("--lsb", 0.0, 1e-12, 1e6, o.lsb, err)) &&
+         (!a.has("--fs") || a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, o.fs, err));
+}
+
+// One channel's ADEV: what it was read as, its rows, the time each step took, or its error.
+struct AdevResult {
+  std::string name;  // as named on the command line
+  std::size_t chan = 0;  // its slot: acc_x..gyro_z, else acc_z (gyro* names: gyro_z) for the
+                         // default LSB and the unit
+  SensorData sd;
+  std::vector<AdevRow> rows;
+  AdevTiming t{};
+  std::string err;
+  int status = kExitOk;
+};
+
+// The slot of a channel name, and for any other variable (NAME, NAME:K, a struct field) the
+// variable it reads.
+bool adev_slot(const std::string& name, std::size_t& chan, ChannelVars& vars, bool& renamed,
+               std::string& err) {
+  renamed = false;
+  if (channel_index(name, chan)) {
+    return true;
+  }
+  imu::cli::ChannelSpec cs;
+  if (!imu::cli::parse_channel_spec(name, cs, err)) {
+    return false;
+  }
+  chan = name.substr(name.rfind('.') + 1).rfind("gyro", 0) == 0 ? 5 : 2;
+  vars.names[chan] = cs.name;
+  vars.columns[chan] = cs.column;
+  vars.column_given[chan] = cs.has_column;
+  renamed = true;
+  return true;
+}
+
+// Rate, LSB and length of the channel: a text column (read whole: text is not streamed) into
+// r.sd.ch[r.chan].values, or a MAT variable's header (streamed later). Exit status; r.err set.
+int adev_load(const AdevOptions& o, const imu::cli::TextTable* table, AdevResult& r) {
+  ChannelVars vars;
+  bool renamed = false;
+  if (!adev_slot(r.name, r.chan, vars, renamed, r.err)) {
+    return kExitUsage;
+  }
+  if (table != nullptr) {
+    imu::cli::TextChannel tc;
+    if (!imu::cli::text_channel(*table, r.name, o.fs, tc, r.err)) {
+      const bool usage = r.err.rfind("no column", 0) == 0;  // like a MAT variable not found
+      r.err = o.path + ": " + r.err;
+      return usage ? kExitUsage : kExitRuntime;
+    }
+    r.sd.path = o.path;
+    r.sd.fs_hz = tc.fs_hz;
+    r.sd.n_samples = tc.samples.size();
+    ChannelData& ch = r.sd.ch[r.chan];
+    ch.present = true;
+    ch.values = std::move(tc.samples);
+    ch.lsb = o.lsb > 0.0 ? o.lsb : default_lsb(r.chan);
+    ch.lsb_from_option = o.lsb > 0.0;
+    if (!(r.sd.fs_hz >= kMinFsHz && r.sd.fs_hz <= kMaxFsHz)) {
+      r.err = o.path + ": the time column gives " + std::to_string(r.sd.fs_hz) +
+              " Hz, outside [1e-3, 1e6] Hz (give --fs)";
+      return kExitRuntime;
+    }
+    return kExitOk;
+  }
+  bool want[kNumChannels] = {};
+  double lsb_over[kNumChannels] = {};
+  want[r.chan] = true;
+  lsb_over[r.chan] = o.lsb;
+  if (!load_sensor_meta(o.path, want, want, lsb_over, o.fs, r.sd, r.err,
+                        renamed ? &vars : nullptr)) {
+    return renamed && r.err.find("not found") != std::string::npos ? kExitUsage : kExitRuntime;
+  }
+  return kExitOk;
+}
+
+// A text column's values into a sink as stream_counts() delivers a MAT variable's: finite runs
+// as counts, each run of missing samples between two finite ones as one gap.
+int feed_values(const std::string& path, std::size_t chan, ChannelData& c, CountSink& sink,
+                std::string& err) {
+  std::vector<std::int32_t> counts;
+  const int st = to_counts(path, chan, c, counts, err);
+  if (st != kExitOk) {
+    return st;
+  }
+  std::size_t i = 0;
+  const std::size_t n = c.values.size();
+  while (i < n && !std::isfinite(c.values[i])) {
+    ++i;
+  }
+  std::size_t end = n;
+  while (end > i && !std::isfinite(c.values[end - 1])) {
+    --end;
+  }
+  while (i < end) {
+    std::size_t j = i;
+    const bool finite = std::isfinite(c.values[i]);
+    while (j < end && std::isfinite(c.values[j]) == finite) {
+      ++j;
+    }
+    if (finite) {
+      sink.push(counts.data() + i, j - i);
+    } else {
+      sink.gap(j - i);
+    }
+    i = j;
+  }
+  return kExitOk;
+}
+
+// The ADEV of a loaded channel: the counts streamed (MAT) or fed (text) into the estimator.
+// Exit status; r.rows and r.t set, or r.err.
+int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
+  ChannelData& ch = r.sd.ch[r.chan];
+  std::vector<std::uint64_t> grid;
+  if (!o.taus.empty()) {
+    (void)tau_grid(o.taus, r.sd.n_samples, grid);  // the keyword was checked by parse_adev
+  }
+  const double cost = o.full ? full_adev_cost(r.sd.n_samples, grid) : 0.0;
+  if (cost > 2e9) {
+    r.err = "--taus " + o.taus + " on " + std::to_string(r.sd.n_samples) + " samples would sum " +
+            std::to_string(cost) + " second differences (limit 2e9): use --taus quarter or octave";
+    return kExitUsage;
+  }
+  StreamTiming tm;
+  const auto feed = [&](CountSink& sink) {
+    return text ? feed_values(o.path, r.chan, ch, sink, r.err)
+                : stream_counts(o.path, r.chan, ch, sink, tm, r.err);
+  };
+  if (o.full) {
+    FullAdevSink sink;
+    const int st = feed(sink);
+    if (st != kExitOk) {
+      return st;
+    }
+    r.rows = full_adev(sink, grid, 1.0 / r.sd.fs_hz, ch.lsb);
+  } else {
+    OnlineAdev<8, 22> adev(1.0 / r.sd.fs_hz, ch.lsb);
+    AdevSink sink(adev);
+    const int st = feed(sink);
+    if (st != kExitOk) {
+      return st;
+    }
+    AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
+    const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
+    r.rows = rows_from_points(pts, np);
+    if (!grid.empty()) {
+      r.rows = rows_on_grid(r.rows, grid);
+    }
+  }
+  // The times of the interleaved steps are summed: read = metadata + read + inflate.
+  const double total = now_s() - t0;
+  r.t = AdevTiming{total - tm.quantize_s - tm.sink_s, tm.quantize_s, tm.sink_s, total};
+  return kExitOk;
+}
+
+// One channel, start to end (the unit of adev's parallel work). Never throws.
+void adev_channel(const AdevOptions& o, const imu::cli::TextTable* table, AdevResult& r) {
+  try {
+    const double t0 = now_s();
+    r.status = adev_load(o, table, r);
+    if (r.status == kExitOk) {
+      r.status = adev_compute(o, table != nullptr, t0, r);
+    }
+  } catch (const std::bad_alloc&) {
+    r.status = kExitRuntime;
+    r.err = "out of memory";
+  }
+}
+
+void print_adev(const std::string& path, const AdevResult& r) {
+  const ChannelData& ch = r.sd.ch[r.chan];
+  std::printf("%s %s: %zu samples at %g Hz, LSB %g %s%s\n", path.c_str(), r.name.c_str(),
+              r.sd.n_samples, r.sd.fs_hz, ch.lsb, adev_unit(r.name, r.chan).c_str(),
+              ch.lsb_from_file ? " (from the file)" : "");
+  std::fputs(format_adev_table(r.rows).c_str(), stdout);
+  std::printf("time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", r.t.read,
+              r.t.quantize, r.t.adev, r.t.total);
+  if (ch.non_finite > 0) {
+    std::printf("note: %llu non-finite samples (NaN/Inf) treated as gaps\n",
+                static_cast<unsigned long long>(ch.non_finite));
+  }
+  if (ch.off_grid > 0) {
+    std::printf("note: %llu samples off the LSB grid (quantised to it)\n",
+                static_cast<unsigned long long>(ch.off_grid));
+  }
+}
+
+// One channel's JSON members (without braces), each line indented by `in`.
+std::string adev_members(const AdevResult& r, const std::string& in) {
+  const ChannelData& ch = r.sd.ch[r.chan];
+  std::string j;
+  j += in + "\"channel\": " + json_str(r.name) + ",\n";
+  j += in + "\"unit\": " + json_str(adev_unit(r.name, r.chan)) + ",\n";
+  j += in + "\"fs_hz\": " + json_num(r.sd.fs_hz) + ",\n";
+  j += in + "\"lsb\": " + json_num(ch.lsb) + ",\n";
+  j += in + "\"n_samples\": " + std::to_string(r.sd.n_samples) + ",\n";
+  j += in + "\"gaps\": " + std::to_string(ch.non_finite) + ",\n";
+  j += in + "\"adev\": " + adev_json_list(r.rows) + ",\n";
+  j += in + "\"timing_s\": {\"read\": " + json_num(r.t.read) + ", \"quantize\": " +
+       json_num(r.t.quantize) + ", \"adev\": " + json_num(r.t.adev) + ", \"total\": " +
+       json_num(r.t.total) + "}\n";
   return j;
+}
+
+// One channel: its members at the top level (as before --channel took lists); several: one
+// object {"source", "estimator", "channels": {NAME: {...}}} (as analyze's).
+std::string adev_json(const AdevOptions& o, const std::vector<AdevResult>& rs) {
+  std::string j = "{\n";
+  j += "  \"source\": " + json_str(o.path) + ",\n";
+  j += "  \"estimator\": " + json_str(o.estimator) + ",\n";
+  if (rs.size() == 1) {
+    return j + adev_members(rs[0], "  ") + "}\n";
+  }
+  j += "  \"channels\": {\n";
+  for (std::size_t i = 0; i < rs.size(); ++i) {
+    j += "    " + json_str(rs[i].name) + ": {\n" + adev_members(rs[i], "      ") + "    }";
+    j += i + 1 < rs.size() ? ",\n" : "\n";
+  }
+  return j + "  }\n}\n";
+}
+
+// One channel: adev_csv's table; several: the same with a first column `channel`.
+std::string adev_csv_all(const std::vector<AdevResult>& rs) {
+  if (rs.size() == 1) {
+    return adev_csv(rs[0].rows);
+  }
+  std::string out;
+  for (const AdevResult& r : rs) {
+    const std::string t = adev_csv(r.rows);
+    std::size_t pos = 0;
+    for (bool header = true; pos < t.size(); header = false) {
+      const std::size_t eol = t.find('\n', pos);
+      const std::string line = t.substr(pos, eol - pos);
+      if (!header || out.empty()) {
+        out += (header ? std::string("channel") : r.name) + "," + line + "\n";
+      }
+      pos = eol == std::string::npos ? t.size() : eol + 1;
+    }
+  }
+  return out;
+}
+
+// The channels --channel names: from the text table's header or the MAT-file's variables.
+bool adev_channels(const AdevOptions& o, const imu::cli::TextTable* table,
+                   std::vector<std::string>& names, std::string& err) {
+  if (table != nullptr) {
+    return imu::cli::text_channels(*table, o.spec, names, err);
+  }
+  std::vector<std::string> held;
+  if (o.spec == "all") {
+    auto vars = mat::scan_variables(o.path);
+    if (!vars.ok()) {
+      err = vars.error().message;
+      return false;
+    }
+    for (const auto& v : vars.value()) {
+      held.push_back(v.name);
+    }
+  }
+  if (!imu::cli::expand_channels(o.spec, held, names, err)) {
+    err = o.path + ": " + err;
+    return false;
+  }
+  return true;
 }
 
 int cmd_adev(int argc, char** argv) {
@@ -306,180 +596,43 @@ int cmd_adev(int argc, char** argv) {
   if (a.help()) {
     return print_help("adev");
   }
-  const std::string estimator = a.get("--estimator", "online");
-  const bool full = estimator == "full";
-  if (!full && estimator != "online") {
-    return fail(cmd, "--estimator " + estimator + ": online or full", kExitUsage);
-  }
-  const std::string taus = a.get("--taus", full ? "octave" : "");
-  std::vector<std::uint64_t> probe;
-  if (!taus.empty() && !tau_grid(taus, 1000, probe)) {
-    return fail(cmd, "--taus " + taus + ": octave, decade, quarter or all", kExitUsage);
-  }
-  if (taus == "all" && !full) {
-    return fail(cmd, "--taus all needs --estimator full (the online estimator has its own grid)",
-                kExitUsage);
-  }
-  if (a.positional().empty()) {
-    return fail(cmd, "a MAT-file is required: imu-sim adev FILE --channel C", kExitUsage);
-  }
-  const std::string path = a.positional()[0];
-  std::size_t chan = 0;
-  const std::string chan_name = a.get("--channel", "acc_z");
-  ChannelVars vars;
-  bool renamed = false;
-  if (!channel_index(chan_name, chan)) {
-    // Any variable of the file, or NAME:K for column K (1-based) of a matrix: it takes the
-    // acc_z slot (gyro* names the gyro_z slot, for the default LSB and the unit).
-    imu::cli::ChannelSpec cs;
-    if (!imu::cli::parse_channel_spec(chan_name, cs, err)) {
-      return fail(cmd, err, kExitUsage);
-    }
-    chan = chan_name.substr(chan_name.rfind('.') + 1).rfind("gyro", 0) == 0 ? 5 : 2;
-    vars.names[chan] = cs.name;
-    vars.columns[chan] = cs.column;
-    vars.column_given[chan] = cs.has_column;
-    renamed = true;
-  }
-  double lsb = 0, fs = 0;
-  if ((a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, lsb, err)) ||
-      (a.has("--fs") && !a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, fs, err))) {
+  AdevOptions o;
+  if (!parse_adev(a, o, err)) {
     return fail(cmd, err, kExitUsage);
   }
-  const double t0 = now_s();
-  bool want[kNumChannels] = {};
-  double lsb_over[kNumChannels] = {};
-  want[chan] = true;
-  lsb_over[chan] = lsb;
-  SensorData sd;
-  // Text input (CSV/TSV/blank-separated with a header; imu/cli/text_input.hpp): the column is
-  // read whole (text files are not streamed), its rate from --fs or a time column.
-  const bool text = imu::cli::looks_like_text(path);
-  if (text) {
-    imu::cli::TextTable table;
-    imu::cli::TextChannel tc;
-    if (!imu::cli::read_text_table(path, table, err) ||
-        !imu::cli::text_channel(table, chan_name, fs, tc, err)) {
-      const bool usage = err.rfind("no column", 0) == 0;  // like a MAT variable not found
-      return fail(cmd, err.rfind(path, 0) == 0 ? err : path + ": " + err,
-                  usage ? kExitUsage : kExitRuntime);
-    }
-    sd.path = path;
-    sd.fs_hz = tc.fs_hz;
-    sd.n_samples = tc.samples.size();
-    ChannelData& tch = sd.ch[chan];
-    tch.present = true;
-    tch.values = std::move(tc.samples);
-    tch.lsb = lsb > 0.0 ? lsb : default_lsb(chan);
-    tch.lsb_from_option = lsb > 0.0;
-    if (!(sd.fs_hz >= kMinFsHz && sd.fs_hz <= kMaxFsHz)) {
-      return fail(cmd, path + ": the time column gives " + std::to_string(sd.fs_hz) +
-                           " Hz, outside [1e-3, 1e6] Hz (give --fs)");
-    }
-  } else if (!load_sensor_meta(path, want, want, lsb_over, fs, sd, err,
-                               renamed ? &vars : nullptr)) {
-    return fail(cmd, err, renamed && err.find("not found") != std::string::npos ? kExitUsage
-                                                                                : kExitRuntime);
+  // Text input (CSV/TSV/blank-separated with a header; imu/cli/text_input.hpp): read once.
+  imu::cli::TextTable table;
+  const bool text = imu::cli::looks_like_text(o.path);
+  if (text && !imu::cli::read_text_table(o.path, table, err)) {
+    return fail(cmd, err.rfind(o.path, 0) == 0 ? err : o.path + ": " + err);
   }
-  // The counts into a sink: streamed from a MAT-file, or from a text column's values (finite
-  // runs as counts, each run of missing samples between two finite ones as one gap, as
-  // stream_counts does).
-  const auto feed = [&](CountSink& sink, StreamTiming& timing) {
-    ChannelData& c = sd.ch[chan];
-    if (!text) {
-      return stream_counts(path, chan, c, sink, timing, err);
-    }
-    std::vector<std::int32_t> counts;
-    const int st = to_counts(path, chan, c, counts, err);
-    if (st != kExitOk) {
-      return st;
-    }
-    std::size_t i = 0;
-    const std::size_t n = c.values.size();
-    while (i < n && !std::isfinite(c.values[i])) {
-      ++i;
-    }
-    std::size_t end = n;
-    while (end > i && !std::isfinite(c.values[end - 1])) {
-      --end;
-    }
-    while (i < end) {
-      std::size_t j = i;
-      const bool finite = std::isfinite(c.values[i]);
-      while (j < end && std::isfinite(c.values[j]) == finite) {
-        ++j;
-      }
-      if (finite) {
-        sink.push(counts.data() + i, j - i);
-      } else {
-        sink.gap(j - i);
-      }
-      i = j;
-    }
-    return kExitOk;
-  };
-  // The channel in chunks (issue 14: memory independent of the record's length); the times of
-  // the interleaved steps are summed.
-  ChannelData& ch = sd.ch[chan];
-  std::vector<std::uint64_t> grid;
-  if (!taus.empty()) {
-    (void)tau_grid(taus, sd.n_samples, grid);  // the keyword was checked above
+  std::vector<std::string> names;
+  if (!adev_channels(o, text ? &table : nullptr, names, err)) {
+    return fail(cmd, err, err.find("empty name") != std::string::npos ? kExitUsage : kExitRuntime);
   }
-  if (full && full_adev_cost(sd.n_samples, grid) > 2e9) {
-    return fail(cmd, "--taus " + taus + " on " + std::to_string(sd.n_samples) +
-                         " samples would sum " + std::to_string(full_adev_cost(sd.n_samples, grid)) +
-                         " second differences (limit 2e9): use --taus quarter or octave",
+  if (o.lsb > 0.0 && names.size() > 1) {
+    return fail(cmd, "--lsb applies to one channel; with several, each takes its LSB from the file",
                 kExitUsage);
   }
-  StreamTiming tm;
-  std::vector<AdevRow> rows;
-  if (full) {
-    FullAdevSink sink;
-    const int st = feed(sink, tm);
-    if (st != kExitOk) {
-      return fail(cmd, err, st);
-    }
-    rows = full_adev(sink, grid, 1.0 / sd.fs_hz, ch.lsb);
-  } else {
-    OnlineAdev<8, 22> adev(1.0 / sd.fs_hz, ch.lsb);
-    AdevSink sink(adev);
-    const int st = feed(sink, tm);
-    if (st != kExitOk) {
-      return fail(cmd, err, st);
-    }
-    AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
-    const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
-    rows = rows_from_points(pts, np);
-    if (!grid.empty()) {
-      rows = rows_on_grid(rows, grid);
+  // The channels in parallel (each streamed from the file on its own: memory per channel is
+  // constant), reported in the order named.
+  std::vector<AdevResult> rs(names.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    rs[i].name = names[i];
+  }
+  imu::cli::parallel_for(rs.size(), [&](std::size_t i) {
+    adev_channel(o, text ? &table : nullptr, rs[i]);
+  });
+  for (const AdevResult& r : rs) {
+    if (r.status != kExitOk) {
+      return fail(cmd, (rs.size() > 1 ? r.name + ": " : std::string()) + r.err, r.status);
     }
   }
-  const double t3 = now_s();
-  const double t1 = t0 + (t3 - t0 - tm.quantize_s - tm.sink_s);  // metadata + read + inflate
-  const double t2 = t1 + tm.quantize_s;
-  const std::size_t n_samples = sd.n_samples;
-  std::printf("%s %s: %zu samples at %g Hz, LSB %g %s%s\n", path.c_str(), chan_name.c_str(),
-              n_samples, sd.fs_hz, ch.lsb, adev_unit(chan_name, chan).c_str(),
-              ch.lsb_from_file ? " (from the file)" : "");
-  std::fputs(format_adev_table(rows).c_str(), stdout);
-  std::printf("time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", t1 - t0,
-              t2 - t1, t3 - t2, t3 - t0);
-  if (ch.non_finite > 0) {
-    std::printf("note: %llu non-finite samples (NaN/Inf) treated as gaps\n",
-                static_cast<unsigned long long>(ch.non_finite));
+  for (const AdevResult& r : rs) {
+    print_adev(o.path, r);
   }
-  if (ch.off_grid > 0) {
-    std::printf("note: %llu samples off the LSB grid (quantised to it)\n",
-                static_cast<unsigned long long>(ch.off_grid));
-  }
-  if (a.has("--json") &&
-      !write_file(a.get("--json"),
-                  adev_json(path, chan_name, chan, sd, n_samples, rows,
-                            AdevTiming{t1 - t0, t2 - t1, t3 - t2, t3 - t0}, estimator),
-                  err)) {
-    return fail(cmd, err);
-  }
-  if (a.has("--csv") && !write_file(a.get("--csv"), adev_csv(rows), err)) {
+  if ((a.has("--json") && !write_file(a.get("--json"), adev_json(o, rs), err)) ||
+      (a.has("--csv") && !write_file(a.get("--csv"), adev_csv_all(rs), err))) {
     return fail(cmd, err);
   }
   return kExitOk;

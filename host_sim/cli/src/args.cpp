@@ -1,11 +1,15 @@
 // The shared command-line parser (see imu/cli/args.hpp).
 #include "imu/cli/args.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <limits>
+#include <system_error>
+#include <thread>
 
 namespace imu::cli {
 namespace {
@@ -139,6 +143,69 @@ bool parse_channel_spec(const std::string& text, ChannelSpec& out, std::string& 
   out.column = static_cast<std::size_t>(v - 1);
   out.has_column = true;
   return true;
+}
+
+bool expand_channels(const std::string& spec, const std::vector<std::string>& held,
+                     std::vector<std::string>& out, std::string& err) {
+  out.clear();
+  if (spec == "all") {
+    for (const char* name : kImuChannelNames) {
+      if (std::find(held.begin(), held.end(), name) != held.end()) {
+        out.emplace_back(name);
+      }
+    }
+    if (out.empty()) {
+      std::string list;
+      for (const auto& h : held) {
+        list += (list.empty() ? "" : ", ") + h;
+      }
+      err = "--channel all: none of acc_x..gyro_z in the file (it holds: " + list +
+            "); name the channels";
+      return false;
+    }
+    return true;
+  }
+  std::size_t pos = 0;
+  for (;;) {
+    const std::size_t comma = spec.find(',', pos);
+    std::string name = spec.substr(pos, comma == std::string::npos ? std::string::npos
+                                                                    : comma - pos);
+    if (name.empty()) {
+      err = "--channel '" + spec + "': an empty name in the list";
+      return false;
+    }
+    if (std::find(out.begin(), out.end(), name) == out.end()) {
+      out.push_back(std::move(name));
+    }
+    if (comma == std::string::npos) {
+      return true;
+    }
+    pos = comma + 1;
+  }
+}
+
+void parallel_for(std::size_t n, const std::function<void(std::size_t)>& job) {
+  std::atomic<std::size_t> next{0};
+  const auto work = [&job, &next, n]() {
+    for (std::size_t i = next++; i < n; i = next++) {
+      job(i);
+    }
+  };
+  const std::size_t cores = std::getenv("IMU_NO_THREADS") != nullptr
+                                ? 1U
+                                : std::max(1U, std::thread::hardware_concurrency());
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < std::min(cores, n); ++t) {
+    try {
+      pool.emplace_back(work);
+    } catch (const std::system_error&) {
+      break;  // no more threads: the ones running (and this one) take the rest
+    }
+  }
+  work();
+  for (auto& t : pool) {
+    t.join();
+  }
 }
 
 }  // namespace imu::cli

@@ -1,6 +1,8 @@
 // Text input (see imu/cli/text_input.hpp).
 #include "imu/cli/text_input.hpp"
 
+#include "imu/cli/args.hpp"
+
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -218,6 +220,26 @@ bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
     }
     out.samples.push_back(v[i]);
   }
+  return true;
+}
+
+bool text_channels(const TextTable& table, const std::string& spec,
+                   std::vector<std::string>& out, std::string& err) {
+  if (expand_channels(spec, table.names, out, err)) {
+    return true;
+  }
+  if (spec != "all") {
+    return false;
+  }
+  for (const auto& n : table.names) {
+    if (n != "t" && n != "time" && n != "timestamp") {
+      out.push_back(n);
+    }
+  }
+  if (out.empty()) {
+    return false;  // err: expand_channels' (the file holds no channel column)
+  }
+  err.clear();
   return true;
 }
 

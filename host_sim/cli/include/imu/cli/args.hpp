@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -69,6 +70,23 @@ struct ChannelSpec {
 
 /// Parse NAME or NAME:K; false with a one-line err when K is not a number in [1, 1e6].
 [[nodiscard]] bool parse_channel_spec(const std::string& text, ChannelSpec& out, std::string& err);
+
+/// The IMU channel names, in the order `--channel all` takes them.
+inline constexpr const char* kImuChannelNames[] = {"acc_x", "acc_y", "acc_z",
+                                                   "gyro_x", "gyro_y", "gyro_z"};
+
+/// --channel SPEC naming one or several channels: `all` is the IMU channels (kImuChannelNames)
+/// among `held` (what the file holds), in that order; else a comma list, each name once, in
+/// order. False with a one-line err: an empty name in the list, or `all` on a file holding
+/// none of them (the message lists what it holds).
+[[nodiscard]] bool expand_channels(const std::string& spec, const std::vector<std::string>& held,
+                                   std::vector<std::string>& out, std::string& err);
+
+/// job(0) .. job(n - 1), each once, on up to hardware_concurrency() threads including this one
+/// (one thread when the environment sets IMU_NO_THREADS: qemu-aarch64 user mode hangs on a
+/// second thread, the cross tests set it; fewer when threads cannot be created). Jobs must not
+/// throw (catch inside; an escaping exception terminates).
+void parallel_for(std::size_t n, const std::function<void(std::size_t)>& job);
 
 }  // namespace imu::cli
 

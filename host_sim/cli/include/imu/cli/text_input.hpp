@@ -41,6 +41,11 @@ struct TextChannel {
 [[nodiscard]] bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
                                 TextChannel& out, std::string& err);
 
+/// --channel SPEC on a text table (imu/cli/args.hpp expand_channels): `all` is the IMU channels
+/// it holds, else every column but a time column (t, time, timestamp); or a comma list.
+[[nodiscard]] bool text_channels(const TextTable& table, const std::string& spec,
+                                 std::vector<std::string>& out, std::string& err);
+
 }  // namespace imu::cli
 
 #endif  // IMU_CLI_TEXT_INPUT_HPP
