@@ -34,14 +34,14 @@ TEST(SimAdis, RunAtMaxRateOverLoopback) {
   std::printf("imu-sim run on adis16405_imu1 acc_z (1e6 samples): %.2f s\n", t_run);
   EXPECT_LT(t_run, 30.0) << "issue 5: the 1,000,000-sample channel in under 30 s";
   const std::string json = simtest::read_text(dir.file("run") + "/report.json");
-  const char* node = "firmware node (its StatsRecord)";
+  const char* node = "node_stats";
   EXPECT_EQ(simtest::json_number_in(json, node, "samples"), 1e6);
   EXPECT_EQ(simtest::json_number_in(json, node, "missing"), 0.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "lost"), 0.0);
   // The recorded acc_z holds steps and a drift the node's first-order filter lacks: its CUSUM
   // fires (the other channels' too, on the node's default models), and the report says so in
   // words next to the raw flags.
-  const double flags = simtest::json_number_in(json, "residual monitors (last MonitorRecord)",
+  const double flags = simtest::json_number_in(json, "residual_monitors",
                                                "flags");
   const std::string report = simtest::read_text(dir.file("run") + "/report.txt");
   EXPECT_GT(flags, 0.5);

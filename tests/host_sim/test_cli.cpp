@@ -168,13 +168,13 @@ TEST(SimCli, RunOverLoopbackLosesNothingAndMatchesAdev) {
   EXPECT_NE(r.out.find("== Frame statistics"), std::string::npos);
   const std::string json = simtest::read_text(out + "/report.json");
   ASSERT_FALSE(json.empty());
-  const char* node = "firmware node (its StatsRecord)";
+  const char* node = "node_stats";
   EXPECT_EQ(simtest::json_number_in(json, node, "samples"), 30000.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "missing"), 0.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "lost"), 0.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "crc_errors"), 0.0);
   // Raw monitor flags in the report come with a note saying what they mean, and only then.
-  const double flags = simtest::json_number_in(json, "residual monitors (last MonitorRecord)",
+  const double flags = simtest::json_number_in(json, "residual_monitors",
                                                "flags");
   const std::string report = simtest::read_text(out + "/report.txt");
   EXPECT_EQ(report.find("note: residual monitors: ") != std::string::npos, flags > 0.5) << flags;
@@ -221,7 +221,7 @@ TEST(SimCli, RunWithSpawnedFirmwareProcess) {
       << log;
   EXPECT_NE(log.find("final ADEV of acc_z"), std::string::npos) << log;
   const std::string json = simtest::read_text(out + "/report.json");
-  EXPECT_EQ(simtest::json_number_in(json, "firmware node (its StatsRecord)", "missing"), 0.0);
+  EXPECT_EQ(simtest::json_number_in(json, "node_stats", "missing"), 0.0);
 }
 
 /// The plots: gnuplot renders SVG (and PNG) from the CSV files, or the report says it is missing.

@@ -177,33 +177,53 @@ std::string adev_json_list(const std::vector<AdevRow>& rows) {
   return s;
 }
 
-bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& text,
-                  std::string& err) {
-  const double ts_s = 1.0 / in.fs_hz;
-  const char* unit = channel_unit(in.channel_index);
-  const std::vector<double>& data = *in.data;
-  const std::size_t n_samples = in.n_samples > 0 ? in.n_samples : data.size();
-  if (!make_dirs(opt.out_dir, err)) {
-    return false;
-  }
+namespace {
+
+// What write_report's steps compute, in order: the model, its simulation, the covariance
+// check, the text, the plots.
+struct ReportState {
+  double ts_s = 0.0;
+  const char* unit = "";
+  std::size_t n_samples = 0;
   double tau_max_s = 1.0;
-  for (const AdevRow& r : in.adev) {
-    tau_max_s = std::max(tau_max_s, r.tau_s);
-  }
-
-  // ---- Fit (always) and the model under test -------------------------------------------
-  const std::vector<AdevPoint> pts = points_from_rows(in.adev, ts_s);
   FitOptions fo;
-  fo.terms = kFitWhite | kFitQuantization | kFitGm1 | kFitRrw;
-  fo.tau_min_s = ts_s;
-  fo.tau_max_s = tau_max_s;
-  fo.edf_cap = 1000.0;  // neighbouring taus are correlated: keep the short taus from deciding alone
-  const FitResult fr = fit(pts.data(), pts.size(), fo);
-
+  FitResult fr{};
   ModelParams mp{};
   FirstOrderGm gm{};
   bool have_gm = false;
   std::string model_origin;
+  DiscreteModel<kStates> dm;
+  ModelSimulator<kStates> sim;
+  std::vector<AdevRow> sim_rows;
+  double t_sim0 = 0.0;
+  CovResult cov;
+  double t_sim = 0.0;
+  std::string text;
+  std::string plot_note;
+  std::vector<std::string> plot_files;
+};
+
+// The model under test: given (--N --B --Tp --K) or fitted to the data's ADEV (always fitted,
+// for the report), built and discretised. False with err.
+bool report_model(const ReportInput& in, const ReportOptions& opt, ReportState& rs,
+                  std::string& err) {
+  const double ts_s = rs.ts_s;
+  const double tau_max_s = rs.tau_max_s;
+  FitOptions& fo = rs.fo;
+  FitResult& fr = rs.fr;
+  ModelParams& mp = rs.mp;
+  FirstOrderGm& gm = rs.gm;
+  bool& have_gm = rs.have_gm;
+  std::string& model_origin = rs.model_origin;
+  DiscreteModel<kStates>& dm = rs.dm;
+  // ---- Fit (always) and the model under test -------------------------------------------
+  const std::vector<AdevPoint> pts = points_from_rows(in.adev, ts_s);
+  fo.terms = kFitWhite | kFitQuantization | kFitGm1 | kFitRrw;
+  fo.tau_min_s = ts_s;
+  fo.tau_max_s = tau_max_s;
+  fo.edf_cap = 1000.0;  // neighbouring taus are correlated: keep the short taus from deciding alone
+  fr = fit(pts.data(), pts.size(), fo);
+
   if (opt.given_model) {
     if (first_order_gm_from_asd(opt.n, opt.b, opt.tp_s, in.fs_hz, gm) != ModelStatus::kOk ||
         opt.k < 0.0) {
@@ -231,15 +251,22 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
     return false;
   }
   ContinuousModel<kStates> cm;
-  DiscreteModel<kStates> dm;
   if (build_model(mp, cm) != ModelStatus::kOk || discretize(cm, ts_s, dm) != ModelStatus::kOk) {
     err = "the model could not be built or discretised";
     return false;
   }
+  return true;
+}
 
+// The model simulated over as many samples as the data, and its ADEV. False with err.
+bool report_simulation(const ReportOptions& opt, ReportState& rs, std::string& err) {
+  const double ts_s = rs.ts_s;
+  const std::size_t n_samples = rs.n_samples;
+  DiscreteModel<kStates>& dm = rs.dm;
+  ModelSimulator<kStates>& sim = rs.sim;
+  std::vector<AdevRow>& sim_rows = rs.sim_rows;
   // ---- Simulated model: ADEV over as many samples as the data -------------------------------
-  const double t_sim0 = now_s();
-  ModelSimulator<kStates> sim;
+  rs.t_sim0 = now_s();
   if (sim.configure(dm, opt.seed) != ModelStatus::kOk) {
     err = "the model could not be simulated (covariance not positive semi-definite)";
     return false;
@@ -248,11 +275,21 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   OnlineAdev<8, 22> sim_adev(ts_s, sim_lsb);
   (void)simulate_adev(sim, n_samples, sim_lsb, sim_adev);  // lsb > 0 by construction
   AdevPoint sim_pts[OnlineAdev<8, 22>::kMaxPoints];
-  const std::vector<AdevRow> sim_rows =
+  sim_rows =
       rows_from_points(sim_pts, sim_adev.snapshot(sim_pts, OnlineAdev<8, 22>::kMaxPoints));
+  return true;
+}
 
+// The covariance check: the integrated error's std over windows of the data and of the
+// simulated model, against the model's prediction (exact, and the seed's). False with err.
+bool report_covariance(const ReportInput& in, const ReportOptions& opt, ReportState& rs,
+                       std::string& err) {
+  const double ts_s = rs.ts_s;
+  const std::vector<double>& data = *in.data;
+  DiscreteModel<kStates>& dm = rs.dm;
+  ModelSimulator<kStates>& sim = rs.sim;
+  CovResult& cov = rs.cov;
   // ---- Covariance check -------------------------------------------------------------------
-  CovResult cov;
   cov.n_avg = static_cast<std::size_t>(std::lround(opt.t_avg_s * in.fs_hz));
   cov.n_int = static_cast<std::size_t>(std::lround(opt.t_int_s * in.fs_hz));
   if (cov.n_avg == 0 || cov.n_int == 0) {
@@ -295,10 +332,26 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   }
   cov.emp_data = column_robust_std(cov.traj_data, cov.data_windows, cov.n_int);
   cov.emp_sim = column_robust_std(cov.traj_sim, cov.sim_windows, cov.n_int);
-  const double t_sim = now_s() - t_sim0;
+  rs.t_sim = now_s() - rs.t_sim0;
+  return true;
+}
 
+// The text report (report.txt) up to the plots' line.
+void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& rs) {
+  const double ts_s = rs.ts_s;
+  const char* unit = rs.unit;
+  const std::vector<double>& data = *in.data;
+  const std::size_t n_samples = rs.n_samples;
+  FitOptions& fo = rs.fo;
+  FitResult& fr = rs.fr;
+  ModelParams& mp = rs.mp;
+  FirstOrderGm& gm = rs.gm;
+  bool& have_gm = rs.have_gm;
+  std::string& model_origin = rs.model_origin;
+  CovResult& cov = rs.cov;
+  std::string& t = rs.text;
+  const std::size_t win = rs.cov.n_avg + rs.cov.n_int;
   // ---- Text ------------------------------------------------------------------------------
-  std::string t;
   appendf(t, "imu-sim report\n==============\n");
   appendf(t, "data: %s, channel %s [%s], %zu samples at %.6g Hz (%.6g s), LSB %.6g %s\n",
           in.source.c_str(), in.channel.c_str(), unit, n_samples, in.fs_hz,
@@ -377,14 +430,23 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   for (const auto& kv : in.timing_s) {
     appendf(t, "  %-34s %8.3f s\n", kv.first.c_str(), kv.second);
   }
-  appendf(t, "  %-34s %8.3f s\n", "model simulation + covariance check", t_sim);
+  appendf(t, "  %-34s %8.3f s\n", "model simulation + covariance check", rs.t_sim);
   for (const std::string& n : in.notes) {
     appendf(t, "\nnote: %s", n.c_str());
   }
   if (!in.notes.empty()) {
     t += "\n";
   }
+}
 
+// The figures' data as CSV files in opt.out_dir. False with err.
+bool report_csvs(const ReportInput& in, const ReportOptions& opt, ReportState& rs,
+                 std::string& err) {
+  const double ts_s = rs.ts_s;
+  const double tau_max_s = rs.tau_max_s;
+  ModelParams& mp = rs.mp;
+  std::vector<AdevRow>& sim_rows = rs.sim_rows;
+  CovResult& cov = rs.cov;
   // ---- CSV -------------------------------------------------------------------------------
   const std::string& d = opt.out_dir;
   {
@@ -446,10 +508,22 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
       }
     }
   }
+  return true;
+}
 
+// The gnuplot scripts, and their SVG/PNG unless --no-plots (or no gnuplot: said). False with
+// err.
+bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& rs,
+                  std::string& err) {
+  const char* unit = rs.unit;
+  ModelParams& mp = rs.mp;
+  std::vector<AdevRow>& sim_rows = rs.sim_rows;
+  CovResult& cov = rs.cov;
+  std::string& t = rs.text;
+  std::string& plot_note = rs.plot_note;
+  std::vector<std::string>& plot_files = rs.plot_files;
+  const std::string& d = opt.out_dir;
   // ---- Plots (gnuplot) --------------------------------------------------------------------
-  std::string plot_note;
-  std::vector<std::string> plot_files;
   std::string title_chan;  // gnuplot enhanced text: '_' would start a subscript
   for (char ch : in.channel) {
     title_chan += ch == '_' ? std::string("\\_") : std::string(1, ch);
@@ -578,7 +652,22 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
   appendf(t, "\n%s\nfiles in %s: report.txt, %s, fig1_adev_{data,model,sim}.csv, fig2_std.csv, "
              "fig2_traj_{sim,data}.csv\n",
           plot_note.c_str(), d.c_str(), opt.json_path.c_str());
+  return true;
+}
 
+// The JSON report.
+std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportState& rs) {
+  const char* unit = rs.unit;
+  const std::size_t n_samples = rs.n_samples;
+  FitResult& fr = rs.fr;
+  ModelParams& mp = rs.mp;
+  FirstOrderGm& gm = rs.gm;
+  bool& have_gm = rs.have_gm;
+  std::string& model_origin = rs.model_origin;
+  std::vector<AdevRow>& sim_rows = rs.sim_rows;
+  CovResult& cov = rs.cov;
+  std::vector<std::string>& plot_files = rs.plot_files;
+  const std::size_t j_end = rs.cov.n_int - 1;
   // ---- JSON ------------------------------------------------------------------------------
   std::string j = "{\n";
   j += "  \"source\": " + json_str(in.source) + ",\n";
@@ -626,7 +715,7 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
        ", \"predicted_seed\": " + json_num(cov.pred_seed[j_end]) + "}},\n";
   j += "  \"frame_stats\": {";
   for (std::size_t gi = 0; gi < in.stats.size(); ++gi) {
-    j += (gi == 0 ? "\n" : ",\n") + std::string("    ") + json_str(in.stats[gi].name) + ": {";
+    j += (gi == 0 ? "\n" : ",\n") + std::string("    ") + json_str(in.stats[gi].key) + ": {";
     for (std::size_t k = 0; k < in.stats[gi].values.size(); ++k) {
       j += (k == 0 ? "" : ", ") + json_str(in.stats[gi].values[k].first) + ": " +
            json_num(in.stats[gi].values[k].second);
@@ -647,10 +736,36 @@ bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& 
     j += (k == 0 ? "" : ", ") + json_str(plot_files[k]);
   }
   j += "]\n}\n";
-  if (!write_file(opt.json_path, j, err) || !write_file(d + "/report.txt", t, err)) {
+  return j;
+}
+
+}  // namespace
+
+bool write_report(const ReportInput& in, const ReportOptions& opt, std::string& text,
+                  std::string& err) {
+  if (!make_dirs(opt.out_dir, err)) {
     return false;
   }
-  text = t;
+  ReportState r;
+  r.ts_s = 1.0 / in.fs_hz;
+  r.unit = channel_unit(in.channel_index);
+  r.n_samples = in.n_samples > 0 ? in.n_samples : in.data->size();
+  for (const AdevRow& row : in.adev) {
+    r.tau_max_s = std::max(r.tau_max_s, row.tau_s);
+  }
+  if (!report_model(in, opt, r, err) || !report_simulation(opt, r, err) ||
+      !report_covariance(in, opt, r, err)) {
+    return false;
+  }
+  report_text(in, opt, r);
+  if (!report_csvs(in, opt, r, err) || !report_plots(in, opt, r, err)) {
+    return false;
+  }
+  if (!write_file(opt.json_path, report_json(in, opt, r), err) ||
+      !write_file(opt.out_dir + "/report.txt", r.text, err)) {
+    return false;
+  }
+  text = r.text;
   return true;
 }
 

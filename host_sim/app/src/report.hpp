@@ -35,7 +35,8 @@ struct AdevRow {
 
 /// Counters of one part of the chain (sender, node, receiver), printed and written as JSON.
 struct StatGroup {
-  std::string name;
+  std::string key;   ///< its JSON key in "frame_stats" (snake_case, no spaces)
+  std::string name;  ///< its heading in the text report
   std::vector<std::pair<std::string, double>> values;
 };
 

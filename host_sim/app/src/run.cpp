@@ -916,7 +916,7 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
   const hal::LinkStats& ls = s.sock.stats();
   const hal::StatsRecord& ns = tel.stats;
   std::vector<StatGroup> g;
-  g.push_back(StatGroup{"sender (imu-sim emulator)",
+  g.push_back(StatGroup{"sender", "sender (imu-sim emulator)",
                         {{"samples", d(sd.n_samples)},
                          {"sent", d(plan.sent)},
                          {"non_finite", d(sd.n_samples - plan.sent)},
@@ -924,7 +924,7 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
                          {"backpressure_waits", d(link.backpressure_waits())},
                          {"tx_link_down", d(ls.tx_link_down)},
                          {"sys_errors", d(ls.sys_errors)}}});
-  g.push_back(StatGroup{"firmware node (its StatsRecord)",
+  g.push_back(StatGroup{"node_stats", "firmware node (its StatsRecord)",
                         {{"frames", d(ns.frames)},
                          {"samples", d(ns.samples)},
                          {"missing", d(ns.missing)},
@@ -937,7 +937,7 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
                          {"kernel_drops", d(ns.kernel_drops)},
                          {"lost", d(plan.sent) - d(ns.samples)}}});
   const hal::RejectsRecord& nr = tel.rejects;
-  g.push_back(StatGroup{"firmware node refusals (its RejectsRecord)",
+  g.push_back(StatGroup{"node_rejects", "firmware node refusals (its RejectsRecord)",
                         {{"bad_config", d(nr.bad_config)},
                          {"config_same_values", d(nr.config_same_values)},
                          {"model_rejected", d(nr.model_rejected)},
@@ -953,7 +953,7 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
                          {"gpio_errors", d(nr.gpio_errors)},
                          {"peer_refused", d(nr.peer_refused)},
                          {"bad_record", d(nr.bad_record)}}});
-  g.push_back(StatGroup{"telemetry receiver (imu-sim)",
+  g.push_back(StatGroup{"telemetry_receiver", "telemetry receiver (imu-sim)",
                         {{"frames", d(rs.frames)},
                          {"adev_records", d(tel.adev_records)},
                          {"stats_records", d(tel.stats_records)},
@@ -964,7 +964,7 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
                          {"kernel_drops", d(ls.kernel_drops)}}});
   if (s.inproc) {
     const node::NodeStats& st = s.inproc->node.stats();
-    g.push_back(StatGroup{"firmware node (in-process counters)",
+    g.push_back(StatGroup{"node_inproc", "firmware node (in-process counters)",
                           {{"telemetry_frames", d(st.telemetry_frames)},
                            {"telemetry_failures", d(st.telemetry_failures)},
                            {"adev_sets", d(st.adev_sets)},
@@ -973,13 +973,13 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
                            {"saturated", d(st.saturated)}}});
   }
   if (tel.have_bias) {
-    g.push_back(StatGroup{"bias filter (last BiasRecord, channel " + o.chan_name + ")",
+    g.push_back(StatGroup{"bias_filter", "bias filter (last BiasRecord, channel " + o.chan_name + ")",
                           {{"bias", static_cast<double>(tel.bias.bias[o.chan])},
                            {"std", std::sqrt(static_cast<double>(tel.bias.var[o.chan]))},
                            {"static_flag", static_cast<double>(tel.bias.flags & hal::kBiasStatic)}}});
   }
   if (tel.have_monitor) {
-    g.push_back(StatGroup{"residual monitors (last MonitorRecord)",
+    g.push_back(StatGroup{"residual_monitors", "residual monitors (last MonitorRecord)",
                           {{"nis_mean", static_cast<double>(tel.monitor.nis_mean)},
                            {"whiteness_ratio", static_cast<double>(tel.monitor.whiteness)},
                            {"flags", static_cast<double>(tel.monitor.flags)},
