@@ -209,6 +209,39 @@ TEST(SimCliInputs, LsbThatCollapsesTheDataIsRefused) {
 
 // Defect: fs = 1e-300 gave taus of 1e298 s; fs = 1e300 threw std::length_error (a crash).
 // The rate must be in [1e-3, 1e6] Hz: from --fs a usage error, from the file a run-time error.
+// Defect: the same file could get a different LSB from adev and from analyze (two lookups:
+// adev read acc_lsb/gyro_lsb only, analyze also NAME_lsb and lsb). One rule now
+// (imu::cli::lsb_candidates): <group>_lsb, NAME_lsb, lsb; both commands report the same LSB,
+// and a candidate that is not a positive number is an error in both, not skipped.
+TEST(SimCliInputs, AdevAndAnalyzeTakeTheSameLsbFromTheFile) {
+  simtest::TempDir dir;
+  const std::vector<double> x = white(4000, 0.5, 0.01, 11);
+  struct Case {
+    const char* lsb_var;
+    double lsb;
+  };
+  for (const Case& c : {Case{"acc_z_lsb", 2.5e-6}, Case{"lsb", 4e-6}, Case{"acc_lsb", 1e-6}}) {
+    SCOPED_TRACE(c.lsb_var);
+    const std::string mat = dir.file(std::string("l_") + c.lsb_var + ".mat");
+    write_mat(mat, {{"acc_z", x}, {"fs", {100.0}}, {c.lsb_var, {c.lsb}}});
+    const std::string ja = dir.file("a.json");
+    const std::string jb = dir.file("b.json");
+    auto r = simtest::run({"adev", mat, "--channel", "acc_z", "--json", ja});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_NE(r.out.find("(from the file)"), std::string::npos) << r.out;
+    r = simtest::run({"analyze", mat, "--channel", "acc_z", "--json", jb});
+    ASSERT_EQ(r.status, 0) << r.err;
+    EXPECT_EQ(json_top(simtest::read_text(ja), "lsb"), c.lsb);
+    EXPECT_EQ(json_top(simtest::read_text(jb), "lsb"), c.lsb);
+  }
+  const std::string bad = dir.file("bad.mat");
+  write_mat(bad, {{"acc_z", x}, {"fs", {100.0}}, {"acc_z_lsb", {-1.0}}});
+  for (const char* cmd : {"adev", "analyze"}) {
+    expect_one_line(simtest::run({cmd, bad, "--channel", "acc_z"}), 1,
+                    "acc_z_lsb is not a positive number", cmd);
+  }
+}
+
 TEST(SimCliInputs, RateOutOfRangeIsRefused) {
   simtest::TempDir dir;
   const std::vector<double> x = white(2000, 9.81, 0.01, 3);

@@ -72,29 +72,42 @@ bool file_rate(const imu::mat::MatFile& m, const std::string& file, const std::s
   return false;
 }
 
-// acc_x -> acc_lsb, gyro_z -> gyro_lsb; also NAME_lsb and lsb. 0 if none. A struct field
-// (`imu.acc_z`) looks in its struct first (imu.acc_lsb, imu.acc_z_lsb, imu.lsb), then at the
-// top level.
-double file_lsb(const imu::mat::MatFile& m, const std::string& channel) {
-  const std::size_t dot = channel.rfind('.');
-  const std::string field = dot == std::string::npos ? channel : channel.substr(dot + 1);
-  const std::size_t us = field.find('_');
-  const std::string own[3] = {
-      us != std::string::npos ? field.substr(0, us) + "_lsb" : std::string(), field + "_lsb",
-      "lsb"};
-  for (const std::string& scope :
-       {dot == std::string::npos ? std::string() : channel.substr(0, dot + 1), std::string()}) {
-    for (const auto& n : own) {
-      if (n.empty()) {
-        continue;
-      }
-      auto v = m.read_scalar(scope + n);
-      if (v && v.value() > 0.0 && std::isfinite(v.value())) {
-        return v.value();
-      }
-    }
+// The LSB the file gives a channel: the first of imu::cli::lsb_candidates it holds (0 if none;
+// the same rule as adev and run). False with err if that variable is not a positive number.
+bool file_lsb(const imu::mat::MatFile& m, const std::string& channel, double& lsb,
+              std::string& err) {
+  lsb = 0.0;
+  auto vars = m.list_variables();
+  if (!vars) {
+    err = vars.error().message;
+    return false;
   }
-  return 0.0;
+  for (const std::string& cand : imu::cli::lsb_candidates(channel)) {
+    const bool in_struct = cand.find('.') != std::string::npos;
+    const bool held = std::any_of(vars.value().begin(), vars.value().end(),
+                                  [&cand](const imu::mat::VariableInfo& v) { return v.name == cand; });
+    if (!in_struct && !held) {
+      continue;
+    }
+    auto v = m.read_scalar(cand);
+    if (!v && in_struct) {
+      continue;  // the struct has no such field
+    }
+    if (!v) {
+      err = v.error().message;
+      return false;
+    }
+    if (!(v.value() > 0.0) || !std::isfinite(v.value())) {
+      err = m.display_name();
+      err += ": ";
+      err += cand;
+      err += " is not a positive number";
+      return false;
+    }
+    lsb = v.value();
+    return true;
+  }
+  return true;
 }
 
 // --channel: NAME, a comma list, or `all` (the IMU channels the file holds, in the usual order).
@@ -347,7 +360,10 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
     }
     jobs[i].channel = channels[i];
     jobs[i].o = o;
-    jobs[i].o.lsb = lsb > 0.0 ? lsb : file_lsb(m, base_name(channels[i]));
+    jobs[i].o.lsb = lsb;
+    if (lsb <= 0.0 && !file_lsb(m, channels[i], jobs[i].o.lsb, err)) {
+      return fail(err, kExitRuntime);
+    }
     // Integer counts (int16 from a logger) with a known LSB are counts x LSB in the channel's
     // unit; without one they stay counts (said in the report).
     if (integer_class && jobs[i].o.lsb > 0.0) {

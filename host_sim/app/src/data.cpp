@@ -1,6 +1,8 @@
 // Loading a sensor recording (see data.hpp).
 #include "data.hpp"
 
+#include "imu/cli/args.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -76,25 +78,21 @@ bool read_rate(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
   return true;
 }
 
-// acc_lsb and gyro_lsb if present (0 if absent): in `scope` (a struct, see read_rate) first.
+// The LSB the file gives channel `name`: the first of imu::cli::lsb_candidates(name) it holds
+// (0 if none). False with err if that variable is not a positive number.
 template <class Reader>
-bool read_file_lsbs(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
-                    const std::string& path, const std::string& scope, double (&file_lsb)[2],
-                    std::string& err) {
-  const char* lsb_names[2] = {"acc_lsb", "gyro_lsb"};
-  for (std::size_t g = 0; g < 2; ++g) {
-    file_lsb[g] = 0.0;
-    std::string name = lsb_names[g];
-    std::string scoped = scope;
-    scoped += ".";
-    scoped += name;
-    auto l = mf.read_scalar(scope.empty() ? name : scoped);
-    if (!scope.empty() && l.ok()) {
-      name = scoped;
-    } else if (find_var(vars, lsb_names[g]) != nullptr) {
-      l = mf.read_scalar(name);
-    } else {
+bool file_lsb_of(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
+                 const std::string& path, const std::string& name, double& lsb,
+                 std::string& err) {
+  lsb = 0.0;
+  for (const std::string& cand : imu::cli::lsb_candidates(name)) {
+    const bool in_struct = cand.find('.') != std::string::npos;
+    if (!in_struct && find_var(vars, cand.c_str()) == nullptr) {
       continue;
+    }
+    auto l = mf.read_scalar(cand);
+    if (!l.ok() && in_struct) {
+      continue;  // the struct has no such field
     }
     if (!l.ok()) {
       err = l.error().message;
@@ -103,11 +101,12 @@ bool read_file_lsbs(const Reader& mf, const std::vector<mat::VariableInfo>& vars
     if (!(l.value() > 0.0) || !std::isfinite(l.value())) {
       err = path;
       err += ": ";
-      err += name;
+      err += cand;
       err += " is not a positive number";
       return false;
     }
-    file_lsb[g] = l.value();
+    lsb = l.value();
+    return true;
   }
   return true;
 }
@@ -246,15 +245,13 @@ bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
   }
   const std::vector<mat::VariableInfo>& vars = listed.value();
   const StreamScalars mf{path};
-  double file_lsb[2] = {0.0, 0.0};
-  // Channels in a struct (`imu.acc_z`): its fs and LSBs come before the top-level ones.
+  // Channels in a struct (`imu.acc_z`): its fs comes before the top-level one.
   std::string scope;
   for (std::size_t c = 0; cv != nullptr && c < kNumChannels && scope.empty(); ++c) {
     const std::size_t dot = want[c] ? cv->names[c].rfind('.') : std::string::npos;
     scope = dot == std::string::npos ? std::string() : cv->names[c].substr(0, dot);
   }
-  if (!read_rate(mf, vars, path, fs_override, scope, out.fs_hz, err) ||
-      !read_file_lsbs(mf, vars, path, scope, file_lsb, err)) {
+  if (!read_rate(mf, vars, path, fs_override, scope, out.fs_hz, err)) {
     return false;
   }
   bool any = false;
@@ -311,7 +308,10 @@ bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
     ch.column = column;
     ch.integer_counts = info->class_name.rfind("int", 0) == 0 ||
                         info->class_name.rfind("uint", 0) == 0;
-    const double fl = file_lsb[c < 3 ? 0 : 1];
+    double fl = 0.0;
+    if (!file_lsb_of(mf, vars, path, name, fl, err)) {
+      return false;
+    }
     ch.lsb_from_option = lsb_override[c] > 0.0;
     ch.lsb_from_file = !ch.lsb_from_option && fl > 0.0;
     ch.lsb = lsb_override[c] > 0.0 ? lsb_override[c] : (fl > 0.0 ? fl : default_lsb(c));

@@ -145,6 +145,27 @@ bool parse_channel_spec(const std::string& text, ChannelSpec& out, std::string& 
   return true;
 }
 
+std::vector<std::string> lsb_candidates(const std::string& channel) {
+  const std::string name = channel.substr(0, channel.rfind(':'));  // NAME:K -> NAME
+  const std::size_t dot = name.rfind('.');
+  const std::string field = dot == std::string::npos ? name : name.substr(dot + 1);
+  const std::size_t us = field.find('_');
+  std::vector<std::string> own;
+  if (us != std::string::npos && us > 0) {
+    own.push_back(field.substr(0, us) + "_lsb");
+  }
+  own.push_back(field + "_lsb");
+  own.emplace_back("lsb");
+  std::vector<std::string> out;
+  if (dot != std::string::npos) {
+    for (const auto& n : own) {
+      out.push_back(name.substr(0, dot + 1) + n);
+    }
+  }
+  out.insert(out.end(), own.begin(), own.end());
+  return out;
+}
+
 bool expand_channels(const std::string& spec, const std::vector<std::string>& held,
                      std::vector<std::string>& out, std::string& err) {
   out.clear();

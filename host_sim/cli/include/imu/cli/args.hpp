@@ -71,6 +71,13 @@ struct ChannelSpec {
 /// Parse NAME or NAME:K; false with a one-line err when K is not a number in [1, 1e6].
 [[nodiscard]] bool parse_channel_spec(const std::string& text, ChannelSpec& out, std::string& err);
 
+/// The file variables that may hold a channel's LSB, in the order every command tries them:
+/// for NAME (NAME:K, or a struct field P.NAME) <group>_lsb (acc_lsb for acc_z, gyro_lsb for
+/// gyro_x; the part before the first '_'), NAME_lsb, lsb; for a struct field first inside its
+/// struct (P.acc_lsb, ...), then at the top level. The first one the file holds is the LSB (one
+/// that is not a positive number is an error, not skipped).
+[[nodiscard]] std::vector<std::string> lsb_candidates(const std::string& channel);
+
 /// The IMU channel names, in the order `--channel all` takes them.
 inline constexpr const char* kImuChannelNames[] = {"acc_x", "acc_y", "acc_z",
                                                    "gyro_x", "gyro_y", "gyro_z"};
