@@ -70,14 +70,14 @@ TEST_F(AnalyzeCli, WritesJsonWithTheFixedKeys) {
   const std::string json = tmp_path("out.json");
   ASSERT_EQ(call({"analyze", mat_, "--channel", "acc_x", "--json", json}), 0);
   const std::string j = slurp(json);
-  for (const char* key : {"\"channel\"", "\"fs_hz\"", "\"samples\"", "\"adev\"", "\"model_before\"",
+  for (const char* key : {"\"channel\"", "\"fs_hz\"", "\"n_samples\"", "\"adev\"", "\"model_before\"",
                           "\"error_before\"", "\"effects\"", "\"model_after\"", "\"error_after\"",
                           "\"tau_s\"", "\"edf\"", "\"ci_lo\"", "\"ci_hi\"", "\"adev_rms_rel\"",
                           "\"adev_max_rel\"", "\"tau_min_s\"", "\"tau_max_s\"", "\"nis_mean\"",
                           "\"covariance_ratio\"", "\"whiteness_flagged_fraction\""}) {
     EXPECT_NE(j.find(key), std::string::npos) << key;
   }
-  EXPECT_NE(j.find("\"samples\": 200000"), std::string::npos);
+  EXPECT_NE(j.find("\"n_samples\": 200000"), std::string::npos);
   // The 10 spikes of 0.4 (12 sigma of the white noise) are the only effect.
   EXPECT_NE(j.find("{\"type\": \"outliers\", \"count\": 10, \"times_s\": ["), std::string::npos) << j;
   EXPECT_NE(j.find("LSB from the file"), std::string::npos);
@@ -138,7 +138,7 @@ TEST_F(AnalyzeCli, NanDropoutsAreGapsNotARefusal) {
   const std::string j = slurp(json);
   EXPECT_NE(j.find("\"gaps\": {\"samples\": 1500, \"runs\": 3}"), std::string::npos) << j;
   EXPECT_NE(j.find("\"unexplained\": ["), std::string::npos);
-  EXPECT_NE(j.find("\"bias_instability\": {\"B\": "), std::string::npos);
+  EXPECT_NE(j.find("\"bias_instability\": {\"b\": "), std::string::npos);
   EXPECT_NE(j.find("\"n_states\": "), std::string::npos);
 }
 

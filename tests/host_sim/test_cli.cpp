@@ -313,7 +313,7 @@ TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
     std::ofstream(f) << "{\"channel\": \"acc_z\", \"fs_hz\": 100, \"model_after\": {\"n\": 3.3e-3, "
                         "\"q\": 0, \"gm\": [{\"sb\": 5.7e-9, \"tb_s\": 158.7}], \"k\": 0, \"r\": 0, "
                         "\"sin_a\": 0, \"sin_f0_hz\": 0, \"sin2_a\": 0, \"sin2_f0_hz\": 0, "
-                        "\"bias_instability\": {\"B\": 0, \"tau_lo_s\": 0, \"tau_hi_s\": 0}, "
+                        "\"bias_instability\": {\"b\": 0, \"tau_lo_s\": 0, \"tau_hi_s\": 0}, "
                         "\"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, \"beta_per_s\": 1.57}}}";
   }
   r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--sim-windows", "10", "--out",
@@ -323,7 +323,8 @@ TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
   EXPECT_NE(report.find("its variance is added to the white noise"), std::string::npos) << report;
   const std::string json = simtest::read_text(dir.file("o") + "/report.json");
   // What the node echoes it runs (float in the record): sqrt(3.3e-3^2 + 0.02^2 / 100).
-  const double n_node = simtest::json_number_in(json, "model", "n");
+  const std::string node = json.substr(json.find("\"node\": {"));
+  const double n_node = simtest::json_number_in(node, "model", "n");
   EXPECT_NEAR(n_node, std::sqrt(3.3e-3 * 3.3e-3 + 0.02 * 0.02 / 100.0), 1e-6);
 }
 

@@ -7,35 +7,14 @@
 #include <sstream>
 
 #include "imu/analyze/analyze.hpp"
+#include "imu/cli/json.hpp"
 
 namespace imu::analyze {
 namespace {
 
-std::string num(double v) {
-  if (!std::isfinite(v)) {
-    return "null";
-  }
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
+std::string num(double v) { return imu::cli::json_num(v); }
 
-std::string quoted(const std::string& s) {
-  std::string o = "\"";
-  for (const char c : s) {
-    if (c == '"' || c == '\\') {
-      o += '\\';
-      o += c;
-    } else if (static_cast<unsigned char>(c) < 0x20) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\u%04x", static_cast<unsigned>(c));
-      o += buf;
-    } else {
-      o += c;
-    }
-  }
-  return o + "\"";
-}
+std::string quoted(const std::string& s) { return imu::cli::json_str(s); }
 
 std::string gm_list(const GmParam* g, std::size_t n) {
   std::ostringstream s;
@@ -61,7 +40,7 @@ std::string model_json(const ModelParams& p) {
   s << "{\"n\": " << num(p.n) << ", \"q\": " << num(p.q) << ", \"gm\": " << gm_list(p.gm, p.n_gm)
     << ", \"k\": " << num(p.k) << ", \"r\": " << num(p.r) << ", \"sin_a\": " << num(p.sin_a)
     << ", \"sin_f0_hz\": " << num(p.sin_f0_hz) << ", \"sin2_a\": " << num(p.sin2_a)
-    << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"bias_instability\": {\"B\": "
+    << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"bias_instability\": {\"b\": "
     << num(p.bi) << ", \"tau_lo_s\": " << num(p.bi_tau_lo_s) << ", \"tau_hi_s\": "
     << num(p.bi_tau_hi_s) << ", \"gm_bank\": " << gm_list(bank, nb)
     << "}, \"oscillation\": {\"sigma\": " << num(p.osc_sigma) << ", \"f0_hz\": "
@@ -88,13 +67,13 @@ std::string effect_json(const Effect& e) {
   std::ostringstream s;
   s << "{\"type\": " << quoted(e.type);
   if (e.type == "quantization") {
-    s << ", \"Q\": " << num(e.q);
+    s << ", \"q\": " << num(e.q);
   } else if (e.type == "rate_random_walk") {
-    s << ", \"K\": " << num(e.k);
+    s << ", \"k\": " << num(e.k);
   } else if (e.type == "ramp") {
-    s << ", \"R\": " << num(e.r);
+    s << ", \"r\": " << num(e.r);
   } else if (e.type == "bias_instability") {
-    s << ", \"B\": " << num(e.b);
+    s << ", \"b\": " << num(e.b);
   } else if (e.type == "sinusoid") {
     s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"amplitude\": " << num(e.amplitude);
   } else if (e.type == "oscillation") {
@@ -113,20 +92,36 @@ std::string effect_json(const Effect& e) {
   return s.str();
 }
 
+// The unit of a channel from its name (its last field for a struct's): acc* m/s^2, gyro* rad/s;
+// otherwise the file's own, which the analysis does not know.
+std::string channel_unit_of(const std::string& channel) {
+  const std::string field = channel.substr(channel.rfind('.') + 1);
+  if (field.rfind("acc", 0) == 0) {
+    return "m/s^2";
+  }
+  if (field.rfind("gyro", 0) == 0) {
+    return "rad/s";
+  }
+  return "unit";
+}
+
 double model_adev(const ModelParams& p, double tau) { return std::sqrt(model_avar(p, tau)); }
 
 }  // namespace
 
 std::string to_json(const Report& r) {
   std::ostringstream s;
+  const std::string unit = channel_unit_of(r.channel);
   s << "{\n  \"channel\": " << quoted(r.channel) << ",\n  \"fs_hz\": " << num(r.fs_hz)
-    << ",\n  \"samples\": " << r.samples << ",\n  \"lsb\": " << num(r.lsb)
-    << ",\n  \"lsb_note\": " << quoted(r.lsb_note) << ",\n  \"adev\": [";
+    << ",\n  \"n_samples\": " << r.samples << ",\n  \"lsb\": " << num(r.lsb)
+    << ",\n  \"lsb_note\": " << quoted(r.lsb_note) << ",\n  \"unit\": " << quoted(unit)
+    << ",\n  \"units\": " << imu::cli::json_units(unit) << ",\n  \"adev\": [";
   for (std::size_t i = 0; i < r.adev.size(); ++i) {
     const AdevPoint& p = r.adev[i];
     s << (i > 0 ? "," : "") << "\n    {\"tau_s\": " << num(p.tau_s) << ", \"adev\": "
       << num(p.adev) << ", \"edf\": " << num(p.edf) << ", \"ci_lo\": " << num(p.ci_lo)
-      << ", \"ci_hi\": " << num(p.ci_hi) << "}";
+      << ", \"ci_hi\": " << num(p.ci_hi) << ", \"n_terms\": " << p.n_terms << ", \"af\": "
+      << p.af << "}";
   }
   s << "\n  ],\n  \"model_before\": " << model_json(r.model_before)
     << ",\n  \"error_before\": " << error_json(r.error_before) << ",\n  \"effects\": [";

@@ -187,7 +187,7 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
   double b = 0.0;
   double lo = 0.0;
   double hi = 0.0;
-  if (bi == std::string::npos || !get_number(json, bi, "B", b, err) ||
+  if (bi == std::string::npos || !get_number(json, bi, "b", b, err) ||
       !get_number(json, bi, "tau_lo_s", lo, err) || !get_number(json, bi, "tau_hi_s", hi, err)) {
     err = "model_after.bias_instability {B, tau_lo_s, tau_hi_s} missing or malformed";
     return false;

@@ -134,34 +134,6 @@ std::string format_adev_table(const std::vector<AdevRow>& rows) {
   return s;
 }
 
-std::string json_num(double v) {
-  if (!std::isfinite(v)) {
-    return "null";
-  }
-  std::string s;
-  appendf(s, "%.10g", v);
-  return s;
-}
-
-std::string json_str(const std::string& s) {
-  std::string o = "\"";
-  for (char ch : s) {
-    switch (ch) {
-      case '"': o += "\\\""; break;
-      case '\\': o += "\\\\"; break;
-      case '\n': o += "\\n"; break;
-      case '\t': o += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(ch) < 0x20) {
-          appendf(o, "\\u%04x", static_cast<unsigned>(static_cast<unsigned char>(ch)));
-        } else {
-          o += ch;
-        }
-    }
-  }
-  return o + "\"";
-}
-
 std::string adev_json_list(const std::vector<AdevRow>& rows) {
   std::string s = "[";
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -679,11 +651,12 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
   j += "  \"adev_origin\": " + json_str(in.adev_origin) + ",\n";
   j += "  \"adev\": " + adev_json_list(in.adev) + ",\n";
   j += "  \"adev_simulated_model\": " + adev_json_list(sim_rows) + ",\n";
-  j += "  \"model\": {\"origin\": " + json_str(model_origin) + ", \"N\": " + json_num(mp.n) +
-       ", \"Q\": " + json_num(mp.q) + ", \"K\": " + json_num(mp.k) + ", \"gm\": [";
+  j += "  \"units\": " + imu::cli::json_units(unit) + ",\n";
+  j += "  \"model\": {\"origin\": " + json_str(model_origin) + ", \"n\": " + json_num(mp.n) +
+       ", \"q\": " + json_num(mp.q) + ", \"k\": " + json_num(mp.k) + ", \"gm\": [";
   for (std::size_t i = 0; i < mp.n_gm; ++i) {
-    j += (i == 0 ? "" : ", ") + std::string("{\"Sb\": ") + json_num(mp.gm[i].sb) +
-         ", \"Tb_s\": " + json_num(mp.gm[i].tb_s) + "}";
+    j += (i == 0 ? "" : ", ") + std::string("{\"sb\": ") + json_num(mp.gm[i].sb) +
+         ", \"tb_s\": " + json_num(mp.gm[i].tb_s) + "}";
   }
   j += "]";
   if (have_gm) {
@@ -695,11 +668,11 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
   }
   j += "},\n";
   j += "  \"fit\": {\"status\": " + std::to_string(static_cast<int>(fr.status)) +
-       ", \"N\": " + json_num(fr.params.n) + ", \"K\": " + json_num(fr.params.k) +
-       ", \"gm\": [";
+       ", \"n\": " + json_num(fr.params.n) + ", \"q\": " + json_num(fr.params.q) +
+       ", \"k\": " + json_num(fr.params.k) + ", \"gm\": [";
   for (std::size_t i = 0; i < fr.params.n_gm; ++i) {
-    j += (i == 0 ? "" : ", ") + std::string("{\"Sb\": ") + json_num(fr.params.gm[i].sb) +
-         ", \"Tb_s\": " + json_num(fr.params.gm[i].tb_s) + "}";
+    j += (i == 0 ? "" : ", ") + std::string("{\"sb\": ") + json_num(fr.params.gm[i].sb) +
+         ", \"tb_s\": " + json_num(fr.params.gm[i].tb_s) + "}";
   }
   j += "], \"rms_rel\": " + json_num(fr.rms_rel) + ", \"n_points\": " +
        std::to_string(fr.n_points) + ", \"tb_at_bound\": " +

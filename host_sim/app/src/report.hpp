@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "imu/cli/json.hpp"
 #include "imu/online_adev.hpp"
 
 namespace imu::sim {
@@ -29,9 +30,10 @@ struct AdevRow {
 [[nodiscard]] std::string format_adev_table(const std::vector<AdevRow>& rows);
 /// JSON array of {"tau_s","adev","edf","ci_lo","ci_hi","n_terms","af"} objects.
 [[nodiscard]] std::string adev_json_list(const std::vector<AdevRow>& rows);
-/// A JSON number (%.10g; non-finite -> null) and a JSON string literal.
-[[nodiscard]] std::string json_num(double v);
-[[nodiscard]] std::string json_str(const std::string& s);
+/// A JSON number (%.10g; non-finite -> null) and a JSON string literal: the CLI library's, one
+/// writer for every command.
+using imu::cli::json_num;
+using imu::cli::json_str;
 
 /// Counters of one part of the chain (sender, node, receiver), printed and written as JSON.
 struct StatGroup {

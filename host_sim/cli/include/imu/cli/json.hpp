@@ -1,0 +1,23 @@
+// The JSON scalars every imu-sim command writes (issue 13: one JSON writer): numbers with 10
+// significant digits (%.10g; NaN and Inf, which JSON lacks, as null) and strings with the
+// escapes JSON requires. One vocabulary rides on them: counts are n_*, times *_s, rates *_hz;
+// the noise terms are lower-case IEEE 952 symbols (n, q, b, k, r; a GM term's sb and tb_s),
+// each JSON naming their units in a "units" object beside them.
+#ifndef IMU_CLI_JSON_HPP
+#define IMU_CLI_JSON_HPP
+
+#include <string>
+
+namespace imu::cli {
+
+/// A JSON number: %.10g, non-finite -> null.
+[[nodiscard]] std::string json_num(double v);
+/// A JSON string literal (quotes, backslash and control characters escaped).
+[[nodiscard]] std::string json_str(const std::string& s);
+/// The "units" object of a JSON whose channel is in `unit` (e.g. "m/s^2"): each noise term's
+/// unit, e.g. {"n": "m/s^2/sqrt(Hz)", "k": "m/s^2*sqrt(Hz)", ...}.
+[[nodiscard]] std::string json_units(const std::string& unit);
+
+}  // namespace imu::cli
+
+#endif  // IMU_CLI_JSON_HPP
