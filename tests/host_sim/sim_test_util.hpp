@@ -18,6 +18,14 @@
 #include "imu/node/fw_main.hpp"
 #include "imu/sim/cli.hpp"
 
+// Tests that need threads or a child process skip under qemu-user (the cross tests: its
+// user mode hangs on a second thread here).
+#ifdef IMU_EMULATED_TARGET
+#define SKIP_IF_EMULATED() GTEST_SKIP() << "needs threads or exec, unavailable under qemu-user here"
+#else
+#define SKIP_IF_EMULATED() (void)0
+#endif
+
 namespace simtest {
 
 struct CliResult {

@@ -15,12 +15,6 @@
 // thread (a two-line std::thread program hangs in pthread_create: qemu 7.2, measured) nor exec
 // another aarch64 binary (no binfmt_misc): the end-to-end runs, which need the in-process node
 // thread or a spawned imu-fw, are skipped there; they run natively and in the VM test.
-#ifdef IMU_EMULATED_TARGET
-#define SKIP_IF_EMULATED() GTEST_SKIP() << "needs threads / exec, unavailable under qemu-user here"
-#else
-#define SKIP_IF_EMULATED() (void)0
-#endif
-
 namespace {
 
 using simtest::count_lines;
@@ -52,7 +46,7 @@ TEST(SimCli, ParseErrorsAreOneLineAndExit2) {
       {"run", "x.mat", "--rate", "fast"},  // bad enum
       {"run", "x.mat", "--node", "x"},
       {"run", "x.mat", "--N", "1e-3"},     // model needs N, B and Tp together
-      {"run", "x.mat", "--channel", "acc_w"},
+      {"run", "x.mat", "--channel", "data:x"},  // any variable, but NAME:K needs a number
       {"run", "x.mat", "--timeout", "abc"},
       {"run", "x.mat", "--no-plots=1"},    // flag with a value
       {"adev"},                                     // FILE required

@@ -19,12 +19,6 @@
 
 // Each test runs imu-fw as a separate process: under qemu-user (the aarch64 cross run) an exec
 // of another aarch64 binary hangs or fails, as for test_cli.cpp; they run natively and in CI.
-#ifdef IMU_EMULATED_TARGET
-#define SKIP_IF_EMULATED() GTEST_SKIP() << "needs exec of imu-fw, unavailable under qemu-user here"
-#else
-#define SKIP_IF_EMULATED() (void)0
-#endif
-
 namespace {
 
 double now_s() {

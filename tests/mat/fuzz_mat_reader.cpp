@@ -90,6 +90,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     static_cast<void>(f.read_column(v.name, 1));
     static_cast<void>(f.read_scalar(v.name));
     static_cast<void>(f.read_string(v.name));
+    if (v.class_name == "struct") {
+      // Struct fields by dotted name (the corpus' scipy files hold structvar.a and .b).
+      for (const char* field : {".a", ".b", ".a.b", ".b.a"}) {
+        static_cast<void>(f.read_column(v.name + field, 0));
+        static_cast<void>(f.read_scalar(v.name + field));
+      }
+    }
   }
   return 0;
 }

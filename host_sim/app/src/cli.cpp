@@ -69,7 +69,9 @@ constexpr const char* kUsageRun =
     "      [--timeout 30] [--window 4096|256] [--layout auto|fd|classic] [--only-channel]\n"
     "      [--fw PATH] [--lsb X] [--fs X] [--model A.json]  (--mat FILE: alias of FILE)\n"
     "  sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON, CSV, SVG/PNG\n"
-    "  plots in DIR, default out/run). A sample with NaN/Inf in a channel sent is not sent (the\n"
+    "  plots in DIR, default out/run). --channel: acc_x..gyro_z, or any variable as for adev\n"
+    "  (NAME, NAME:K, imu.acc_z), which takes the acc_z slot (gyro*: gyro_z) of the six sent.\n"
+    "  A sample with NaN/Inf in a channel sent is not sent (the\n"
     "  node counts it missing). LSB and rate rules as for adev. Ranges: --T-avg + --T-int at\n"
     "  most the recording, --sim-windows in [1, 1e5] (x window samples <= 2e8), --seed in\n"
     "  [0, 2^53], --timeout in (0, 86400] s, --window in [0, 1e6].\n";
@@ -331,32 +333,12 @@ struct AdevResult {
   int status = kExitOk;
 };
 
-// The slot of a channel name, and for any other variable (NAME, NAME:K, a struct field) the
-// variable it reads.
-bool adev_slot(const std::string& name, std::size_t& chan, ChannelVars& vars, bool& renamed,
-               std::string& err) {
-  renamed = false;
-  if (channel_index(name, chan)) {
-    return true;
-  }
-  imu::cli::ChannelSpec cs;
-  if (!imu::cli::parse_channel_spec(name, cs, err)) {
-    return false;
-  }
-  chan = name.substr(name.rfind('.') + 1).rfind("gyro", 0) == 0 ? 5 : 2;
-  vars.names[chan] = cs.name;
-  vars.columns[chan] = cs.column;
-  vars.column_given[chan] = cs.has_column;
-  renamed = true;
-  return true;
-}
-
 // Rate, LSB and length of the channel: a text column (read whole: text is not streamed) into
 // r.sd.ch[r.chan].values, or a MAT variable's header (streamed later). Exit status; r.err set.
 int adev_load(const AdevOptions& o, const imu::cli::TextTable* table, AdevResult& r) {
   ChannelVars vars;
   bool renamed = false;
-  if (!adev_slot(r.name, r.chan, vars, renamed, r.err)) {
+  if (!channel_slot(r.name, r.chan, vars, renamed, r.err)) {
     return kExitUsage;
   }
   if (table != nullptr) {

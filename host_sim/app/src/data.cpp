@@ -232,6 +232,38 @@ void count_spread(const std::vector<double>& values, const std::vector<std::int3
 }  // namespace
 
 
+mat::Result<mat::ChannelStream> open_channel(const SensorData& sd, std::size_t c) {
+  const ChannelData& ch = sd.ch[c];
+  return mat::ChannelStream::open(sd.path, ch.var.empty() ? std::string(kChannelNames[c]) : ch.var,
+                                  ch.column);
+}
+
+void scale_counts(const ChannelData& ch, double* v, std::size_t n) {
+  if (ch.integer_counts) {
+    for (std::size_t i = 0; i < n; ++i) {
+      v[i] *= ch.scale;
+    }
+  }
+}
+
+bool channel_slot(const std::string& name, std::size_t& chan, ChannelVars& vars, bool& renamed,
+                  std::string& err) {
+  renamed = false;
+  if (channel_index(name, chan)) {
+    return true;
+  }
+  imu::cli::ChannelSpec cs;
+  if (!imu::cli::parse_channel_spec(name, cs, err)) {
+    return false;
+  }
+  chan = name.substr(name.rfind('.') + 1).rfind("gyro", 0) == 0 ? 5 : 2;
+  vars.names[chan] = cs.name;
+  vars.columns[chan] = cs.column;
+  vars.column_given[chan] = cs.has_column;
+  renamed = true;
+  return true;
+}
+
 bool load_sensor_meta(const std::string& path, const bool (&want)[kNumChannels],
                       const bool (&required)[kNumChannels],
                       const double (&lsb_override)[kNumChannels], double fs_override,
@@ -384,11 +416,7 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
   };
   // A chunk to f, integer counts first scaled to the channel's unit.
   const auto deliver = [&ch, &f](double* v, std::size_t n) {
-    if (ch.integer_counts) {
-      for (std::size_t i = 0; i < n; ++i) {
-        v[i] *= ch.scale;
-      }
-    }
+    scale_counts(ch, v, n);
     f(v, n);
   };
   // Read and work in turn on this thread: when no thread is to be had (limits), or when
@@ -628,25 +656,6 @@ int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
     return misfit;
   }
   return kExitOk;
-}
-
-std::string channels_held(const std::string& path) {
-  auto vars = mat::list_variables(path);
-  if (!vars.ok()) {
-    return "the file cannot be listed (" + vars.error().message + ")";
-  }
-  std::string held;
-  std::string others;
-  for (const auto& v : vars.value()) {
-    std::size_t c = 0;
-    std::string& list = channel_index(v.name, c) ? held : others;
-    list += (list.empty() ? "" : ", ") + v.name;
-  }
-  if (!held.empty()) {
-    return "the file holds " + held;
-  }
-  return "the file holds none of acc_x .. gyro_z (variables: " +
-         (others.empty() ? std::string("none") : others) + ")";
 }
 
 }  // namespace imu::sim

@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "imu/mat/mat_reader.hpp"
 #include "common.hpp"
 
 namespace imu::sim {
@@ -55,6 +56,13 @@ struct ChannelVars {
   bool column_given[kNumChannels] = {};
 };
 
+/// The slot of a channel named on the command line (adev and run alike): acc_x..gyro_z are
+/// their own; any other variable (NAME, NAME:K column K of a matrix, a struct field P.NAME)
+/// takes the acc_z slot, or gyro_z for a gyro* name (its default LSB and unit), and is put in
+/// `vars` (renamed set). False with err on a malformed NAME:K.
+[[nodiscard]] bool channel_slot(const std::string& name, std::size_t& chan, ChannelVars& vars,
+                                bool& renamed, std::string& err);
+
 // NOLINTNEXTLINE(bugprone-reserved-identifier): '__i0' is the compiler's implicit array copy loop
 struct SensorData {
   std::string path;
@@ -69,6 +77,11 @@ struct SensorData {
 /// sample, the file's LSB does not fit). O(n), one pass to check and one to quantise.
 [[nodiscard]] int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
                             std::vector<std::int32_t>& counts, std::string& err);
+
+/// Channel c of sd's file as a stream: its variable (ch.var, else acc_x..gyro_z) and column.
+[[nodiscard]] mat::Result<mat::ChannelStream> open_channel(const SensorData& sd, std::size_t c);
+/// Integer counts (ch.integer_counts) to the channel's unit: v[i] *= ch.scale; else nothing.
+void scale_counts(const ChannelData& ch, double* v, std::size_t n);
 
 /// Read the rate (`fs`/`Fs`, or fs_override if > 0), the LSBs (lsb_override[c] if > 0, else the
 /// file's acc_lsb / gyro_lsb, else default_lsb(c)), which channels are present and their length
@@ -116,10 +129,6 @@ struct StreamTiming {
 /// chunks and the reader's ~0.3 MB, whatever the length.
 [[nodiscard]] int stream_counts(const std::string& path, std::size_t c, ChannelData& ch,
                                 CountSink& sink, StreamTiming& timing, std::string& err);
-
-/// "the file holds acc_x, gyro_y" (the channels acc_x .. gyro_z present in it), or what else
-/// it holds; for an unknown --channel. Never fails (a bad file is described as such).
-[[nodiscard]] std::string channels_held(const std::string& path);
 
 }  // namespace imu::sim
 

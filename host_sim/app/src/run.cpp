@@ -274,6 +274,7 @@ struct RunOptions {
   std::string path;
   std::string chan_name;
   std::size_t chan = 0;
+  ChannelVars vars;  // a variable other than acc_x..gyro_z in the slot `chan` (if renamed)
   std::string bus;
   bool is_loopback = false;
   std::string rate;
@@ -289,6 +290,7 @@ struct RunOptions {
   double fs_opt = 0.0;
   bool quiet = false;
   bool only_channel = false;
+  bool renamed = false;  // `vars` is used
   std::string model_path;       ///< --model: analysis JSON whose model_after is pushed
   hal::ModelRecord model{};     ///< read from model_path
   bool push_model = false;
@@ -310,8 +312,7 @@ bool parse_run_names(const Args& a, RunOptions& o, std::string& err) {
     return false;
   }
   o.chan_name = a.get("--channel", "acc_z");
-  if (!channel_index(o.chan_name, o.chan)) {
-    err = "unknown channel '" + o.chan_name + "' (acc_x .. gyro_z); " + channels_held(o.path);
+  if (!channel_slot(o.chan_name, o.chan, o.vars, o.renamed, err)) {
     return false;
   }
   o.bus = a.get("--bus", "loopback");
@@ -409,12 +410,13 @@ class Lockstep {
       if (!sd.ch[c].present) {
         continue;
       }
-      auto cs = mat::ChannelStream::open(sd.path, kChannelNames[c]);
+      auto cs = open_channel(sd, c);
       if (!cs.ok()) {
         err = cs.error().message;
         return false;
       }
       stream_[c] = std::make_unique<mat::ChannelStream>(std::move(cs.value()));
+      ch_[c] = &sd.ch[c];
       values_[c].resize(kChunk);
     }
     return true;
@@ -433,6 +435,7 @@ class Lockstep {
         err = r.error().message;
         return false;
       }
+      scale_counts(*ch_[c], values_[c].data(), r.value());
       if (!first && r.value() != n) {
         err = "channels of different lengths";
         return false;
@@ -455,6 +458,7 @@ class Lockstep {
 
  private:
   std::unique_ptr<mat::ChannelStream> stream_[kNumChannels];
+  const ChannelData* ch_[kNumChannels] = {};
   std::vector<double> values_[kNumChannels];
 };
 
@@ -488,7 +492,7 @@ bool read_cov_prefix(const RunOptions& o, const SensorData& sd, std::vector<doub
   const double win = std::round(o.ro.t_avg_s * sd.fs_hz) + std::round(o.ro.t_int_s * sd.fs_hz);
   const auto want = static_cast<std::size_t>(
       std::min(static_cast<double>(sd.n_samples), win * static_cast<double>(kMaxCovWindows)));
-  auto cs = mat::ChannelStream::open(sd.path, kChannelNames[o.chan]);
+  auto cs = open_channel(sd, o.chan);
   if (!cs.ok()) {
     err = cs.error().message;
     return false;
@@ -503,6 +507,7 @@ bool read_cov_prefix(const RunOptions& o, const SensorData& sd, std::vector<doub
     }
     got += r.value();
   }
+  scale_counts(sd.ch[o.chan], prefix.data(), prefix.size());
   return true;
 }
 
@@ -550,8 +555,10 @@ int load_run_data(const RunOptions& o, SensorData& sd, SendPlan& plan, std::stri
     required[c] = c == o.chan;
     lsb_over[c] = c == o.chan ? o.lsb_opt : 0.0;
   }
-  if (!load_sensor_meta(o.path, want, required, lsb_over, o.fs_opt, sd, err)) {
-    return kExitRuntime;
+  if (!load_sensor_meta(o.path, want, required, lsb_over, o.fs_opt, sd, err,
+                        o.renamed ? &o.vars : nullptr)) {
+    // A variable the file does not hold is a usage error, as in adev.
+    return o.renamed && err.find("not found") != std::string::npos ? kExitUsage : kExitRuntime;
   }
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     if (sd.ch[c].present) {
