@@ -232,6 +232,19 @@ TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
     EXPECT_NE(simtest::read_text(out + "/fig1_adev.svg").find("<svg"), std::string::npos);
     EXPECT_NE(simtest::read_text(out + "/fig2_covariance.svg").find("<svg"), std::string::npos);
     EXPECT_NE(r.out.find("plots: fig1_adev.svg"), std::string::npos) << r.out;
+    // The scripts run from any directory (issue 13 item 5): here from /, into another file.
+    for (const char* gp : {"fig1_adev", "fig2_covariance"}) {
+      const std::string svg = dir.file(std::string(gp) + "_elsewhere.svg");
+      std::string cmd = "cd / && gnuplot -e \"set terminal svg; set output '";
+      cmd += svg;
+      cmd += "'\" '";
+      cmd += out;
+      cmd += "/";
+      cmd += gp;
+      cmd += ".gp' 2>/dev/null";
+      EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+      EXPECT_NE(simtest::read_text(svg).find("<svg"), std::string::npos) << gp;
+    }
   } else {
     EXPECT_NE(r.out.find("gnuplot NOT FOUND"), std::string::npos) << r.out;
   }

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "imu/analyze/analyze.hpp"
+#include "imu/cli/file_out.hpp"
 #include "imu/cli/json.hpp"
 
 namespace imu::analyze {
@@ -314,14 +315,7 @@ std::string absolute(const std::string& path) {
   return out;
 }
 
-// Single quotes for a gnuplot string.
-std::string gq(const std::string& s) {
-  std::string o = "'";
-  for (const char c : s) {
-    o += c == '\'' ? std::string("''") : std::string(1, c);
-  }
-  return o + "'";
-}
+std::string gq(const std::string& s) { return imu::cli::gnuplot_str(s); }
 
 }  // namespace
 

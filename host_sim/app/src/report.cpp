@@ -5,8 +5,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 
 #include "common.hpp"
+#include "imu/cli/file_out.hpp"
 #include "imu/covariance_check.hpp"
 #include "imu/error_model.hpp"
 #include "imu/model_fit.hpp"
@@ -503,7 +505,12 @@ bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& 
   {
     const std::size_t nw_sim = std::min<std::size_t>(100, cov.sim_windows);
     const std::size_t nw_data = std::min<std::size_t>(100, cov.data_windows);
-    std::string g1;
+    // The scripts run from any directory: they start in the report's folder (absolute).
+    std::error_code ec;
+    const std::string here =
+        "cd " + imu::cli::gnuplot_str(std::filesystem::absolute(d, ec).lexically_normal().string()) +
+        "\n";
+    std::string g1 = here;
     appendf(g1,
             "set datafile separator ','\n"
             "set logscale xy\nset format y '10^{%%L}'\nset format x '10^{%%L}'\n"
@@ -542,7 +549,7 @@ bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& 
             "'#d62728' title 'simulated model'";
     }
     g1 += "\n";
-    std::string g2;
+    std::string g2 = here;
     appendf(g2,
             "set datafile separator ','\n"
             "set multiplot layout 2,1\n"

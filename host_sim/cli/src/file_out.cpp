@@ -72,6 +72,14 @@ bool AtomicFileWriter::write(const void* data, std::size_t size, std::string& er
   return true;
 }
 
+std::string gnuplot_str(const std::string& s) {
+  std::string o = "'";
+  for (const char c : s) {
+    o += c == '\'' ? std::string("''") : std::string(1, c);
+  }
+  return o + "'";
+}
+
 bool make_dirs(const std::string& path, std::string& err) {
   if (path.empty()) {
     return true;

@@ -50,6 +50,10 @@ class AtomicFileWriter {
 /// one-line err if a component cannot be created or `path` is not a directory.
 [[nodiscard]] bool make_dirs(const std::string& path, std::string& err);
 
+/// A gnuplot string literal: single-quoted, a quote doubled. For the paths in .gp scripts,
+/// which name their files absolutely so that they run from any directory.
+[[nodiscard]] std::string gnuplot_str(const std::string& s);
+
 }  // namespace imu::cli
 
 #endif  // IMU_CLI_FILE_OUT_HPP
