@@ -48,6 +48,10 @@ int main(int argc, char** argv) {
   unsigned long long ticks = 0;
   unsigned long long cal_ticks = 0;
   unsigned long long cal_insns = 0;
+  unsigned long long adev_frame_ticks = 0;
+  unsigned long long adev_frames = 0;
+  unsigned long long adev_block_ticks = 0;
+  unsigned long long adev_samples = 0;
   while (std::getline(in, l)) {
     l += "\n";
     if (relevant(l)) {
@@ -58,6 +62,8 @@ int main(int argc, char** argv) {
     }
     std::sscanf(l.c_str(), "IMU-NODE COST ticks=%llu cal_ticks=%llu cal_insns=%llu", &ticks,
                 &cal_ticks, &cal_insns);
+    std::sscanf(l.c_str(), "IMU-ADEV COST frame_ticks=%llu frames=%llu block_ticks=%llu samples=%llu",
+                &adev_frame_ticks, &adev_frames, &adev_block_ticks, &adev_samples);
   }
   std::vector<std::string> want;
   for (const std::string& h : host) {
@@ -93,6 +99,18 @@ int main(int argc, char** argv) {
                 "calibrated: %llu ticks for %llu instructions)\n",
                 insns, imu::m4::kNodeSamples, insns / (imu::m4::kNodeSamples * 6.0), cal_ticks,
                 cal_insns);
+  }
+  if (cal_ticks > 0 && adev_frames > 0 && adev_samples > 0) {
+    const double per_tick = static_cast<double>(cal_insns) / static_cast<double>(cal_ticks);
+    std::printf("node-check: ADEV kernel alone: %.0f instructions per sample per channel through "
+                "MultiAdev<6,8,22>::push_frame (%llu frames), %.0f through "
+                "OnlineAdev<8,22>::push_block (%llu samples)\n",
+                static_cast<double>(adev_frame_ticks) * per_tick /
+                    (static_cast<double>(adev_frames) * 6.0),
+                adev_frames,
+                static_cast<double>(adev_block_ticks) * per_tick /
+                    static_cast<double>(adev_samples),
+                adev_samples);
   }
   if (diffs != 0 || target.empty()) {
     std::printf("NODE-CHECK FAIL\n");

@@ -5,8 +5,15 @@
 // ratio is calibrated on a loop of known length (2 instructions per iteration: subs, bne).
 // Extra lines (target only):
 //   IMU-NODE COST ticks=<samples phase> cal_ticks=<calibration loop> cal_insns=<its instructions>
+//   IMU-ADEV COST frame_ticks=<ticks> frames=<F> block_ticks=<ticks> samples=<S>
+//     the ADEV kernel alone (issue 14 item 4): F frames of six channels through the node's
+//     MultiAdev<6, 8, 22>::push_frame, and S samples of one channel through
+//     OnlineAdev<8, 22>::push_block, each on pseudo-random counts (an LCG)
 //   IMU-M4 STACK used=<bytes> of=<bytes>
 #include <cstdint>
+
+#include "imu/node/node.hpp"
+#include "imu/online_adev.hpp"
 
 #include "line.hpp"
 #include "node_workload.hpp"
@@ -57,6 +64,45 @@ void mark(int phase, void* /*ctx*/) {
   }
 }
 
+// The ADEV kernel alone, outside the node: frames through MultiAdev::push_frame (the node's
+// path) and a block through OnlineAdev::push_block. Static: no stack, no heap.
+constexpr std::uint32_t kAdevFrames = 4096;
+constexpr std::uint32_t kAdevBlock = 4096;
+imu::node::NodeAdev g_multi;
+imu::OnlineAdev<8, 22> g_single(0.01, 1.0);
+std::int32_t g_block[kAdevBlock];
+
+std::int32_t next_counts(std::uint32_t& s) {
+  s = s * 1664525U + 1013904223U;  // LCG: cheap, deterministic
+  return static_cast<std::int32_t>(s >> 20U) - 2048;
+}
+
+void adev_kernel_cost(std::uint64_t& frame_ticks, std::uint64_t& block_ticks) {
+  std::uint32_t s = 12345U;
+  std::int32_t frame[imu::node::kChannels];
+  TickCounter t;
+  t.start();
+  for (std::uint32_t f = 0; f < kAdevFrames; ++f) {
+    for (auto& c : frame) {
+      c = next_counts(s);  // ~4 instructions per channel: counted in, negligible beside the push
+    }
+    g_multi.push_frame(frame);
+    t.poll();
+  }
+  g_multi.flush();
+  t.poll();
+  frame_ticks = t.total;
+  for (auto& c : g_block) {
+    c = next_counts(s);
+  }
+  t.start();
+  for (std::uint32_t k = 0; k < kAdevBlock; k += 256) {
+    g_single.push_block(g_block + k, 256);
+    t.poll();
+  }
+  block_ticks = t.total;
+}
+
 constexpr std::uint32_t kCalIterations = 1000000;
 
 std::uint64_t calibrate() {
@@ -83,6 +129,13 @@ extern "C" int imu_m4_main() {
   imu::m4::Line<> line;
   line.str("IMU-NODE COST ticks=").u64(g_ticks.total).str(" cal_ticks=").u64(cal);
   line.str(" cal_insns=").u64(2ULL * kCalIterations).str("\n");
+  imu::m4::semihost_write0(line.c_str());
+  std::uint64_t frame_ticks = 0;
+  std::uint64_t block_ticks = 0;
+  adev_kernel_cost(frame_ticks, block_ticks);
+  line.clear();
+  line.str("IMU-ADEV COST frame_ticks=").u64(frame_ticks).str(" frames=").u64(kAdevFrames);
+  line.str(" block_ticks=").u64(block_ticks).str(" samples=").u64(kAdevBlock).str("\n");
   imu::m4::semihost_write0(line.c_str());
   line.clear();
   line.str("IMU-M4 STACK used=").u64(imu::m4::stack_high_water_bytes());
