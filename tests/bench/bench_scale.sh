@@ -68,5 +68,20 @@ for ((e = 6; e <= max_exp; ++e)); do
     "$synth_wall" "$adev_rss" "$adev_wall" "$adev_mbs" "$run_rss" "$run_wall"
   rm -f "$mat"
 done
+# Text input (CSV with a time column), streamed as MAT-files are: 10^6 and 10^7 rows (10^8
+# rows of text is ~1.6 GB; TEXT_MAX_EXP=8 to include it).
+text_max_exp=${TEXT_MAX_EXP:-7}
+printf '%-10s %8s | %-26s\n' rows file_MB "adev (CSV) RSS_MB wall_s MB/s"
+for ((e = 6; e <= text_max_exp; ++e)); do
+  n=$((10**e))
+  csv="$dir/rec_1e$e.csv"
+  awk -v n="$n" 'BEGIN { srand(5); print "t,acc_z"
+    for (i = 0; i < n; i++) printf "%.2f,%.4f\n", i * 0.01, 9.81 + 0.01 * (rand() - 0.5) }' > "$csv"
+  file_mb=$(awk -v b="$(stat -c %s "$csv")" 'BEGIN { printf "%.0f", b / 1e6 }')
+  measure adev_text "$imu_sim" adev "$csv" --channel acc_z --lsb 1e-4
+  mbs=$(awk -v m="$file_mb" -v t="$wall_s" 'BEGIN { printf "%.0f", (t > 0) ? m / t : 0 }')
+  printf '%-10s %8s | %8s %8s %8s\n' "1e$e" "$file_mb" "$rss_mb" "$wall_s" "$mbs"
+  rm -f "$csv"
+done
 echo "load average at end: $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "(RSS: peak resident set, GNU time %M; wall: whole process; adev MB/s: file MB / wall)"

@@ -4,11 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
 
+#include "imu/cli/text_input.hpp"
+#include "imu/mat/mat_writer.hpp"
 #include "sim_test_util.hpp"
 
 namespace {
@@ -133,6 +136,127 @@ TEST(TextInput, BadTextIsRefusedWithTheLine) {
   const auto r = simtest::run({"adev", dir.file("ok.csv"), "--channel", "acc"});
   EXPECT_EQ(r.status, 2);
   EXPECT_NE(r.err.find("no column 'acc'; the columns: t, gyro"), std::string::npos) << r.err;
+}
+
+// The stream (adev, issue 14: memory independent of the rows) and the whole table (analyze)
+// place a column on the same grid: irregular steps, dropped rows, an empty field, comments and
+// blank lines; read 1, 7 and 4096 samples at a time. Both are checked against the grid built
+// here from the rows written.
+TEST(TextInput, StreamAndWholeTableGiveTheSameGrid) {
+  simtest::TempDir dir;
+  const std::string f = dir.file("irregular.csv");
+  std::vector<double> want;  // the grid at 100 Hz
+  {
+    std::ofstream o(f);
+    o << "# log\ntime,acc_z,gyro_x\n";
+    double t = 0.0;
+    for (int i = 0; i < 300; ++i) {
+      int step = 1;
+      if (i % 37 == 36) {
+        step = 4;  // three rows dropped
+      } else if (i % 11 == 5) {
+        step = 2;  // one
+      }
+      if (i > 0) {
+        for (int k = 1; k < step; ++k) {
+          want.push_back(std::nan(""));
+        }
+        t += 0.01 * step + (i % 3 == 0 ? 2e-4 : -1e-4);  // jitter well under half a period
+      }
+      if (i == 50) {
+        o << t << ",," << i << "\n";  // an empty field: missing
+        want.push_back(std::nan(""));
+      } else {
+        o << t << "," << (i * 0.5) << "," << i << "\n";
+        want.push_back(i * 0.5);
+      }
+      if (i == 100) {
+        o << "\n# a comment in the middle\n";
+      }
+    }
+  }
+  const auto same = [&want](const std::vector<double>& got, const std::string& what) {
+    ASSERT_EQ(got.size(), want.size()) << what;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      if (std::isnan(want[i])) {
+        EXPECT_TRUE(std::isnan(got[i])) << what << " sample " << i;
+      } else {
+        EXPECT_EQ(got[i], want[i]) << what << " sample " << i;
+      }
+    }
+  };
+  imu::cli::TextTable table;
+  std::string err;
+  ASSERT_TRUE(imu::cli::read_text_table(f, table, err)) << err;
+  imu::cli::TextChannel tc;
+  ASSERT_TRUE(imu::cli::text_channel(table, "acc_z", 0.0, tc, err)) << err;
+  EXPECT_NEAR(tc.fs_hz, 100.0, 2.0);
+  same(tc.samples, "whole table");
+  for (const std::size_t chunk : {std::size_t{1}, std::size_t{7}, std::size_t{4096}}) {
+    imu::cli::TextColumnStream st;
+    ASSERT_TRUE(st.open(f, "acc_z", 0.0, err)) << err;
+    EXPECT_EQ(st.fs_hz(), tc.fs_hz);
+    std::vector<double> got;
+    std::vector<double> buf(chunk);
+    std::size_t n = 0;
+    while (st.read(buf.data(), chunk, n, err) && n > 0) {
+      got.insert(got.end(), buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(n));
+    }
+    ASSERT_TRUE(err.empty()) << err;
+    same(got, "stream, chunks of " + std::to_string(chunk));
+    EXPECT_EQ(st.time_gap_samples(), tc.time_gap_samples);
+    EXPECT_EQ(st.time_name(), "time");
+  }
+  // The same refusals: an unknown column (the columns listed), a time going back.
+  imu::cli::TextColumnStream st;
+  EXPECT_FALSE(st.open(f, "acc_q", 0.0, err));
+  EXPECT_EQ(err, "no column 'acc_q'; the columns: time, acc_z, gyro_x");
+  const std::string back = dir.file("back.csv");
+  std::ofstream(back) << "t,x\n0,1\n0.01,2\n0.02,3\n0.015,4\n";
+  ASSERT_TRUE(imu::cli::read_text_table(back, table, err)) << err;
+  std::string whole_err;
+  EXPECT_FALSE(imu::cli::text_channel(table, "x", 0.0, tc, whole_err));
+  EXPECT_FALSE(st.open(back, "x", 0.0, err));
+  EXPECT_EQ(err, whole_err);
+}
+
+// A text file longer than the rows that decide the rate (kRateRows) gives adev the same ADEV,
+// number for number, as the same samples in a MAT-file: the text is streamed, not held.
+TEST(TextInput, LongTextGivesTheMatFilesAdev) {
+  simtest::TempDir dir;
+  const std::size_t n = 3 * imu::cli::kRateRows + 123;
+  std::vector<double> v(n);
+  std::uint32_t s = 777U;
+  std::string text = "t,acc_z\n";
+  char buf[64];
+  for (std::size_t i = 0; i < n; ++i) {
+    s = s * 1664525U + 1013904223U;
+    v[i] = static_cast<double>(static_cast<int>(s >> 20U) - 2048) * 1e-3;
+    std::snprintf(buf, sizeof buf, "%.2f,%.3f\n", static_cast<double>(i) * 0.01, v[i]);
+    text += buf;
+  }
+  const std::string csv = dir.file("long.csv");
+  std::ofstream(csv) << text;
+  const std::string mat = dir.file("long.mat");
+  imu::mat::MatWriter w;
+  ASSERT_TRUE(w.add_column("acc_z", v).ok());
+  ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
+  ASSERT_TRUE(w.save(mat).ok());
+  const std::string ja = dir.file("csv.json");
+  const std::string jb = dir.file("mat.json");
+  auto r = simtest::run({"adev", csv, "--channel", "acc_z", "--lsb", "1e-3", "--json", ja});
+  ASSERT_EQ(r.status, 0) << r.err;
+  r = simtest::run({"adev", mat, "--channel", "acc_z", "--lsb", "1e-3", "--json", jb});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const auto a = simtest::json_adev(simtest::read_text(ja));
+  const auto b = simtest::json_adev(simtest::read_text(jb));
+  ASSERT_GT(a.size(), 60U);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].tau_s, b[i].tau_s) << i;
+    EXPECT_EQ(a[i].adev, b[i].adev) << "tau " << a[i].tau_s;
+  }
+  EXPECT_NE(simtest::read_text(ja).find("\"n_samples\": " + std::to_string(n)), std::string::npos);
 }
 
 }  // namespace

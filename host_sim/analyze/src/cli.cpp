@@ -292,7 +292,7 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     return false;
   }
   std::vector<std::string> names;
-  if (!imu::cli::text_channels(table, spec, names, err)) {
+  if (!imu::cli::text_channels(table.names, spec, names, err)) {
     err.insert(0, file + ": ");
     return false;
   }

@@ -333,27 +333,26 @@ struct AdevResult {
   int status = kExitOk;
 };
 
-// Rate, LSB and length of the channel: a text column (read whole: text is not streamed) into
-// r.sd.ch[r.chan].values, or a MAT variable's header (streamed later). Exit status; r.err set.
-int adev_load(const AdevOptions& o, const imu::cli::TextTable* table, AdevResult& r) {
+// Rate, LSB and length of the channel: a text column's rate from its first rows (the samples
+// are streamed later, their number known at the end), or a MAT variable's header. Exit status;
+// r.err set.
+int adev_load(const AdevOptions& o, bool text, AdevResult& r) {
   ChannelVars vars;
   bool renamed = false;
   if (!channel_slot(r.name, r.chan, vars, renamed, r.err)) {
     return kExitUsage;
   }
-  if (table != nullptr) {
-    imu::cli::TextChannel tc;
-    if (!imu::cli::text_channel(*table, r.name, o.fs, tc, r.err)) {
+  if (text) {
+    imu::cli::TextColumnStream probe;
+    if (!probe.open(o.path, r.name, o.fs, r.err)) {
       const bool usage = r.err.rfind("no column", 0) == 0;  // like a MAT variable not found
-      r.err = o.path + ": " + r.err;
+      r.err = r.err.rfind(o.path, 0) == 0 ? r.err : o.path + ": " + r.err;
       return usage ? kExitUsage : kExitRuntime;
     }
     r.sd.path = o.path;
-    r.sd.fs_hz = tc.fs_hz;
-    r.sd.n_samples = tc.samples.size();
+    r.sd.fs_hz = probe.fs_hz();
     ChannelData& ch = r.sd.ch[r.chan];
     ch.present = true;
-    ch.values = std::move(tc.samples);
     ch.lsb = o.lsb > 0.0 ? o.lsb : default_lsb(r.chan);
     ch.lsb_from_option = o.lsb > 0.0;
     if (!(r.sd.fs_hz >= kMinFsHz && r.sd.fs_hz <= kMaxFsHz)) {
@@ -374,58 +373,41 @@ int adev_load(const AdevOptions& o, const imu::cli::TextTable* table, AdevResult
   return kExitOk;
 }
 
-// A text column's values into a sink as stream_counts() delivers a MAT variable's: finite runs
-// as counts, each run of missing samples between two finite ones as one gap.
-int feed_values(const std::string& path, std::size_t chan, ChannelData& c, CountSink& sink,
-                std::string& err) {
-  std::vector<std::int32_t> counts;
-  const int st = to_counts(path, chan, c, counts, err);
-  if (st != kExitOk) {
-    return st;
-  }
-  std::size_t i = 0;
-  const std::size_t n = c.values.size();
-  while (i < n && !std::isfinite(c.values[i])) {
-    ++i;
-  }
-  std::size_t end = n;
-  while (end > i && !std::isfinite(c.values[end - 1])) {
-    --end;
-  }
-  while (i < end) {
-    std::size_t j = i;
-    const bool finite = std::isfinite(c.values[i]);
-    while (j < end && std::isfinite(c.values[j]) == finite) {
-      ++j;
-    }
-    if (finite) {
-      sink.push(counts.data() + i, j - i);
-    } else {
-      sink.gap(j - i);
-    }
-    i = j;
-  }
-  return kExitOk;
-}
-
 // The ADEV of a loaded channel: the counts streamed (MAT) or fed (text) into the estimator.
 // Exit status; r.rows and r.t set, or r.err.
 int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
   ChannelData& ch = r.sd.ch[r.chan];
   std::vector<std::uint64_t> grid;
-  if (!o.taus.empty()) {
-    (void)tau_grid(o.taus, r.sd.n_samples, grid);  // the keyword was checked by parse_adev
-  }
-  const double cost = o.full ? full_adev_cost(r.sd.n_samples, grid) : 0.0;
-  if (cost > 2e9) {
-    r.err = "--taus " + o.taus + " on " + std::to_string(r.sd.n_samples) + " samples would sum " +
-            std::to_string(cost) + " second differences (limit 2e9): use --taus quarter or octave";
+  // The tau grid and the full estimator's cost: before reading a MAT variable (its length is in
+  // its header), after streaming a text column (its length is known at its end).
+  const auto plan = [&]() {
+    grid.clear();
+    if (!o.taus.empty()) {
+      (void)tau_grid(o.taus, r.sd.n_samples, grid);  // the keyword was checked by parse_adev
+    }
+    const double cost = o.full ? full_adev_cost(r.sd.n_samples, grid) : 0.0;
+    if (cost > 2e9) {
+      r.err = "--taus " + o.taus + " on " + std::to_string(r.sd.n_samples) +
+              " samples would sum " + std::to_string(cost) +
+              " second differences (limit 2e9): use --taus quarter or octave";
+      return false;
+    }
+    return true;
+  };
+  if (!text && !plan()) {
     return kExitUsage;
   }
   StreamTiming tm;
+  TextChannelSource text_src(o.path, r.name, o.fs);
   const auto feed = [&](CountSink& sink) {
-    return text ? feed_values(o.path, r.chan, ch, sink, r.err)
-                : stream_counts(o.path, r.chan, ch, sink, tm, r.err);
+    int st = text ? stream_counts(text_src, o.path + ": column '" + r.name + "': ", ch, sink, tm,
+                                  r.err)
+                  : stream_counts(o.path, r.chan, ch, sink, tm, r.err);
+    if (st == kExitOk && text) {
+      r.sd.n_samples = static_cast<std::size_t>(text_src.samples());
+      st = plan() ? kExitOk : kExitUsage;
+    }
+    return st;
   };
   if (o.full) {
     FullAdevSink sink;
@@ -455,12 +437,12 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
 }
 
 // One channel, start to end (the unit of adev's parallel work). Never throws.
-void adev_channel(const AdevOptions& o, const imu::cli::TextTable* table, AdevResult& r) {
+void adev_channel(const AdevOptions& o, bool text, AdevResult& r) {
   try {
     const double t0 = now_s();
-    r.status = adev_load(o, table, r);
+    r.status = adev_load(o, text, r);
     if (r.status == kExitOk) {
-      r.status = adev_compute(o, table != nullptr, t0, r);
+      r.status = adev_compute(o, text, t0, r);
     }
   } catch (const std::bad_alloc&) {
     r.status = kExitRuntime;
@@ -541,11 +523,12 @@ std::string adev_csv_all(const std::vector<AdevResult>& rs) {
   return out;
 }
 
-// The channels --channel names: from the text table's header or the MAT-file's variables.
-bool adev_channels(const AdevOptions& o, const imu::cli::TextTable* table,
-                   std::vector<std::string>& names, std::string& err) {
-  if (table != nullptr) {
-    return imu::cli::text_channels(*table, o.spec, names, err);
+// The channels --channel names: from the text file's header or the MAT-file's variables.
+bool adev_channels(const AdevOptions& o, bool text, std::vector<std::string>& names,
+                   std::string& err) {
+  if (text) {
+    imu::cli::TextRows rows;
+    return rows.open(o.path, err) && imu::cli::text_channels(rows.names(), o.spec, names, err);
   }
   std::vector<std::string> held;
   if (o.spec == "all") {
@@ -582,14 +565,11 @@ int cmd_adev(int argc, char** argv) {
   if (!parse_adev(a, o, err)) {
     return fail(cmd, err, kExitUsage);
   }
-  // Text input (CSV/TSV/blank-separated with a header; imu/cli/text_input.hpp): read once.
-  imu::cli::TextTable table;
+  // Text input (CSV/TSV/blank-separated with a header; imu/cli/text_input.hpp): streamed, as a
+  // MAT-file is.
   const bool text = imu::cli::looks_like_text(o.path);
-  if (text && !imu::cli::read_text_table(o.path, table, err)) {
-    return fail(cmd, err.rfind(o.path, 0) == 0 ? err : o.path + ": " + err);
-  }
   std::vector<std::string> names;
-  if (!adev_channels(o, text ? &table : nullptr, names, err)) {
+  if (!adev_channels(o, text, names, err)) {
     return fail(cmd, err, err.find("empty name") != std::string::npos ? kExitUsage : kExitRuntime);
   }
   if (o.lsb > 0.0 && names.size() > 1) {
@@ -603,7 +583,7 @@ int cmd_adev(int argc, char** argv) {
     rs[i].name = names[i];
   }
   imu::cli::parallel_for(rs.size(), [&](std::size_t i) {
-    adev_channel(o, text ? &table : nullptr, rs[i]);
+    adev_channel(o, text, rs[i]);
   });
   for (const AdevResult& r : rs) {
     if (r.status != kExitOk) {

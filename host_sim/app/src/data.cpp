@@ -122,24 +122,6 @@ bool check_vector(const mat::VariableInfo& v, const std::string& path, std::stri
   return false;
 }
 
-// Statistics of the finite samples of a channel.
-struct Scan {
-  std::uint64_t finite = 0;
-  double max_abs = 0.0;
-  double mean = 0.0;
-  double m2 = 0.0;  ///< Welford's sum of squared deviations
-  [[nodiscard]] double std_dev() const {
-    return finite > 1 ? std::sqrt(m2 / static_cast<double>(finite - 1)) : 0.0;
-  }
-  void add(double v) {
-    ++finite;
-    max_abs = std::fabs(v) > max_abs ? std::fabs(v) : max_abs;
-    const double d = v - mean;
-    mean += d / static_cast<double>(finite);
-    m2 += d * (v - mean);
-  }
-};
-
 // imu::quantize(x, lsb).counts for finite x, from c = x / lsb, without branches: half away from
 // zero is trunc(c + copysign(0.5, c)) (equal to quantize's floor forms on each side of zero),
 // clamped in double first so that the conversion is defined, saturating at the int32 ends as
@@ -151,7 +133,7 @@ std::int32_t round_counts(double c) {
 
 // Count, mean, sum of squared deviations and largest |x| of a stream given in chunks: each
 // chunk's own mean and deviations (two passes in cache, no division per sample), merged by
-// Chan et al.'s update. Equal to Scan's Welford recurrence up to rounding.
+// Chan et al.'s update (equal to Welford's recurrence up to rounding).
 struct Moments {
   std::uint64_t n = 0;
   double mean = 0.0;
@@ -201,34 +183,6 @@ struct Moments {
   }
 };
 
-// Share of the finite samples in the most common count (Boyer-Moore majority vote: exact when
-// one count holds more than half, which is all the 99 % rule needs) and the std of the
-// quantised values.
-void count_spread(const std::vector<double>& values, const std::vector<std::int32_t>& counts,
-                  double lsb, double& top_share, double& quantised_std) {
-  std::int32_t cand = 0;
-  std::uint64_t votes = 0;
-  Scan q;
-  for (std::size_t i = 0; i < counts.size(); ++i) {
-    if (!std::isfinite(values[i])) {
-      continue;
-    }
-    q.add(static_cast<double>(counts[i]) * lsb);
-    if (votes == 0) {
-      cand = counts[i];
-      votes = 1;
-    } else {
-      votes = counts[i] == cand ? votes + 1 : votes - 1;
-    }
-  }
-  std::uint64_t same = 0;
-  for (std::size_t i = 0; i < counts.size(); ++i) {
-    same += std::isfinite(values[i]) && counts[i] == cand ? 1U : 0U;
-  }
-  top_share = q.finite > 0 ? static_cast<double>(same) / static_cast<double>(q.finite) : 0.0;
-  quantised_std = q.std_dev();
-}
-
 }  // namespace
 
 
@@ -244,6 +198,45 @@ void scale_counts(const ChannelData& ch, double* v, std::size_t n) {
       v[i] *= ch.scale;
     }
   }
+}
+
+bool MatChannelSource::open(std::string& err) {
+  auto cs = open_channel(sd_, c_);
+  if (!cs.ok()) {
+    err = cs.error().message;
+    return false;
+  }
+  stream_ = std::make_unique<mat::ChannelStream>(std::move(cs.value()));
+  return true;
+}
+
+bool MatChannelSource::read(double* out, std::size_t n, std::size_t& got, std::string& err) {
+  const auto r = stream_->read(out, n);
+  if (!r.ok()) {
+    err = r.error().message;
+    return false;
+  }
+  got = r.value();
+  return true;
+}
+
+bool TextChannelSource::open(std::string& err) {
+  samples_ = 0;
+  stream_ = imu::cli::TextColumnStream{};
+  if (!stream_.open(path_, column_, fs_hz_, err)) {
+    err = err.rfind(path_, 0) == 0 ? err : path_ + ": " + err;
+    return false;
+  }
+  return true;
+}
+
+bool TextChannelSource::read(double* out, std::size_t n, std::size_t& got, std::string& err) {
+  if (!stream_.read(out, n, got, err)) {
+    err = err.rfind(path_, 0) == 0 ? err : path_ + ": " + err;
+    return false;
+  }
+  samples_ += got;
+  return true;
 }
 
 bool channel_slot(const std::string& name, std::size_t& chan, ChannelVars& vars, bool& renamed,
@@ -372,12 +365,9 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 // that inflating chunk k + 1 overlaps f's work on chunk k (two buffers, handed over under a
 // mutex). read_s: the time f's thread waited for data. The reader is used by that thread alone.
 template <class F>
-bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& ch,
-                    std::vector<double>& buf, double& read_s, std::string& err, F&& f) {
-  auto cs = mat::ChannelStream::open(path, ch.var.empty() ? std::string(kChannelNames[c]) : ch.var,
-                                     ch.column);
-  if (!cs.ok()) {
-    err = cs.error().message;
+bool for_each_chunk(ChunkSource& src, const ChannelData& ch, std::vector<double>& buf,
+                    double& read_s, std::string& err, F&& f) {
+  if (!src.open(err)) {
     return false;
   }
   struct Slot {
@@ -401,11 +391,13 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
           return;
         }
       }
-      const auto r = cs.value().read(slot[k].v.data(), slot[k].v.size());
+      std::size_t got = 0;
+      std::string e;
+      const bool ok = src.read(slot[k].v.data(), slot[k].v.size(), got, e);
       std::lock_guard<std::mutex> lock(m);
-      slot[k].n = r.ok() ? r.value() : 0U;
-      if (!r.ok()) {
-        read_err = r.error().message;
+      slot[k].n = ok ? got : 0U;
+      if (!ok) {
+        read_err = e;
       }
       slot[k].full = true;
       cv.notify_all();
@@ -424,14 +416,14 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
   const auto in_turn = [&]() {
     for (;;) {
       const auto t0 = std::chrono::steady_clock::now();
-      const auto r = cs.value().read(slot[0].v.data(), slot[0].v.size());
+      std::size_t got = 0;
+      const bool ok = src.read(slot[0].v.data(), slot[0].v.size(), got, err);
       read_s += seconds_since(t0);
-      if (!r.ok() || r.value() == 0U) {
-        err = r.ok() ? std::string() : r.error().message;
+      if (!ok || got == 0U) {
         buf.swap(slot[0].v);
-        return r.ok();
+        return ok;
       }
-      deliver(slot[0].v.data(), r.value());
+      deliver(slot[0].v.data(), got);
     }
   };
   if (std::getenv("IMU_NO_THREADS") != nullptr) {
@@ -474,10 +466,21 @@ bool for_each_chunk(const std::string& path, std::size_t c, const ChannelData& c
 
 int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, CountSink& sink,
                   StreamTiming& timing, std::string& err) {
+  SensorData sd;
+  sd.path = path;
+  sd.ch[c] = ch;
+  MatChannelSource src(sd, c);
+  const int st = stream_counts(src,
+                               path + ": variable '" +
+                                   (ch.var.empty() ? std::string(kChannelNames[c]) : ch.var) + "': ",
+                               ch, sink, timing, err);
+  return st;
+}
+
+int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch, CountSink& sink,
+                  StreamTiming& timing, std::string& err) {
   constexpr std::size_t kChunk = 8192;
   constexpr double kMaxCounts = 2147483647.0;
-  const std::string where =
-      path + ": variable '" + (ch.var.empty() ? std::string(kChannelNames[c]) : ch.var) + "': ";
   std::vector<double> values(kChunk);
   std::vector<std::int32_t> counts(kChunk);
   std::vector<double> fin(kChunk);    // the chunk's finite values
@@ -492,7 +495,7 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
   std::uint64_t pending_gap = 0;
   ch.off_grid = 0;
   const double lsb = ch.lsb;
-  const bool ok = for_each_chunk(path, c, ch, values, timing.read_s, err, [&](const double* v,
+  const bool ok = for_each_chunk(src, ch, values, timing.read_s, err, [&](const double* v,
                                                                           std::size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
     total += n;
@@ -595,7 +598,7 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
     // Only now is the exact share of the majority candidate needed: a second pass.
     std::uint64_t same = 0;
     double second_read_s = 0.0;
-    if (!for_each_chunk(path, c, ch, values, second_read_s, err, [&](const double* v, std::size_t n) {
+    if (!for_each_chunk(src, ch, values, second_read_s, err, [&](const double* v, std::size_t n) {
           for (std::size_t i = 0; i < n; ++i) {
             same += std::isfinite(v[i]) && quantize(v[i], lsb).counts == cand ? 1U : 0U;
           }
@@ -610,50 +613,6 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
             num(q.std_dev()) + "): the LSB is too coarse for these data";
       return misfit;
     }
-  }
-  return kExitOk;
-}
-
-int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
-              std::vector<std::int32_t>& counts, std::string& err) {
-  const std::string where = path + ": variable '" + kChannelNames[c] + "': ";
-  Scan s;
-  for (const double v : ch.values) {
-    if (std::isfinite(v)) {
-      s.add(v);
-    }
-  }
-  ch.non_finite = ch.values.size() - s.finite;
-  if (s.finite == 0) {
-    err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
-    return kExitRuntime;
-  }
-  const int misfit = ch.lsb_from_option ? kExitUsage : kExitRuntime;
-  const std::string lsb_origin =
-      ch.lsb_from_option ? "--lsb " : (ch.lsb_from_file ? "the file's LSB " : "the default LSB ");
-  constexpr double kMaxCounts = 2147483647.0;
-  if (s.max_abs / ch.lsb >= kMaxCounts + 0.5) {
-    err = where + "values up to " + num(s.max_abs) + " do not fit int32 counts at " + lsb_origin +
-          num(ch.lsb) + " (the LSB must be at least " + num(s.max_abs / kMaxCounts) + ")";
-    return misfit;
-  }
-  counts.resize(ch.values.size());
-  ch.off_grid = 0;
-  for (std::size_t i = 0; i < ch.values.size(); ++i) {
-    const double v = ch.values[i];
-    counts[i] = std::isfinite(v) ? quantize(v, ch.lsb).counts : 0;
-    const double resid = v / ch.lsb - static_cast<double>(counts[i]);
-    ch.off_grid += std::isfinite(v) && std::fabs(resid) > 1e-6 ? 1U : 0U;
-  }
-  double top_share = 0.0;
-  double q_std = 0.0;
-  count_spread(ch.values, counts, ch.lsb, top_share, q_std);
-  if (top_share > 0.99 && q_std < 0.5 * s.std_dev()) {
-    err = where + lsb_origin + num(ch.lsb) + " puts " + num(100.0 * top_share) +
-          " % of the samples in one count (std " + num(s.std_dev()) + " becomes " + num(q_std) +
-          "): the LSB is too coarse for these data";
-    counts.clear();
-    return misfit;
   }
   return kExitOk;
 }

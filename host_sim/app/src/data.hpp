@@ -16,11 +16,13 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
-#include "imu/mat/mat_reader.hpp"
 #include "common.hpp"
+#include "imu/cli/text_input.hpp"
+#include "imu/mat/mat_reader.hpp"
 
 namespace imu::sim {
 
@@ -36,7 +38,6 @@ inline constexpr std::uint64_t kMaxStreamSamples = 200000000U;
 
 struct ChannelData {
   bool present = false;
-  std::vector<double> values;   ///< channel units, as stored in the file (may hold NaN/Inf)
   double lsb = 0.0;             ///< value of one count
   bool lsb_from_file = false;   ///< acc_lsb / gyro_lsb read from the file
   bool lsb_from_option = false; ///< given on the command line (a misfit is a usage error)
@@ -44,7 +45,7 @@ struct ChannelData {
   std::uint64_t non_finite = 0; ///< NaN / Inf samples: gaps
   std::string var;              ///< the file's variable (empty: the slot's name acc_x .. gyro_z)
   std::size_t column = 0;       ///< its column, for a matrix named NAME:K (K - 1)
-  double scale = 1.0;           ///< values x scale: integer counts (int16 ..) x their LSB
+  double scale = 1.0;           ///< stored x scale: integer counts (int16 ..) x their LSB
   bool integer_counts = false;  ///< the variable is of an integer class
 };
 
@@ -70,13 +71,6 @@ struct SensorData {
   std::size_t n_samples = 0;  ///< length of the present channels (all equal)
   ChannelData ch[kNumChannels];
 };
-
-/// Counts of channel c of file `path` (imu::quantize with its LSB; 0 for a non-finite sample), after checking
-/// that the LSB represents the data (see the top of this file). Returns the exit status: 0, or
-/// kExitUsage when an LSB given as an option does not fit, kExitRuntime for bad data (no finite
-/// sample, the file's LSB does not fit). O(n), one pass to check and one to quantise.
-[[nodiscard]] int to_counts(const std::string& path, std::size_t c, ChannelData& ch,
-                            std::vector<std::int32_t>& counts, std::string& err);
 
 /// Channel c of sd's file as a stream: its variable (ch.var, else acc_x..gyro_z) and column.
 [[nodiscard]] mat::Result<mat::ChannelStream> open_channel(const SensorData& sd, std::size_t c);
@@ -113,6 +107,55 @@ class CountSink {
   virtual void gap(std::size_t n) = 0;
 };
 
+/// Where a channel's samples come from, pass after pass (stream_counts() may take two): a MAT
+/// variable (MatChannelSource) or a text column (TextChannelSource). Read by one thread at a time.
+class ChunkSource {
+ public:
+  ChunkSource() = default;
+  ChunkSource(const ChunkSource&) = delete;
+  ChunkSource& operator=(const ChunkSource&) = delete;
+  ChunkSource(ChunkSource&&) = delete;
+  ChunkSource& operator=(ChunkSource&&) = delete;
+  virtual ~ChunkSource() = default;
+  /// Start a pass at the first sample. False with err.
+  [[nodiscard]] virtual bool open(std::string& err) = 0;
+  /// Up to n samples: got, 0 at the end. False with err.
+  [[nodiscard]] virtual bool read(double* out, std::size_t n, std::size_t& got,
+                                  std::string& err) = 0;
+};
+
+/// Channel c of sd's file (open_channel()).
+class MatChannelSource final : public ChunkSource {
+ public:
+  MatChannelSource(const SensorData& sd, std::size_t c) : sd_(sd), c_(c) {}
+  [[nodiscard]] bool open(std::string& err) override;
+  [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err) override;
+
+ private:
+  const SensorData& sd_;
+  std::size_t c_;
+  std::unique_ptr<mat::ChannelStream> stream_;
+};
+
+/// A text file's column on its regular grid (imu::cli::TextColumnStream): rows are read as
+/// they are needed, never held. samples(): the grid samples the last pass gave.
+class TextChannelSource final : public ChunkSource {
+ public:
+  TextChannelSource(std::string path, std::string column, double fs_hz)
+      : path_(std::move(path)), column_(std::move(column)), fs_hz_(fs_hz) {}
+  [[nodiscard]] bool open(std::string& err) override;
+  [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err) override;
+  [[nodiscard]] double fs_hz() const { return stream_.fs_hz(); }
+  [[nodiscard]] std::uint64_t samples() const { return samples_; }
+
+ private:
+  std::string path_;
+  std::string column_;
+  double fs_hz_;
+  imu::cli::TextColumnStream stream_;
+  std::uint64_t samples_ = 0;
+};
+
 /// Seconds spent by stream_counts(): reading/inflating, quantising and checking, in the sink.
 struct StreamTiming {
   double read_s = 0.0;
@@ -121,13 +164,16 @@ struct StreamTiming {
 };
 
 /// Channel c (present, ch.lsb set by load_sensor_meta) read from the file in chunks of 8192
-/// samples and quantised into `sink`, with the checks of to_counts() (no finite sample, int32
+/// samples and quantised into `sink`, with these checks (no finite sample, int32
 /// overflow, collapse: same messages and statuses) made on running statistics. The sink sees
 /// every chunk before the verdict: its result is valid only when 0 is returned. A second pass
 /// over the file is made only when the quantised std is under half the values' std (to count
 /// the share of the most common count exactly). Fills ch.non_finite and ch.off_grid. Memory: two
 /// chunks and the reader's ~0.3 MB, whatever the length.
 [[nodiscard]] int stream_counts(const std::string& path, std::size_t c, ChannelData& ch,
+                                CountSink& sink, StreamTiming& timing, std::string& err);
+/// The same from any source; `where` begins its error messages (e.g. "FILE: variable 'X': ").
+[[nodiscard]] int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch,
                                 CountSink& sink, StreamTiming& timing, std::string& err);
 
 }  // namespace imu::sim

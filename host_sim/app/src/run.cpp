@@ -544,7 +544,7 @@ bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& e
   return true;
 }
 
-// Check every present channel of the file (LSB, finite samples: as to_counts, chunk by chunk)
+// Check every present channel of the file (LSB, finite samples: stream_counts' checks, chunk by chunk)
 // and plan what is sent; nothing of the record is kept (issue 14). Exit status.
 int load_run_data(const RunOptions& o, SensorData& sd, SendPlan& plan, std::string& err) {
   bool want[kNumChannels];

@@ -82,9 +82,10 @@ bool looks_like_text(const std::string& path) {
   return n > 0 && std::memchr(head, '\0', n) == nullptr;
 }
 
-bool read_text_table(const std::string& path, TextTable& table, std::string& err,
-                     std::uint64_t max_bytes) {
-  table = TextTable{};
+bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max_bytes) {
+  path_ = path;
+  names_.clear();
+  line_no_ = 0;
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0) {
     err = path + ": " + std::strerror(errno);
@@ -99,77 +100,175 @@ bool read_text_table(const std::string& path, TextTable& table, std::string& err
           std::to_string(max_bytes) + "-byte limit";
     return false;
   }
-  std::ifstream f(path);
-  std::string line;
-  std::uint64_t line_no = 0;
-  char delim = ' ';
-  while (std::getline(f, line)) {
-    ++line_no;
-    if (!line.empty() && line.back() == '\r') {
-      line.pop_back();
+  in_.close();
+  in_.clear();
+  in_.open(path);
+  while (std::getline(in_, line_)) {
+    ++line_no_;
+    if (!line_.empty() && line_.back() == '\r') {
+      line_.pop_back();
     }
-    if (line.empty() || line[0] == '#') {
+    if (line_.empty() || line_[0] == '#') {
       continue;
     }
-    if (table.names.empty()) {
-      delim = line.find(',') != std::string::npos ? ',' : (line.find('\t') != std::string::npos
-                                                               ? '\t' : ' ');
-      table.names = split(line, delim);
-      double probe = 0.0;
-      for (const auto& n : table.names) {
-        if (n.empty() || parse_field(n, probe)) {
-          err = path + ": line " + std::to_string(line_no) +
-                ": the first row must name the columns (a header), e.g. t,acc_x,acc_y";
-          return false;
-        }
+    delim_ = line_.find(',') != std::string::npos ? ','
+             : (line_.find('\t') != std::string::npos ? '\t' : ' ');
+    names_ = split(line_, delim_);
+    double probe = 0.0;
+    for (const auto& n : names_) {
+      if (n.empty() || parse_field(n, probe)) {
+        err = path + ": line " + std::to_string(line_no_) +
+              ": the first row must name the columns (a header), e.g. t,acc_x,acc_y";
+        return false;
       }
-      table.cols.assign(table.names.size(), {});
+    }
+    return true;
+  }
+  err = path + ": no header and data rows (text input: a header row, then one row per sample)";
+  return false;
+}
+
+bool TextRows::next(std::vector<double>& row, std::string& err) {
+  err.clear();
+  while (std::getline(in_, line_)) {
+    ++line_no_;
+    if (!line_.empty() && line_.back() == '\r') {
+      line_.pop_back();
+    }
+    if (line_.empty() || line_[0] == '#') {
       continue;
     }
-    const std::vector<std::string> fields = split(line, delim);
-    if (fields.size() != table.names.size()) {
-      err = path + ": line " + std::to_string(line_no) + " has " + std::to_string(fields.size()) +
-            " fields, the header " + std::to_string(table.names.size());
+    const std::vector<std::string> fields = split(line_, delim_);
+    if (fields.size() != names_.size()) {
+      err = path_ + ": line " + std::to_string(line_no_) + " has " +
+            std::to_string(fields.size()) + " fields, the header " +
+            std::to_string(names_.size());
       return false;
     }
+    row.resize(fields.size());
     for (std::size_t c = 0; c < fields.size(); ++c) {
-      double v = 0.0;
-      if (!parse_field(fields[c], v)) {
-        err = path + ": line " + std::to_string(line_no) + ", column " + table.names[c] + ": '" +
+      if (!parse_field(fields[c], row[c])) {
+        err = path_ + ": line " + std::to_string(line_no_) + ", column " + names_[c] + ": '" +
               fields[c] + "' is not a number";
         return false;
       }
-      table.cols[c].push_back(v);
+    }
+    return true;
+  }
+  return false;
+}
+
+bool read_text_table(const std::string& path, TextTable& table, std::string& err,
+                     std::uint64_t max_bytes) {
+  table = TextTable{};
+  TextRows rows;
+  if (!rows.open(path, err, max_bytes)) {
+    return false;
+  }
+  table.names = rows.names();
+  table.cols.assign(table.names.size(), {});
+  std::vector<double> row;
+  while (rows.next(row, err)) {
+    for (std::size_t c = 0; c < row.size(); ++c) {
+      table.cols[c].push_back(row[c]);
     }
   }
-  if (table.names.empty() || table.cols[0].empty()) {
+  if (!err.empty()) {
+    return false;
+  }
+  if (table.cols[0].empty()) {
     err = path + ": no header and data rows (text input: a header row, then one row per sample)";
     return false;
   }
   return true;
 }
 
+std::size_t time_column(const std::vector<std::string>& names) {
+  for (std::size_t c = 0; c < names.size(); ++c) {
+    if (names[c] == "t" || names[c] == "time" || names[c] == "timestamp") {
+      return c;
+    }
+  }
+  return names.size();
+}
+
+namespace {
+
+// The sample period from the first rows' times (t[0..n)): fs_hz if given, else the median
+// step. False with err: one row, or a time that does not increase (as TimeGrid says it).
+bool grid_period(const double* t, std::size_t n, double fs_hz, const std::string& column,
+                 double& ts_s, std::string& err) {
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < n; ++i) {
+    if (!(t[i] > t[i - 1])) {
+      err = "the time column '" + column + "' does not increase at row " + std::to_string(i + 1) +
+            " (" + std::to_string(t[i - 1]) + " then " + std::to_string(t[i]) + ")";
+      return false;
+    }
+    steps.push_back(t[i] - t[i - 1]);
+  }
+  if (fs_hz > 0.0) {
+    ts_s = 1.0 / fs_hz;
+    return true;
+  }
+  if (steps.empty()) {
+    err = "one row: no rate from the time column";
+    return false;
+  }
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
+                   steps.end());
+  ts_s = steps[steps.size() / 2];
+  return true;
+}
+
+std::string no_column(const std::vector<std::string>& names, const std::string& name) {
+  std::string held;
+  for (const auto& n : names) {
+    held += (held.empty() ? "" : ", ") + n;
+  }
+  return "no column '" + name + "'; the columns: " + held;
+}
+
+}  // namespace
+
+bool TimeGrid::place(double t_s, std::uint64_t row, const std::string& column,
+                     std::uint64_t& missing, std::string& err) {
+  missing = 0;
+  if (!started_) {
+    started_ = true;
+    last_t_s_ = t_s;
+    return true;
+  }
+  if (!(t_s > last_t_s_)) {
+    err = "the time column '" + column + "' does not increase at row " + std::to_string(row) +
+          " (" + std::to_string(last_t_s_) + " then " + std::to_string(t_s) + ")";
+    return false;
+  }
+  const double step = t_s - last_t_s_;
+  const double k = std::round(step / ts_s_);
+  if (k >= 2.0) {
+    if (k > 1e8) {
+      err = "the time column jumps by " + std::to_string(step) + " s at row " +
+            std::to_string(row) + ": more than 1e8 missing samples";
+      return false;
+    }
+    missing = static_cast<std::uint64_t>(k) - 1;
+    gap_samples_ += missing;
+  }
+  last_t_s_ = t_s;
+  return true;
+}
+
 bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
                   TextChannel& out, std::string& err) {
   out = TextChannel{};
-  std::size_t ci = table.names.size();
-  std::size_t ti = table.names.size();
-  for (std::size_t c = 0; c < table.names.size(); ++c) {
-    ci = table.names[c] == name ? c : ci;
-    const std::string& n = table.names[c];
-    if (ti == table.names.size() && (n == "t" || n == "time" || n == "timestamp")) {
-      ti = c;
-    }
-  }
-  if (ci == table.names.size()) {
-    std::string held;
-    for (const auto& n : table.names) {
-      held += (held.empty() ? "" : ", ") + n;
-    }
-    err = "no column '" + name + "'; the columns: " + held;
+  const auto it = std::find(table.names.begin(), table.names.end(), name);
+  if (it == table.names.end()) {
+    err = no_column(table.names, name);
     return false;
   }
-  const std::vector<double>& v = table.cols[ci];
+  const std::vector<double>& v = table.cols[static_cast<std::size_t>(it - table.names.begin())];
+  const std::size_t ti = time_column(table.names);
   if (ti == table.names.size()) {
     if (!(fs_hz > 0.0)) {
       err = "no --fs and no time column (t, time or timestamp) to take the rate from";
@@ -181,57 +280,144 @@ bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
   }
   const std::vector<double>& t = table.cols[ti];
   out.time_column = table.names[ti];
-  std::vector<double> steps;
-  for (std::size_t i = 1; i < t.size(); ++i) {
-    if (!(t[i] > t[i - 1])) {
-      err = "the time column '" + table.names[ti] + "' does not increase at row " +
-            std::to_string(i + 1) + " (" + std::to_string(t[i - 1]) + " then " +
-            std::to_string(t[i]) + ")";
-      return false;
-    }
-    steps.push_back(t[i] - t[i - 1]);
-  }
   double ts = 0.0;
-  if (fs_hz > 0.0) {
-    ts = 1.0 / fs_hz;
-  } else {
-    if (steps.empty()) {
-      err = "one row: no rate from the time column";
-      return false;
-    }
-    std::vector<double> s = steps;
-    std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(s.size() / 2), s.end());
-    ts = s[s.size() / 2];
+  if (!grid_period(t.data(), std::min(t.size(), kRateRows + 1), fs_hz, out.time_column, ts,
+                   err)) {
+    return false;
   }
   out.fs_hz = 1.0 / ts;
+  TimeGrid grid(ts);
   out.samples.reserve(v.size());
-  out.samples.push_back(v[0]);
-  for (std::size_t i = 1; i < v.size(); ++i) {
-    const double k = std::round(steps[i - 1] / ts);
-    if (k >= 2.0) {
-      if (k > 1e8) {
-        err = "the time column jumps by " + std::to_string(steps[i - 1]) + " s at row " +
-              std::to_string(i + 1) + ": more than 1e8 missing samples";
-        return false;
-      }
-      const auto missing = static_cast<std::uint64_t>(k) - 1;
-      out.samples.insert(out.samples.end(), missing, std::nan(""));
-      out.time_gap_samples += missing;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    std::uint64_t missing = 0;
+    if (!grid.place(t[i], i + 1, out.time_column, missing, err)) {
+      return false;
     }
+    out.samples.insert(out.samples.end(), missing, std::nan(""));
     out.samples.push_back(v[i]);
+  }
+  out.time_gap_samples = grid.gap_samples();
+  return true;
+}
+
+bool TextColumnStream::open(const std::string& path, const std::string& name, double fs_hz,
+                            std::string& err) {
+  head_pos_ = 0;
+  row_no_ = 0;
+  pending_missing_ = 0;
+  have_pending_ = false;
+  time_name_.clear();
+  if (!rows_.open(path, err)) {
+    return false;
+  }
+  // A file without data rows is refused as such before its columns are looked at (as
+  // read_text_table refuses it before text_channel).
+  const bool first = rows_.next(row_, err);
+  if (!first && err.empty()) {
+    err = path + ": no header and data rows (text input: a header row, then one row per sample)";
+  }
+  if (!first) {
+    return false;
+  }
+  const std::vector<std::string>& names = rows_.names();
+  const auto it = std::find(names.begin(), names.end(), name);
+  if (it == names.end()) {
+    err = no_column(names, name);
+    return false;
+  }
+  col_ = static_cast<std::size_t>(it - names.begin());
+  time_ = time_column(names);
+  if (time_ == names.size() && !(fs_hz > 0.0)) {
+    err = "no --fs and no time column (t, time or timestamp) to take the rate from";
+    return false;
+  }
+  // The rows that decide the rate (as text_channel's), held until they are given out.
+  head_.clear();
+  head_.emplace_back(time_ < names.size() ? row_[time_] : 0.0, row_[col_]);
+  while (head_.size() < kRateRows + 1 && rows_.next(row_, err)) {
+    head_.emplace_back(time_ < names.size() ? row_[time_] : 0.0, row_[col_]);
+  }
+  if (!err.empty()) {
+    return false;
+  }
+  double ts = fs_hz > 0.0 ? 1.0 / fs_hz : 0.0;
+  if (time_ < names.size()) {
+    time_name_ = names[time_];
+    std::vector<double> t(head_.size());
+    for (std::size_t i = 0; i < head_.size(); ++i) {
+      t[i] = head_[i].first;
+    }
+    if (!grid_period(t.data(), t.size(), fs_hz, time_name_, ts, err)) {
+      return false;
+    }
+  }
+  fs_hz_ = 1.0 / ts;
+  grid_ = TimeGrid(ts);
+  return true;
+}
+
+bool TextColumnStream::next_row(double& t, double& v, bool& have, std::string& err) {
+  have = false;
+  if (head_pos_ < head_.size()) {
+    t = head_[head_pos_].first;
+    v = head_[head_pos_].second;
+    have = true;
+    if (++head_pos_ == head_.size()) {
+      head_ = {};  // the rate is known: hold no more rows
+    }
+    return true;
+  }
+  if (head_pos_ > 0 && head_.empty() && rows_.next(row_, err)) {
+    t = time_ < row_.size() ? row_[time_] : 0.0;
+    v = row_[col_];
+    have = true;
+  }
+  return err.empty();
+}
+
+bool TextColumnStream::read(double* out, std::size_t n, std::size_t& got, std::string& err) {
+  got = 0;
+  while (got < n) {
+    if (pending_missing_ > 0) {
+      out[got++] = std::nan("");
+      --pending_missing_;
+      continue;
+    }
+    if (have_pending_) {
+      out[got++] = pending_value_;
+      have_pending_ = false;
+      continue;
+    }
+    double t = 0.0;
+    double v = 0.0;
+    bool have = false;
+    if (!next_row(t, v, have, err)) {
+      return false;
+    }
+    if (!have) {
+      break;
+    }
+    ++row_no_;
+    std::uint64_t missing = 0;
+    if (!time_name_.empty() && !grid_.place(t, row_no_, time_name_, missing, err)) {
+      return false;
+    }
+    pending_missing_ = missing;
+    pending_value_ = v;
+    have_pending_ = true;
   }
   return true;
 }
 
-bool text_channels(const TextTable& table, const std::string& spec,
+bool text_channels(const std::vector<std::string>& names, const std::string& spec,
                    std::vector<std::string>& out, std::string& err) {
-  if (expand_channels(spec, table.names, out, err)) {
+  if (expand_channels(spec, names, out, err)) {
     return true;
   }
   if (spec != "all") {
     return false;
   }
-  for (const auto& n : table.names) {
+  for (const auto& n : names) {
     if (n != "t" && n != "time" && n != "timestamp") {
       out.push_back(n);
     }

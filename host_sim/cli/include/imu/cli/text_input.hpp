@@ -6,8 +6,11 @@
 #ifndef IMU_CLI_TEXT_INPUT_HPP
 #define IMU_CLI_TEXT_INPUT_HPP
 
+#include <cstddef>
 #include <cstdint>
+#include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace imu::cli {
@@ -22,11 +25,59 @@ struct TextTable {
 /// reader, which says what is wrong with it).
 [[nodiscard]] bool looks_like_text(const std::string& path);
 
-/// Read the whole table. Refused with a one-line err (naming the line): not a regular file,
-/// larger than max_bytes, no header, a row with another number of fields, a field that is not a
-/// number. O(file size).
+/// The rows of a text table one at a time, the header read by open(): constant memory (one
+/// line). The one parser of text input: read_text_table and TextColumnStream are built on it.
+class TextRows {
+ public:
+  /// Refused with a one-line err: not a regular file, larger than max_bytes, no header (a
+  /// first row of names).
+  [[nodiscard]] bool open(const std::string& path, std::string& err,
+                          std::uint64_t max_bytes = std::uint64_t{2} << 30U);
+  [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
+  /// The next data row as numbers (names().size() of them; NaN for an empty or nan field).
+  /// False at the end (err empty) or on a bad row (err names the line: another number of fields
+  /// than the header, a field that is not a number).
+  [[nodiscard]] bool next(std::vector<double>& row, std::string& err);
+
+ private:
+  std::string path_;
+  std::ifstream in_;
+  std::string line_;
+  std::vector<std::string> names_;
+  std::uint64_t line_no_ = 0;
+  char delim_ = ' ';
+};
+
+/// Read the whole table (TextRows into one vector per column). The errors of TextRows, and no
+/// data row. O(file size) memory.
 [[nodiscard]] bool read_text_table(const std::string& path, TextTable& table, std::string& err,
                                    std::uint64_t max_bytes = std::uint64_t{2} << 30U);
+
+/// The time column of a table: the first named t, time or timestamp; names.size() if none.
+[[nodiscard]] std::size_t time_column(const std::vector<std::string>& names);
+
+/// Rows whose time steps decide the rate when no --fs is given: the median step of the time
+/// column over its first kRateRows + 1 rows (every command, whole or streamed).
+inline constexpr std::size_t kRateRows = 65536;
+
+/// Places rows on the regular grid of period ts_s: a row after a step of k periods (k = the
+/// step / ts rounded, k >= 2) comes after k - 1 missing samples (NaN), counted. The time
+/// column must increase. One rule for the whole table and the stream.
+class TimeGrid {
+ public:
+  explicit TimeGrid(double ts_s) : ts_s_(ts_s) {}
+  /// The missing samples before a row at time t_s (0 for the first row). False with err if the
+  /// time does not increase or jumps by more than 1e8 samples.
+  [[nodiscard]] bool place(double t_s, std::uint64_t row, const std::string& column,
+                           std::uint64_t& missing, std::string& err);
+  [[nodiscard]] std::uint64_t gap_samples() const { return gap_samples_; }
+
+ private:
+  double ts_s_;
+  double last_t_s_ = 0.0;
+  bool started_ = false;
+  std::uint64_t gap_samples_ = 0;
+};
 
 struct TextChannel {
   std::vector<double> samples;  ///< on a regular grid; NaN: missing (field or time gap)
@@ -36,14 +87,46 @@ struct TextChannel {
 };
 
 /// Column `name` of the table on a regular grid. fs_hz > 0: that rate (the time column, if
-/// any, still places the samples); else the time column's median step. Refused: unknown name
-/// (the names are listed), no rate and no time column, a time column that does not increase.
+/// any, still places the samples); else the time column's median step (kRateRows). Refused:
+/// unknown name (the names are listed), no rate and no time column, a time column that does
+/// not increase.
 [[nodiscard]] bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
                                 TextChannel& out, std::string& err);
 
+/// One column of a text file on the same grid as text_channel gives, read row by row: memory
+/// independent of the number of rows (the first kRateRows rows are held while the rate is
+/// taken from them). Same refusals and messages as TextRows and text_channel.
+class TextColumnStream {
+ public:
+  [[nodiscard]] bool open(const std::string& path, const std::string& name, double fs_hz,
+                          std::string& err);
+  /// Up to n samples into out: got, 0 at the end. False on a bad row (err).
+  [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err);
+  [[nodiscard]] double fs_hz() const { return fs_hz_; }
+  /// Samples inserted for time steps so far (all of them once read() gave 0).
+  [[nodiscard]] std::uint64_t time_gap_samples() const { return grid_.gap_samples(); }
+  [[nodiscard]] const std::string& time_name() const { return time_name_; }
+
+ private:
+  bool next_row(double& t, double& v, bool& have, std::string& err);
+  TextRows rows_;
+  std::vector<double> row_;
+  std::vector<std::pair<double, double>> head_;  // (t, value) of the rows read for the rate
+  std::size_t head_pos_ = 0;
+  std::size_t col_ = 0;
+  std::size_t time_ = 0;
+  std::string time_name_;
+  double fs_hz_ = 0.0;
+  TimeGrid grid_{1.0};
+  std::uint64_t row_no_ = 0;
+  std::uint64_t pending_missing_ = 0;  // NaNs still to give before pending_value_
+  double pending_value_ = 0.0;
+  bool have_pending_ = false;
+};
+
 /// --channel SPEC on a text table (imu/cli/args.hpp expand_channels): `all` is the IMU channels
 /// it holds, else every column but a time column (t, time, timestamp); or a comma list.
-[[nodiscard]] bool text_channels(const TextTable& table, const std::string& spec,
+[[nodiscard]] bool text_channels(const std::vector<std::string>& names, const std::string& spec,
                                  std::vector<std::string>& out, std::string& err);
 
 }  // namespace imu::cli
