@@ -72,42 +72,31 @@ bool file_rate(const imu::mat::MatFile& m, const std::string& file, const std::s
   return false;
 }
 
-// The LSB the file gives a channel: the first of imu::cli::lsb_candidates it holds (0 if none;
-// the same rule as adev and run). False with err if that variable is not a positive number.
+// The LSB the file gives a channel (imu::cli::file_lsb: the same rule as adev and run).
 bool file_lsb(const imu::mat::MatFile& m, const std::string& channel, double& lsb,
               std::string& err) {
-  lsb = 0.0;
   auto vars = m.list_variables();
   if (!vars) {
     err = vars.error().message;
     return false;
   }
-  for (const std::string& cand : imu::cli::lsb_candidates(channel)) {
-    const bool in_struct = cand.find('.') != std::string::npos;
-    const bool held = std::any_of(vars.value().begin(), vars.value().end(),
-                                  [&cand](const imu::mat::VariableInfo& v) { return v.name == cand; });
-    if (!in_struct && !held) {
-      continue;
-    }
-    auto v = m.read_scalar(cand);
-    if (!v && in_struct) {
-      continue;  // the struct has no such field
-    }
-    if (!v) {
-      err = v.error().message;
-      return false;
-    }
-    if (!(v.value() > 0.0) || !std::isfinite(v.value())) {
-      err = m.display_name();
-      err += ": ";
-      err += cand;
-      err += " is not a positive number";
-      return false;
-    }
-    lsb = v.value();
-    return true;
-  }
-  return true;
+  const auto& listed = vars.value();
+  return imu::cli::file_lsb(
+      channel, m.display_name(),
+      [&listed](const std::string& n) {
+        return std::any_of(listed.begin(), listed.end(),
+                           [&n](const imu::mat::VariableInfo& v) { return v.name == n; });
+      },
+      [&m](const std::string& n, double& v, std::string& e) {
+        auto r = m.read_scalar(n);
+        if (!r) {
+          e = r.error().message;
+          return false;
+        }
+        v = r.value();
+        return true;
+      },
+      lsb, err);
 }
 
 // --channel: NAME, a comma list, or `all` (the IMU channels the file holds, in the usual order).

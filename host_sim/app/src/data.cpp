@@ -78,37 +78,23 @@ bool read_rate(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
   return true;
 }
 
-// The LSB the file gives channel `name`: the first of imu::cli::lsb_candidates(name) it holds
-// (0 if none). False with err if that variable is not a positive number.
+// The LSB the file gives channel `name` (imu::cli::file_lsb: the rule of every command).
 template <class Reader>
 bool file_lsb_of(const Reader& mf, const std::vector<mat::VariableInfo>& vars,
                  const std::string& path, const std::string& name, double& lsb,
                  std::string& err) {
-  lsb = 0.0;
-  for (const std::string& cand : imu::cli::lsb_candidates(name)) {
-    const bool in_struct = cand.find('.') != std::string::npos;
-    if (!in_struct && find_var(vars, cand.c_str()) == nullptr) {
-      continue;
-    }
-    auto l = mf.read_scalar(cand);
-    if (!l.ok() && in_struct) {
-      continue;  // the struct has no such field
-    }
-    if (!l.ok()) {
-      err = l.error().message;
-      return false;
-    }
-    if (!(l.value() > 0.0) || !std::isfinite(l.value())) {
-      err = path;
-      err += ": ";
-      err += cand;
-      err += " is not a positive number";
-      return false;
-    }
-    lsb = l.value();
-    return true;
-  }
-  return true;
+  return imu::cli::file_lsb(
+      name, path, [&vars](const std::string& n) { return find_var(vars, n.c_str()) != nullptr; },
+      [&mf](const std::string& n, double& v, std::string& e) {
+        auto r = mf.read_scalar(n);
+        if (!r.ok()) {
+          e = r.error().message;
+          return false;
+        }
+        v = r.value();
+        return true;
+      },
+      lsb, err);
 }
 
 // A channel is one vector: an N x M matrix would be read as its first column without a word.

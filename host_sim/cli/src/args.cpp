@@ -166,6 +166,38 @@ std::vector<std::string> lsb_candidates(const std::string& channel) {
   return out;
 }
 
+bool file_lsb(const std::string& channel, const std::string& file,
+              const std::function<bool(const std::string&)>& held,
+              const std::function<bool(const std::string&, double&, std::string&)>& read,
+              double& lsb, std::string& err) {
+  lsb = 0.0;
+  for (const std::string& cand : lsb_candidates(channel)) {
+    const bool in_struct = cand.find('.') != std::string::npos;
+    if (!in_struct && !held(cand)) {
+      continue;
+    }
+    double v = 0.0;
+    std::string read_err;
+    if (!read(cand, v, read_err)) {
+      if (in_struct) {
+        continue;  // the struct has no such field
+      }
+      err = read_err;
+      return false;
+    }
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      err = file;
+      err += ": ";
+      err += cand;
+      err += " is not a positive number";
+      return false;
+    }
+    lsb = v;
+    return true;
+  }
+  return true;
+}
+
 bool expand_channels(const std::string& spec, const std::vector<std::string>& held,
                      std::vector<std::string>& out, std::string& err) {
   out.clear();

@@ -78,6 +78,15 @@ struct ChannelSpec {
 /// that is not a positive number is an error, not skipped).
 [[nodiscard]] std::vector<std::string> lsb_candidates(const std::string& channel);
 
+/// The LSB a file gives `channel` (every command the same): the first of lsb_candidates() that
+/// the file holds, 0 if none. `held(name)`: the file has a top-level variable `name` (struct
+/// fields are tried whatever it says); `read(name, value, err)`: its scalar value. False with
+/// err: a held top-level candidate cannot be read, or the value is not a positive number.
+[[nodiscard]] bool file_lsb(const std::string& channel, const std::string& file,
+                            const std::function<bool(const std::string&)>& held,
+                            const std::function<bool(const std::string&, double&, std::string&)>& read,
+                            double& lsb, std::string& err);
+
 /// The IMU channel names, in the order `--channel all` takes them.
 inline constexpr const char* kImuChannelNames[] = {"acc_x", "acc_y", "acc_z",
                                                    "gyro_x", "gyro_y", "gyro_z"};
