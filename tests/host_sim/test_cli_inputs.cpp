@@ -236,6 +236,34 @@ TEST(SimCliInputs, AdevAndAnalyzeTakeTheSameLsbFromTheFile) {
   }
 }
 
+// adev --channel all --plots DIR (issue 13 item 3: plots per axis): per channel a CSV, a
+// gnuplot script that renders from any directory, and its SVG/PNG when gnuplot is there.
+TEST(SimCliInputs, AdevPlotsEveryAxis) {
+  simtest::TempDir dir;
+  const std::string mat = dir.file("two.mat");
+  write_mat(mat, {{"acc_x", white(20000, 0.0, 0.01, 3)}, {"gyro_y", white(20000, 0.0, 0.001, 4)},
+                  {"fs", {100.0}}});
+  const std::string plots = dir.file("plots/sub");  // created
+  const auto r = run({"adev", mat, "--channel", "all", "--plots", plots});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const bool have = std::system("command -v gnuplot >/dev/null 2>&1") == 0;
+  for (const char* ch : {"acc_x", "gyro_y"}) {
+    const std::string base = plots + "/adev_" + ch;
+    EXPECT_EQ(simtest::read_text(base + ".csv").rfind("tau_s,af,adev,", 0), 0U) << ch;
+    EXPECT_NE(simtest::read_text(base + ".gp").find(ch), std::string::npos) << ch;
+    if (have) {
+      EXPECT_NE(simtest::read_text(base + ".svg").find("<svg"), std::string::npos) << ch;
+      std::string cmd = "cd / && gnuplot -e \"set terminal svg; set output '";
+      cmd += dir.file(std::string(ch) + ".svg");
+      cmd += "'\" '";
+      cmd += base;
+      cmd += ".gp' 2>/dev/null";
+      EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    }
+  }
+  EXPECT_NE(simtest::read_text(plots + "/adev_gyro_y.gp").find("[rad/s]"), std::string::npos);
+}
+
 TEST(SimCliInputs, RateOutOfRangeIsRefused) {
   simtest::TempDir dir;
   const std::vector<double> x = white(2000, 9.81, 0.01, 3);

@@ -1,11 +1,15 @@
 // imu-sim: subcommand dispatch, synth, model and adev (run is in run.cpp).
 #include "imu/sim/cli.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <new>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "common.hpp"
@@ -44,13 +48,15 @@ constexpr const char* kUsageModel =
     "  the continuous and discrete first-order model in the seed's layout\n";
 constexpr const char* kUsageAdev =
     "usage: imu-sim adev FILE [--channel acc_z|all|A,B] [--json OUT] [--csv OUT] [--lsb X]\n"
-    "                         [--fs X] [--estimator online|full]\n"
+    "                         [--fs X] [--estimator online|full] [--plots DIR]\n"
     "                         [--taus octave|decade|quarter|all]\n"
     "  ADEV of a channel, with the time it took. --channel: a variable (NAME, NAME:K column K\n"
     "  of a matrix, imu.acc_z a struct field), a comma list, or all (the channels acc_x..gyro_z\n"
     "  the file holds; a text file without them: every column but the time): the channels in\n"
     "  parallel on the machine's cores, one table each, one JSON ({\"source\", \"estimator\",\n"
-    "  \"channels\": {NAME: ...}}), one CSV with a channel column. --estimator online\n"
+    "  \"channels\": {NAME: ...}}), one CSV with a channel column, --plots DIR: a plot per\n"
+    "  channel (DIR/adev_NAME.svg/.png, its .csv and a .gp that runs from any directory; DIR\n"
+    "  is created). --estimator online\n"
     "  (default): the firmware's fixed-memory estimator (fw OnlineAdev<8,22>, partially\n"
     "  overlapping, constant memory);\n"
     "  full: the fully overlapping estimator on the whole record (allantools oadev, Stable32;\n"
@@ -523,6 +529,52 @@ std::string adev_csv_all(const std::vector<AdevResult>& rs) {
   return out;
 }
 
+// One channel's plot in `abs` (an absolute folder): adev_NAME.csv, .gp (runs from any
+// directory), and with gnuplot (`have`) .svg and .png: the ADEV with its 68.3 % intervals, the
+// unit on the axis, the name as given (noenhanced). False with err.
+bool adev_plot(const std::string& abs, bool have, const AdevResult& r, std::string& err) {
+  std::string base = "adev_";
+  for (const char ch : r.name) {
+    base += std::isalnum(static_cast<unsigned char>(ch)) != 0 || ch == '_' ? ch : '_';
+  }
+  std::string gp = "cd " + imu::cli::gnuplot_str(abs) + "\n";
+  gp += "set datafile separator ','\nset logscale xy\nset format x '10^{%L}'\n";
+  gp += "set format y '10^{%L}'\nset grid xtics ytics mxtics mytics lc rgb '#dddddd'\n";
+  gp += "set key bottom left box opaque noenhanced\nset xlabel 'tau [s]'\n";
+  gp += "set ylabel " +
+        imu::cli::gnuplot_str("Allan deviation [" + adev_unit(r.name, r.chan) + "]") +
+        " noenhanced\n";
+  gp += "set title " + imu::cli::gnuplot_str("ADEV of " + r.name + " (" + r.sd.path + ")") +
+        " noenhanced\n";
+  gp += "plot '" + base + ".csv' skip 1 using 1:3:4:5 with yerrorbars pt 7 ps 0.6 lc rgb ";
+  gp += "'#1f77b4' title 'ADEV, 68.3 % interval'\n";
+  const std::string path = abs + "/" + base;
+  if (!write_file(path + ".csv", adev_csv(r.rows), err) || !write_file(path + ".gp", gp, err)) {
+    return false;
+  }
+  if (!have) {
+    std::printf("plots: gnuplot NOT FOUND: %s.{csv,gp} written, no SVG/PNG\n", path.c_str());
+  } else if (!imu::cli::gnuplot_render(abs, base, 700)) {
+    err = "gnuplot failed on " + path + ".gp (see " + base + ".gnuplot.log)";
+    return false;
+  } else {
+    std::printf("plots: %s.{svg,png}\n", path.c_str());
+  }
+  return true;
+}
+
+// --plots DIR (created): a plot per channel (adev_plot). False with err.
+bool adev_plots(const std::string& dir, const std::vector<AdevResult>& rs, std::string& err) {
+  if (!imu::cli::make_dirs(dir, err)) {
+    return false;
+  }
+  std::error_code ec;
+  const std::string abs = std::filesystem::absolute(dir, ec).lexically_normal().string();
+  const bool have = imu::cli::gnuplot_available();
+  return std::all_of(rs.begin(), rs.end(),
+                     [&](const AdevResult& r) { return adev_plot(abs, have, r, err); });
+}
+
 // The channels --channel names: from the text file's header or the MAT-file's variables.
 bool adev_channels(const AdevOptions& o, bool text, std::vector<std::string>& names,
                    std::string& err) {
@@ -554,7 +606,7 @@ int cmd_adev(int argc, char** argv) {
   std::string err;
   const std::vector<OptSpec> specs = {{"--channel", true},   {"--json", true}, {"--lsb", true},
                                       {"--fs", true},        {"--csv", true},  {"--taus", true},
-                                      {"--estimator", true}};
+                                      {"--estimator", true}, {"--plots", true}};
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
     return fail(cmd, err, kExitUsage);
   }
@@ -594,7 +646,8 @@ int cmd_adev(int argc, char** argv) {
     print_adev(o.path, r);
   }
   if ((a.has("--json") && !write_file(a.get("--json"), adev_json(o, rs), err)) ||
-      (a.has("--csv") && !write_file(a.get("--csv"), adev_csv_all(rs), err))) {
+      (a.has("--csv") && !write_file(a.get("--csv"), adev_csv_all(rs), err)) ||
+      (a.has("--plots") && !adev_plots(a.get("--plots"), rs, err))) {
     return fail(cmd, err);
   }
   return kExitOk;

@@ -95,24 +95,6 @@ std::string fmt_stats_value(double v) {
   return s;
 }
 
-bool have_gnuplot() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
-
-bool gnuplot_has_pngcairo() {
-  return std::system("gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1") == 0;
-}
-
-std::string quote_sh(const std::string& s) {
-  std::string q = "'";
-  for (char ch : s) {
-    if (ch == '\'') {
-      q += "'\\''";
-    } else {
-      q += ch;
-    }
-  }
-  return q + "'";
-}
-
 }  // namespace
 
 std::vector<AdevRow> rows_from_points(const AdevPoint* p, std::size_t n) {
@@ -586,41 +568,23 @@ bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& 
     }
     if (!opt.plots) {
       plot_note = "plots: skipped (--no-plots); gnuplot scripts fig1_adev.gp, fig2_covariance.gp";
-    } else if (!have_gnuplot()) {
+    } else if (!imu::cli::gnuplot_available()) {
       plot_note =
           "plots: gnuplot NOT FOUND, no SVG/PNG written (install gnuplot-nox: "
           "toolchains/install-deps.sh core); the CSV files and the gnuplot scripts are there";
     } else {
-      const bool cairo = gnuplot_has_pngcairo();
-      const char* png_term = cairo ? "pngcairo size 1100,800" : "png size 1100,800";
       bool ok = true;
       for (const char* base : {"fig1_adev", "fig2_covariance"}) {
         const std::string b = base;
-        const std::string h = b == "fig1_adev" ? "700" : "900";
-        std::string svg_term;
-        appendf(svg_term, "set terminal svg size 1000,%s dynamic; set output '%s.svg'", h.c_str(),
-                b.c_str());
-        std::string png;
-        appendf(png, "set terminal %s; set output '%s.png'", png_term, b.c_str());
-        std::string cmd;
-        appendf(cmd,
-                "cd %s && gnuplot -e %s %s.gp >/dev/null 2>%s.gnuplot.log && gnuplot -e %s %s.gp "
-                ">/dev/null 2>>%s.gnuplot.log",
-                quote_sh(d).c_str(), quote_sh(svg_term).c_str(), b.c_str(), b.c_str(),
-                quote_sh(png).c_str(), b.c_str(), b.c_str());
-        if (std::system(cmd.c_str()) != 0) {
+        if (!imu::cli::gnuplot_render(d, b, b == "fig1_adev" ? 700 : 900)) {
           ok = false;
           appendf(plot_note, "plots: gnuplot failed on %s.gp (see %s.gnuplot.log)\n", b.c_str(),
                   b.c_str());
         } else {
-          std::string path;
-          appendf(path, "%s/%s", d.c_str(), b.c_str());
-          plot_files.push_back(path);
-          plot_files.back() += ".svg";
-          plot_files.push_back(path);
-          plot_files.back() += ".png";
-          path += ".gnuplot.log";
-          (void)std::remove(path.c_str());
+          for (const char* ext : {".svg", ".png"}) {
+            plot_files.push_back(d);
+            plot_files.back() += "/" + b + ext;
+          }
         }
       }
       if (ok) {

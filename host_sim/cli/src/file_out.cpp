@@ -7,7 +7,9 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
+#include <string>
 #include <vector>
 
 namespace imu::cli {
@@ -69,6 +71,40 @@ bool AtomicFileWriter::write(const void* data, std::size_t size, std::string& er
     err = "cannot write '" + path_ + "': " + std::strerror(e) + " (nothing written)";
     return false;
   }
+  return true;
+}
+
+namespace {
+
+// Single quotes for the shell.
+std::string shell_str(const std::string& s) {
+  std::string q = "'";
+  for (const char ch : s) {
+    q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+  }
+  return q + "'";
+}
+
+}  // namespace
+
+bool gnuplot_available() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
+
+bool gnuplot_render(const std::string& dir, const std::string& base, int svg_height) {
+  static const bool cairo = std::system("gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1") == 0;
+  const std::string svg = "set terminal svg size 1000," + std::to_string(svg_height) +
+                          " dynamic; set output '" + base + ".svg'";
+  const std::string png = std::string("set terminal ") +
+                          (cairo ? "pngcairo size 1100,800" : "png size 1100,800") +
+                          "; set output '" + base + ".png'";
+  const std::string log = base + ".gnuplot.log";
+  const std::string cmd = "cd " + shell_str(dir) + " && gnuplot -e " + shell_str(svg) + " " +
+                          shell_str(base + ".gp") + " >/dev/null 2>" + shell_str(log) +
+                          " && gnuplot -e " + shell_str(png) + " " + shell_str(base + ".gp") +
+                          " >/dev/null 2>>" + shell_str(log);
+  if (std::system(cmd.c_str()) != 0) {
+    return false;
+  }
+  (void)std::remove((dir + "/" + log).c_str());
   return true;
 }
 

@@ -54,6 +54,13 @@ class AtomicFileWriter {
 /// which name their files absolutely so that they run from any directory.
 [[nodiscard]] std::string gnuplot_str(const std::string& s);
 
+/// gnuplot is on the PATH.
+[[nodiscard]] bool gnuplot_available();
+/// Render DIR/BASE.gp into DIR/BASE.svg (1000 x svg_height, dynamic) and DIR/BASE.png
+/// (1100 x 800; pngcairo if this gnuplot has it), gnuplot's messages in DIR/BASE.gnuplot.log
+/// (removed on success). False if gnuplot failed on either. Runs gnuplot twice (std::system).
+[[nodiscard]] bool gnuplot_render(const std::string& dir, const std::string& base, int svg_height);
+
 }  // namespace imu::cli
 
 #endif  // IMU_CLI_FILE_OUT_HPP
