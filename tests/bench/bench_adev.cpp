@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <vector>
 
 #include "imu/online_adev.hpp"
@@ -36,6 +37,20 @@ void BM_PushPerSample(benchmark::State& state) {
 }
 BENCHMARK(BM_PushPerSample<8, 24>)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_PushPerSample<8, 22>)->Unit(benchmark::kMillisecond);
+
+// The baseline-ISA kernel (what a CPU without AVX2 + FMA runs), for comparison.
+void BM_PushPerSamplePortable(benchmark::State& state) {
+  const auto input = make_input(1U << 20U);
+  imu::OnlineAdev<8, 22> adev(0.01, 1.0);
+  for (auto _ : state) {  // NOLINT(clang-analyzer-deadcode.DeadStores): benchmark idiom
+    adev.push_block_portable(input.data(), input.size());
+    benchmark::DoNotOptimize(adev);
+  }
+  state.counters["ns_per_sample"] = benchmark::Counter(
+      static_cast<double>(state.iterations()) * static_cast<double>(input.size()),
+      benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_PushPerSamplePortable)->Unit(benchmark::kMillisecond);
 
 void BM_SixChannels(benchmark::State& state) {
   const auto input = make_input(6U << 18U);
@@ -72,6 +87,32 @@ void BM_SixChannelsFrame(benchmark::State& state) {
 }
 BENCHMARK(BM_SixChannelsFrame)->Unit(benchmark::kMillisecond);
 
+// The same six-channel batches through the baseline-ISA kernel (OnlineAdev::push_frames_portable
+// on batches of kAdevFrameBufferDefault frames, as MultiAdev::flush() would pass them).
+void BM_SixChannelsFramePortable(benchmark::State& state) {
+  constexpr std::size_t kF = imu::kAdevFrameBufferDefault;
+  using Channel = imu::OnlineAdev<8, 24>;
+  const auto input = make_input(6U << 18U);
+  Channel ch[6];
+  std::int32_t frames[kF][6];
+  for (auto _ : state) {  // NOLINT(clang-analyzer-deadcode.DeadStores): benchmark idiom
+    std::size_t n = 0;
+    for (std::size_t i = 0; i + 6 <= input.size(); i += 6) {
+      std::memcpy(frames[n], &input[i], sizeof frames[n]);
+      if (++n == kF) {
+        Channel::push_frames_portable(ch, frames, n);
+        n = 0;
+      }
+    }
+    Channel::push_frames_portable(ch, frames, n);
+    benchmark::DoNotOptimize(ch);
+  }
+  const auto samples = static_cast<double>(state.iterations()) * static_cast<double>(input.size());
+  state.counters["ns_per_sample_per_channel"] =
+      benchmark::Counter(samples, benchmark::Counter::kIsRate | benchmark::Counter::kInvert);
+}
+BENCHMARK(BM_SixChannelsFramePortable)->Unit(benchmark::kMillisecond);
+
 void BM_Snapshot(benchmark::State& state) {
   const auto input = make_input(1U << 20U);
   imu::OnlineAdev<8, 24> adev(0.01, 1.0);
@@ -105,6 +146,8 @@ void print_state_breakdown() {
 
 int main(int argc, char** argv) {
   print_state_breakdown();
+  std::printf("kernel path on this CPU (push_block, push_frames): %s\n",
+              imu::OnlineAdev<8, 22>::kernel_isa());
   benchmark::Initialize(&argc, argv);
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();

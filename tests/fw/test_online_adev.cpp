@@ -65,8 +65,9 @@ RefPoint brute_avar(const std::vector<std::int32_t>& y, const std::vector<bool>&
   return {static_cast<double>(lsbl * lsbl * sum / (2 * afl * afl * terms_l)), terms};
 }
 
-std::vector<imu::AdevPoint> snap(const Adev& a) {
-  std::vector<imu::AdevPoint> pts(Adev::kMaxPoints);
+template <typename Estimator>
+std::vector<imu::AdevPoint> snap(const Estimator& a) {
+  std::vector<imu::AdevPoint> pts(Estimator::kMaxPoints);
   pts.resize(a.snapshot(pts.data(), pts.size()));
   return pts;
 }
@@ -340,8 +341,8 @@ TEST(OnlineAdev, SnapshotRespectsCapacity) {
 TEST(OnlineAdev, StateIsSmallAndFixed) {
   // Issue 2 budget: at most 6 KiB per channel for L = 24, M = 8.
   EXPECT_LE(sizeof(imu::OnlineAdev<8, 24>), 6U * 1024U);
-  // Six channels plus push_frame's buffer of kFrames frames and its count.
-  constexpr std::size_t kBuffer = imu::OnlineAdev<8, 22>::kFrames * 6 * 4 + 8;
+  // Six channels plus push_frame's buffer of kAdevFrameBufferDefault frames and its count.
+  constexpr std::size_t kBuffer = imu::kAdevFrameBufferDefault * 6 * 4 + 8;
   EXPECT_EQ(sizeof(imu::MultiAdev<6, 8, 22>), 6 * sizeof(imu::OnlineAdev<8, 22>) + kBuffer);
 }
 
@@ -352,7 +353,8 @@ std::uint64_t bits_of(double v) {
 }
 
 // Every field of every tau, bit for bit.
-void expect_identical(const imu::OnlineAdev<8, 22>& a, const imu::OnlineAdev<8, 22>& b) {
+template <typename Estimator>
+void expect_identical(const Estimator& a, const Estimator& b) {
   EXPECT_EQ(a.samples(), b.samples());
   EXPECT_EQ(a.missing_samples(), b.missing_samples());
   EXPECT_EQ(a.gaps(), b.gaps());
@@ -374,12 +376,12 @@ void expect_identical(const imu::OnlineAdev<8, 22>& a, const imu::OnlineAdev<8, 
 // fed one sample at a time with push(): bit-identical, with gaps of random lengths at random
 // places, snapshots in between (which flush a partial buffer), more than 2^16 samples (block
 // sums closed inside a batch), small and full-scale samples, and one channel pushed on its own
-// (the fallback for channels out of step). kBuf: the push_frame buffer (frames per batch).
-template <std::size_t kBuf>
+// (the fallback for channels out of step). kBuf: the push_frame buffer (frames per batch); kCh
+// channels (their number mod 4 picks how push_frames lays them in vectors); M taus per level.
+template <std::size_t kBuf, std::size_t kCh = 6, std::size_t M = 8>
 void check_push_frame_against_push(std::size_t n_frames) {
-  constexpr std::size_t kCh = 6;
-  imu::MultiAdev<kCh, 8, 22, kBuf> multi;
-  Adev ref[kCh];
+  imu::MultiAdev<kCh, M, 22, kBuf> multi;
+  imu::OnlineAdev<M, 22> ref[kCh];
   std::mt19937_64 rng(2024);
   std::uniform_int_distribution<std::int32_t> small(-3000, 3000);
   std::uniform_int_distribution<std::int32_t> full(std::numeric_limits<std::int32_t>::min(),
@@ -403,9 +405,9 @@ void check_push_frame_against_push(std::size_t n_frames) {
     } else if (e == 3) {
       expect_identical(multi.channel(f % kCh), ref[f % kCh]);  // flushes a partial buffer
     }
-    if (f == n_frames * 2U / 3U) {  // channel 2 alone gets an extra sample: channels out of step
-      multi.channel(2).push(17);
-      ref[2].push(17);
+    if (f == n_frames * 2U / 3U) {  // one channel alone gets an extra sample: out of step
+      multi.channel(kCh / 2).push(17);
+      ref[kCh / 2].push(17);
     }
   }
   for (std::size_t c = 0; c < kCh; ++c) {
@@ -421,6 +423,74 @@ TEST(MultiAdev, PushFrameIsBitIdenticalToPerChannelPush) {
 TEST(MultiAdev, PushFrameWithSmallBuffersIsBitIdenticalToo) {
   check_push_frame_against_push<7>(80000U);  // batches of 7: levels 0 and 1 batched
   check_push_frame_against_push<1>(20000U);  // no batching: every frame by push_point
+  check_push_frame_against_push<64>(80000U);  // the 32-bit targets' default
+}
+
+// Every channel count mod 4 (2 and 6 share a vector between two taus' last two channels; 1, 3,
+// 5, 7 and 9 read past the row; 4 and 8 fill their vectors), and M = 6, whose upper levels have
+// an odd number of taus (3: the last one shares a vector with itself).
+TEST(MultiAdev, PushFrameIsBitIdenticalForAnyChannelCountAndM) {
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 1>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 2>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 3>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 4>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 5>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 7>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 8>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 9>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 10>(40000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 6, 6>(80000U);
+  check_push_frame_against_push<imu::kAdevFrameBufferDefault, 2, 6>(40000U);
+}
+
+// The CPU-selected kernel (AVX2 + FMA on most x86-64 machines) against the baseline-ISA one: the
+// same doubles, bit for bit, for push_block (single channel) and push_frames, with full-scale
+// samples and gaps. On a CPU without AVX2 + FMA both calls take the portable path (printed).
+TEST(OnlineAdev, DispatchedKernelIsBitIdenticalToPortable) {
+  std::printf("kernel path on this CPU: %s\n", Adev::kernel_isa());
+  std::mt19937_64 rng(77);
+  std::uniform_int_distribution<std::int32_t> full(std::numeric_limits<std::int32_t>::min(),
+                                                   std::numeric_limits<std::int32_t>::max());
+  std::uniform_int_distribution<std::int32_t> small(-5000, 5000);
+  std::vector<std::int32_t> y(400000);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    y[i] = (i / 50000) % 3 == 1 ? full(rng) : small(rng);
+  }
+  Adev fast;
+  Adev portable;
+  for (std::size_t i = 0; i < y.size();) {
+    const std::size_t n = std::min<std::size_t>(1 + rng() % 3000, y.size() - i);
+    fast.push_block(y.data() + i, n);
+    portable.push_block_portable(y.data() + i, n);
+    i += n;
+    if (rng() % 8 == 0) {
+      const std::uint64_t gap = 1 + rng() % 40;
+      fast.mark_missing(gap);
+      portable.mark_missing(gap);
+    }
+  }
+  expect_identical(fast, portable);
+
+  constexpr std::size_t kCh = 6;
+  constexpr std::size_t kF = Adev::kFrames;
+  Adev ch_fast[kCh];
+  Adev ch_portable[kCh];
+  std::int32_t frames[kF][kCh];
+  for (std::size_t done = 0; done < 200000;) {
+    const std::size_t n = 1 + rng() % kF;
+    for (std::size_t f = 0; f < n; ++f) {
+      for (auto& v : frames[f]) {
+        v = done > 100000 && done < 120000 ? full(rng) : small(rng);
+      }
+    }
+    Adev::push_frames(ch_fast, frames, n);
+    Adev::push_frames_portable(ch_portable, frames, n);
+    done += n;
+  }
+  for (std::size_t c = 0; c < kCh; ++c) {
+    SCOPED_TRACE(c);
+    expect_identical(ch_fast[c], ch_portable[c]);
+  }
 }
 
 TEST(Quantize, RoundsAndSaturates) {
