@@ -2,12 +2,17 @@
 // [--yaml IMU.yaml]`, on the command-line parser and exit codes every imu-sim subcommand
 // shares (host_sim/cli).
 #include <algorithm>
+#include <iterator>
 #include <atomic>
 #include <cmath>
 #include <cstdio>
+#include <cstdint>
 #include <cstdlib>
+#include <limits>
+#include <memory>
 #include <new>
 #include <string>
+#include <string_view>
 #include <system_error>
 #include <thread>
 #include <vector>
@@ -15,6 +20,7 @@
 #include "imu/analyze/analyze.hpp"
 #include "imu/cli/args.hpp"
 #include "imu/cli/file_out.hpp"
+#include "imu/cli/json.hpp"
 #include "imu/cli/text_input.hpp"
 #include "imu/mat/mat_reader.hpp"
 
@@ -37,9 +43,56 @@ constexpr const char* kUsage =
     "  object as before). --yaml: Kalibr's imu.yaml (needs acc* and gyro* channels). --fs (else\n"
     "  the file's fs or Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
     "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
-    "  the report's `gaps`). --plots DIR is created if missing.\n"
+    "  the report's `gaps`). --plots DIR is created if missing. A MAT channel longer than 2^22\n"
+    "  samples is analysed on block means of 2^k samples (said in the report); the file is\n"
+    "  read in chunks, never whole.\n"
     "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
     "processed, failed write, out of memory), 2 command-line error\n";
+
+// The file's variables through the streaming reader: headers, scalars and the analysed columns
+// are read as needed, never the file whole (a long record's file image would be the largest
+// thing in memory). The variable list is scanned once.
+class StreamedFile {
+ public:
+  explicit StreamedFile(std::string path) : path_(std::move(path)) {}
+  [[nodiscard]] const std::string& display_name() const { return path_; }
+  [[nodiscard]] imu::mat::Result<std::vector<imu::mat::VariableInfo>> list_variables() const {
+    if (!listed_) {
+      listed_ = std::make_unique<imu::mat::Result<std::vector<imu::mat::VariableInfo>>>(
+          imu::mat::scan_variables(path_));
+    }
+    return *listed_;
+  }
+  [[nodiscard]] imu::mat::Result<double> read_scalar(std::string_view name) const {
+    return imu::mat::stream_scalar(path_, name);
+  }
+  // A whole column, read in chunks from the stream (its checks and messages).
+  [[nodiscard]] imu::mat::Result<std::vector<double>> read_column(std::string_view name,
+                                                                  std::size_t column) const {
+    auto st = imu::mat::ChannelStream::open(path_, name, column);
+    if (!st) {
+      return st.error();
+    }
+    std::vector<double> out;
+    out.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(st.value().size(), 1U << 22U)));
+    double chunk[4096];
+    for (;;) {
+      auto got = st.value().read(chunk, std::size(chunk));
+      if (!got) {
+        return got.error();
+      }
+      if (got.value() == 0) {
+        break;
+      }
+      out.insert(out.end(), chunk, chunk + got.value());
+    }
+    return out;
+  }
+
+ private:
+  std::string path_;
+  mutable std::unique_ptr<imu::mat::Result<std::vector<imu::mat::VariableInfo>>> listed_;
+};
 
 int fail(const std::string& msg, int status) {
   std::fprintf(stderr, "imu-sim analyze: %s\n", msg.c_str());
@@ -48,7 +101,7 @@ int fail(const std::string& msg, int status) {
 
 // The rate: --fs, else the file's `fs`, else its `Fs`.
 // `scope`: the struct holding the channels (`imu` of `imu.acc_z`): its fs/Fs come first.
-bool file_rate(const imu::mat::MatFile& m, const std::string& file, const std::string& scope,
+bool file_rate(const StreamedFile& m, const std::string& file, const std::string& scope,
                double& fs_hz, std::string& err) {
   const std::string in = scope.empty() ? std::string() : scope + ".";
   std::string found;
@@ -73,7 +126,7 @@ bool file_rate(const imu::mat::MatFile& m, const std::string& file, const std::s
 }
 
 // The LSB the file gives a channel (imu::cli::file_lsb: the same rule as adev and run).
-bool file_lsb(const imu::mat::MatFile& m, const std::string& channel, double& lsb,
+bool file_lsb(const StreamedFile& m, const std::string& channel, double& lsb,
               std::string& err) {
   auto vars = m.list_variables();
   if (!vars) {
@@ -100,7 +153,7 @@ bool file_lsb(const imu::mat::MatFile& m, const std::string& channel, double& ls
 }
 
 // --channel: NAME, a comma list, or `all` (the IMU channels the file holds, in the usual order).
-bool resolve_channels(const imu::mat::MatFile& m, const std::string& file,
+bool resolve_channels(const StreamedFile& m, const std::string& file,
                       const std::string& spec, std::vector<std::string>& out, std::string& err) {
   std::vector<std::string> held;
   if (spec == "all") {
@@ -120,11 +173,60 @@ bool resolve_channels(const imu::mat::MatFile& m, const std::string& file,
   return true;
 }
 
+// Records longer than this are analysed on block means: the analysis keeps several doubles per
+// sample (about 100 bytes in flight), so 2^22 samples (11.6 h at 100 Hz) is ~0.4 GB per channel
+// whatever the record's length. The shared records (10^6 samples) stay at full rate.
+constexpr std::uint64_t kMaxAnalysedSamples = std::uint64_t{1} << 22;
+
+// Block means of `block` consecutive samples of the stream, read in chunks (nothing of the
+// record is held but the means). A block with fewer than half of its samples finite is a gap
+// (NaN); a last, partial block is dropped (`dropped`: its samples).
+bool read_block_means(imu::mat::ChannelStream& st, std::uint64_t block, std::vector<double>& out,
+                      std::uint64_t& dropped, std::string& err) {
+  std::vector<double> buf(std::size_t{1} << 16U);
+  out.clear();
+  out.reserve(static_cast<std::size_t>(st.size() / block));
+  double sum = 0.0;
+  std::uint64_t finite = 0;
+  std::uint64_t in_block = 0;
+  for (;;) {
+    auto got = st.read(buf.data(), buf.size());
+    if (!got) {
+      err = got.error().message;
+      return false;
+    }
+    if (got.value() == 0) {
+      break;
+    }
+    for (std::size_t i = 0; i < got.value(); ++i) {
+      if (std::isfinite(buf[i])) {
+        sum += buf[i];
+        ++finite;
+      }
+      if (++in_block == block) {
+        out.push_back(2 * finite >= block ? sum / static_cast<double>(finite)
+                                          : std::numeric_limits<double>::quiet_NaN());
+        sum = 0.0;
+        finite = 0;
+        in_block = 0;
+      }
+    }
+  }
+  dropped = in_block;
+  return true;
+}
+
 // NAME or NAME:K (column K, 1-based as in Octave, of a matrix NAME). A matrix named without a
-// column is refused (reading its first column silently was a wrong answer).
-bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vector<double>& out,
-                  bool& integer_class, std::string& err) {
+// column is refused (reading its first column silently was a wrong answer). A record longer
+// than kMaxAnalysedSamples comes back as block means of `block` samples (a power of two, the
+// smallest that brings it under the limit; 1 otherwise), with the samples a last partial block
+// dropped.
+bool read_channel(const StreamedFile& m, const std::string& spec, std::vector<double>& out,
+                  bool& integer_class, std::uint64_t& block, std::uint64_t& dropped,
+                  std::string& err) {
   integer_class = false;
+  block = 1;
+  dropped = 0;
   imu::cli::ChannelSpec cs;
   if (!imu::cli::parse_channel_spec(spec, cs, err)) {
     return false;
@@ -159,6 +261,23 @@ bool read_channel(const imu::mat::MatFile& m, const std::string& spec, std::vect
       return false;
     }
   }
+  std::uint64_t n = 0;
+  for (const auto& v : listed) {
+    if (v.name == name) {
+      n = has_column ? v.rows : v.rows * v.cols;
+    }
+  }
+  while (n / block > kMaxAnalysedSamples) {
+    block *= 2;
+  }
+  if (block > 1) {
+    auto st = imu::mat::ChannelStream::open(m.display_name(), name, column);
+    if (!st) {
+      err = st.error().message;
+      return false;
+    }
+    return read_block_means(st.value(), block, out, dropped, err);
+  }
   auto col = m.read_column(name, column);
   if (!col) {
     err = col.error().message;
@@ -180,6 +299,7 @@ struct Job {
   bool counts_scaled = false;    // an integer variable, multiplied by its LSB
   bool counts_unscaled = false;  // an integer variable without an LSB: counts
   std::string text_note;         // where a text file's rate and gaps came from
+  std::string block_note;        // a long record analysed on block means
   std::vector<double> samples;
   Options o;
   Report r;
@@ -220,6 +340,9 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const st
     }
     if (!j.text_note.empty()) {
       j.r.notes.insert(j.r.notes.begin(), j.text_note);
+    }
+    if (!j.block_note.empty()) {
+      j.r.notes.insert(j.r.notes.begin(), j.block_note);
     }
     if (j.counts_scaled) {
       j.r.notes.insert(j.r.notes.begin(), "the variable holds integer counts: analysed as counts x "
@@ -320,11 +443,10 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
     }
     return finish(file, jobs, lsb, json, plots, yaml);
   }
-  auto mf = imu::mat::MatFile::open(file);
-  if (!mf) {
-    return fail(mf.error().message, kExitRuntime);
+  const StreamedFile m(file);
+  if (auto listed = m.list_variables(); !listed) {
+    return fail(listed.error().message, kExitRuntime);
   }
-  const imu::mat::MatFile& m = mf.value();
   std::vector<std::string> channels;
   if (!resolve_channels(m, file, channel_spec, channels, err)) {
     return fail(err, kExitRuntime);
@@ -344,7 +466,9 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
   std::vector<Job> jobs(channels.size());
   for (std::size_t i = 0; i < channels.size(); ++i) {
     bool integer_class = false;
-    if (!read_channel(m, channels[i], jobs[i].samples, integer_class, err)) {
+    std::uint64_t block = 1;
+    std::uint64_t dropped = 0;
+    if (!read_channel(m, channels[i], jobs[i].samples, integer_class, block, dropped, err)) {
       return fail(err, kExitRuntime);
     }
     jobs[i].channel = channels[i];
@@ -362,6 +486,24 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
       jobs[i].counts_scaled = true;
     } else if (integer_class) {
       jobs[i].counts_unscaled = true;
+    }
+    if (block > 1) {
+      // Means of B samples on an LSB grid lie on a grid B times finer; the rate is B times lower.
+      const std::uint64_t n = jobs[i].samples.size() * block + dropped;
+      jobs[i].o.fs_hz = o.fs_hz / static_cast<double>(block);
+      if (jobs[i].o.lsb > 0.0) {
+        jobs[i].o.lsb /= static_cast<double>(block);
+      }
+      jobs[i].block_note =
+          "long record: its " + std::to_string(n) + " samples analysed as " +
+          std::to_string(jobs[i].samples.size()) + " means of " + std::to_string(block) +
+          " samples (rate " + imu::cli::json_num(jobs[i].o.fs_hz) + " Hz" +
+          (dropped > 0 ? ", the last " + std::to_string(dropped) + " samples dropped" : "") +
+          ") to keep memory bounded: taus below " +
+          imu::cli::json_num(static_cast<double>(block) / o.fs_hz) +
+          " s, quantisation and effects faster than " +
+          imu::cli::json_num(jobs[i].o.fs_hz / 2.0) +
+          " Hz are not resolved here (imu-sim adev gives the full-rate ADEV in constant memory)";
     }
   }
   return finish(file, jobs, lsb, json, plots, yaml);
