@@ -11,14 +11,19 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "imu/analyze/analyze.hpp"
 #include "imu/analyze/synth.hpp"
 #include "imu/mat/mat_writer.hpp"
 
 namespace {
 
+// ctest runs each test in its own process, several at once: the pid keeps one test's input
+// from being rewritten by another's SetUp while the streamed reader is still inside it.
 std::string tmp_path(const std::string& name) {
-  return std::string(::testing::TempDir()) + "imu_analyze_" + name;
+  return std::string(::testing::TempDir()) + "imu_analyze_" + std::to_string(::getpid()) + "_" +
+         name;
 }
 
 int call(std::vector<std::string> args) {
@@ -63,6 +68,7 @@ class AnalyzeCli : public ::testing::Test {
             static_cast<std::streamsize>(w.bytes().size()));
     ASSERT_TRUE(f.good());
   }
+  void TearDown() override { std::remove(mat_.c_str()); }
   std::string mat_;
 };
 

@@ -13,6 +13,8 @@
 #include <string>
 #include <vector>
 
+#include <unistd.h>
+
 #include "imu/mat/mat_reader.hpp"
 #include "imu/mat/mat_writer.hpp"
 
@@ -160,7 +162,7 @@ TEST(MatWriter, ColumnInPiecesIsTheSameFile) {
 }
 
 TEST(MatWriter, SaveAndReadBackFromDisk) {
-  const std::string path = ::testing::TempDir() + "imu_mat_writer_test.mat";
+  const std::string path = ::testing::TempDir() + "imu_mat_writer_test_" + std::to_string(::getpid()) + ".mat";
   MatWriter w(WriterOptions{true});
   ASSERT_TRUE(w.add_column("acc_z", {1.0, 2.0, 3.0}).ok());
   ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
