@@ -212,7 +212,7 @@ struct FilterRun {
   double whiteness_flagged = 0.0;  // fraction of WhitenessMonitor blocks above the bound
   std::size_t states = 0;
   std::vector<double> nu;    // normalised innovation per sample (0 when not updated)
-  std::vector<double> pred;  // predicted measurement per sample
+  std::vector<double> pred;  // predicted measurement per sample (empty unless asked for)
 };
 
 constexpr std::size_t kStates = kModelMaxStates;
@@ -351,10 +351,12 @@ bool steady_state_covariance(const Model& d, std::size_t n, double r, Dense& x) 
 // time-varying Kalman filter once that has converged (a few of the slowest correlation times);
 // the steady gain costs O(n^2) per sample instead of O(n^3).
 FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<double>& y,
-                     double known, const std::vector<std::uint8_t>* skip) {
+                     double known, const std::vector<std::uint8_t>* skip, bool want_pred) {
   FilterRun out;
   out.nu.assign(y.size(), 0.0);
-  out.pred.assign(y.size(), known);
+  if (want_pred) {
+    out.pred.assign(y.size(), known);
+  }
   Model d;
   if (!discretize_params(stochastic_part(p_full), ts, d)) {
     return out;
@@ -412,7 +414,9 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
       hx += d.h(0, a) * v;
     }
     st.swap(tmp);
-    out.pred[i] = known + hx;
+    if (want_pred) {
+      out.pred[i] = known + hx;
+    }
     const bool tv = i < burn_in;
     double s_i = s;
     if (tv) {  // P = Phi P Phi' + Q, gain from it
@@ -1672,9 +1676,11 @@ namespace {
 // the earlier ones left; analyze() runs them in order.
 class Analysis {
  public:
-  Analysis(const std::vector<double>& y_in_, const std::string& channel_, const Options& o_,
+  // The record is taken by value: moved in by the analyze() that consumes it, copied once by
+  // the one that does not. It is the analysis' y0, then its y: no other copy of it is kept.
+  Analysis(std::vector<double> y_in_, const std::string& channel_, const Options& o_,
            Report& out_, std::string& error_)
-      : y_in(y_in_), channel(channel_), o(o_), out(out_), error(error_) {}
+      : y0(std::move(y_in_)), channel(channel_), o(o_), out(out_), error(error_) {}
 
   bool run() {
     if (!prepare() || !fit_before()) {
@@ -1701,19 +1707,19 @@ class Analysis {
     out = Report{};
     out.channel = channel;
     out.fs_hz = o.fs_hz;
-    out.samples = y_in.size();
+    const std::size_t n_in = y0.size();
+    out.samples = n_in;
     if (!(o.fs_hz > 0.0) || !std::isfinite(o.fs_hz)) {
       error = "analyze: sample rate must be > 0 (got " + fmt("%g", o.fs_hz) + ")";
       return false;
     }
-    if (y_in.size() < 1000) {
-      error = "analyze: channel '" + channel + "' has " + std::to_string(y_in.size()) +
+    if (n_in < 1000) {
+      error = "analyze: channel '" + channel + "' has " + std::to_string(n_in) +
               " samples; at least 1000 are needed";
       return false;
     }
     // Non-finite samples are gaps: the ADEV marks them missing, the filters skip them, and the
     // time-domain steps see them filled by interpolation.
-    y0 = y_in;
     if (!fill_gaps(y0, gap, out.gap_samples, out.gap_runs)) {
       error = "analyze: channel '" + channel + "' has no finite sample";
       return false;
@@ -1723,14 +1729,14 @@ class Analysis {
                           std::to_string(out.gap_runs) +
                           " gaps: marked missing in the ADEV, skipped by the filters");
     }
-    if (static_cast<double>(out.gap_samples) > 0.5 * static_cast<double>(y_in.size())) {
+    if (static_cast<double>(out.gap_samples) > 0.5 * static_cast<double>(n_in)) {
       error = "analyze: channel '" + channel + "' is more than half gaps (" +
-              std::to_string(out.gap_samples) + " of " + std::to_string(y_in.size()) +
+              std::to_string(out.gap_samples) + " of " + std::to_string(n_in) +
               " samples are not finite)";
       return false;
     }
     ts = 1.0 / o.fs_hz;
-    n_d = static_cast<double>(y_in.size());
+    n_d = static_cast<double>(n_in);
     t_rec = n_d * ts;
     tau_max = o.tau_max_fraction * t_rec;
     offset = y0[0];
@@ -1742,10 +1748,11 @@ class Analysis {
       // the data's lattice.
       std::vector<double> finite;
       if (out.gap_samples > 0) {
-        finite.reserve(y_in.size() - out.gap_samples);
-        for (const double v : y_in) {
-          if (std::isfinite(v)) {
-            finite.push_back(v);
+        // fill_gaps changed only the samples it marked: the others are the recorded ones.
+        finite.reserve(n_in - out.gap_samples);
+        for (std::size_t i = 0; i < n_in; ++i) {
+          if (gap[i] == 0) {
+            finite.push_back(y0[i]);
           }
         }
       }
@@ -1781,7 +1788,7 @@ class Analysis {
     }
     out.adev = raw.by_alpha[2];
     const double known_raw = initial_level(y0);
-    fb = run_filter(out.model_before, ts, y0, known_raw, gap.empty() ? nullptr : &gap);
+    fb = run_filter(out.model_before, ts, y0, known_raw, gap.empty() ? nullptr : &gap, true);
     fill_errors(raw_pts_b, out.model_before, o, ts, tau_max, out.error_before);
     out.error_before.nis_mean = fb.nis_mean;
     out.error_before.nis_flagged_fraction = fb.nis_flagged;
@@ -1793,7 +1800,9 @@ class Analysis {
 
   void find_outliers() {
     // ---- time domain: outliers on the before filter's innovations (gaps are skipped like them)
-    y = y0;
+    // y0 is not read again: y takes its storage.
+    y = std::move(y0);
+    y0 = std::vector<double>{};
     outlier = gap.empty() ? std::vector<std::uint8_t>(y.size(), 0) : gap;
     bool outliers_replaced = false;
     {
@@ -2381,7 +2390,9 @@ class Analysis {
     drop_degenerate_effects(ts, n_d, out);
     // The filter sees the record without the deterministic terms the model holds (their
     // least-squares estimates): sinusoids, and the least-squares line for a ramp.
-    std::vector<double> y_det = cur_p.sin_a > 0.0 ? y_fit : y;
+    // y_fit is not read again: with a sinusoid, y_det takes its storage.
+    std::vector<double> y_det = cur_p.sin_a > 0.0 ? std::move(y_fit) : y;
+    y_fit = std::vector<double>{};
     if (cur_p.r > 0.0) {
       remove_line(y_det, ts);
     }
@@ -2391,7 +2402,8 @@ class Analysis {
       y_det[i] += d;
     }
     const double known_clean = initial_level(y_det);
-    const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier);
+    const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier, false);
+    y_det = std::vector<double>{};
     confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, out);
     out.error_after.nis_mean = fa.nis_mean;
     out.error_after.nis_flagged_fraction = fa.nis_flagged;
@@ -2406,15 +2418,14 @@ class Analysis {
     out.cpu_seconds = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
   }
 
-  const std::vector<double>& y_in;
+  // prepare
+  std::vector<double> y0;  // the record, gaps filled (until find_outliers moves it into y)
   const std::string& channel;
   const Options& o;
   Report& out;
   std::string& error;
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
   std::clock_t c0 = std::clock();
-  // prepare
-  std::vector<double> y0;          // the record, gaps filled
   std::vector<std::uint8_t> gap;   // 1 at a non-finite sample
   double ts = 0.0;
   double n_d = 0.0;
@@ -2461,6 +2472,12 @@ class Analysis {
 bool analyze(const std::vector<double>& y_in, const std::string& channel, const Options& o,
              Report& out, std::string& error) {
   Analysis a(y_in, channel, o, out, error);
+  return a.run();
+}
+
+bool analyze(std::vector<double>&& y_in, const std::string& channel, const Options& o,
+             Report& out, std::string& error) {
+  Analysis a(std::move(y_in), channel, o, out, error);
   return a.run();
 }
 

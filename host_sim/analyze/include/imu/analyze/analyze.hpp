@@ -138,6 +138,11 @@ struct Report {
 [[nodiscard]] bool analyze(const std::vector<double>& y, const std::string& channel,
                            const Options& options, Report& out, std::string& error);
 
+/// The same analysis, consuming the record: its storage becomes the analysis' working copy (one
+/// record-length vector fewer in flight; `y` is left empty).
+[[nodiscard]] bool analyze(std::vector<double>&& y, const std::string& channel,
+                           const Options& options, Report& out, std::string& error);
+
 /// LSB for data without one (non-finite values ignored): the smallest difference between
 /// distinct values (values within 1e-9 of max |y| are one value: floating-point residue of
 /// scaling or differencing) when every value lies on that lattice from the smallest (within
