@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Peak RSS and wall time of `imu-sim synth`, `adev` and `run` on synthesised records of 10^6,
-# 10^7, ... samples (issue 14: memory flat in the record's length, <= 64 MB at 10^8). Not a
-# test (ctest does not run it): it prints figures, with the load average, for the README.
+# Peak RSS and wall time of `imu-sim synth`, `adev`, `run` and `analyze` on synthesised records
+# of 10^6, 10^7, ... samples (issue 14: memory flat in the record's length, <= 64 MB at 10^8 for
+# adev and run; analyze bounded by its 2^22 analysed samples, block means beyond). Not a test
+# (ctest does not run it): it prints figures, with the load average, for the README.
 #
 #   tests/bench/bench_scale.sh [MAX_EXP [RUN_MAX_EXP]]
 #     MAX_EXP      largest record, 10^MAX_EXP samples (default 8: 800 MB on disk, deleted after)
@@ -47,8 +48,8 @@ measure() {
 
 echo "imu-sim: $imu_sim ($(git -C "$(dirname "$0")" rev-parse --short HEAD 2>/dev/null || echo '?'))"
 echo "machine: $(nproc) cores, load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
-printf '%-10s %8s | %-17s | %-26s | %-17s\n' samples file_MB "synth RSS_MB wall_s" \
-  "adev RSS_MB wall_s MB/s" "run RSS_MB wall_s"
+printf '%-10s %8s | %-17s | %-26s | %-17s | %-17s\n' samples file_MB "synth RSS_MB wall_s" \
+  "adev RSS_MB wall_s MB/s" "run RSS_MB wall_s" "analyze RSS wall"
 for ((e = 6; e <= max_exp; ++e)); do
   n=$((10**e))
   mat="$dir/rec_1e$e.mat"
@@ -64,14 +65,18 @@ for ((e = 6; e <= max_exp; ++e)); do
       --out "$dir/run" --quiet --no-plots
     run_rss=$rss_mb run_wall=$wall_s
   fi
-  printf '%-10s %8s | %8s %8s | %8s %8s %8s | %8s %8s\n' "1e$e" "$file_mb" "$synth_rss" \
-    "$synth_wall" "$adev_rss" "$adev_wall" "$adev_mbs" "$run_rss" "$run_wall"
+  measure analyze "$imu_sim" analyze "$mat" --channel acc_z
+  analyze_rss=$rss_mb analyze_wall=$wall_s
+  printf '%-10s %8s | %8s %8s | %8s %8s %8s | %8s %8s | %8s %8s\n' "1e$e" "$file_mb" \
+    "$synth_rss" "$synth_wall" "$adev_rss" "$adev_wall" "$adev_mbs" "$run_rss" "$run_wall" \
+    "$analyze_rss" "$analyze_wall"
   rm -f "$mat"
 done
 # Text input (CSV with a time column), streamed as MAT-files are: 10^6 and 10^7 rows (10^8
 # rows of text is ~1.6 GB; TEXT_MAX_EXP=8 to include it).
 text_max_exp=${TEXT_MAX_EXP:-7}
-printf '%-10s %8s | %-26s\n' rows file_MB "adev (CSV) RSS_MB wall_s MB/s"
+printf '%-10s %8s | %-26s | %-17s\n' rows file_MB "adev (CSV) RSS_MB wall_s MB/s" \
+  "analyze RSS wall"
 for ((e = 6; e <= text_max_exp; ++e)); do
   n=$((10**e))
   csv="$dir/rec_1e$e.csv"
@@ -80,7 +85,10 @@ for ((e = 6; e <= text_max_exp; ++e)); do
   file_mb=$(awk -v b="$(stat -c %s "$csv")" 'BEGIN { printf "%.0f", b / 1e6 }')
   measure adev_text "$imu_sim" adev "$csv" --channel acc_z --lsb 1e-4
   mbs=$(awk -v m="$file_mb" -v t="$wall_s" 'BEGIN { printf "%.0f", (t > 0) ? m / t : 0 }')
-  printf '%-10s %8s | %8s %8s %8s\n' "1e$e" "$file_mb" "$rss_mb" "$wall_s" "$mbs"
+  adev_rss=$rss_mb adev_wall=$wall_s
+  measure analyze_text "$imu_sim" analyze "$csv" --channel acc_z --lsb 1e-4
+  printf '%-10s %8s | %8s %8s %8s | %8s %8s\n' "1e$e" "$file_mb" "$adev_rss" "$adev_wall" \
+    "$mbs" "$rss_mb" "$wall_s"
   rm -f "$csv"
 done
 echo "load average at end: $(cut -d' ' -f1-3 /proc/loadavg)"

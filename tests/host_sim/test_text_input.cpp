@@ -220,6 +220,64 @@ TEST(TextInput, StreamAndWholeTableGiveTheSameGrid) {
   EXPECT_EQ(err, whole_err);
 }
 
+// Several columns in one pass (analyze reads every channel of a text file so): sample i is one
+// value per column, in the order asked, and each column is the grid text_channel gives it, past
+// the rows that decide the rate too (time gaps, an empty field).
+TEST(TextInput, SeveralColumnsInOnePassAreEachColumnsGrid) {
+  simtest::TempDir dir;
+  const std::string f = dir.file("three.csv");
+  const std::size_t rows = 2 * imu::cli::kRateRows + 77;
+  {
+    std::ofstream o(f);
+    o << "a,t,b\n";
+    double t = 0.0;
+    for (std::size_t i = 0; i < rows; ++i) {
+      t += (i % 97 == 96) ? 0.03 : 0.01;  // two samples missing, now and then
+      if (i == rows - 40) {
+        o << "," << t << "," << i << "\n";  // a missing field in one column only
+      } else {
+        o << (static_cast<double>(i) * 0.25) << "," << t << "," << i << "\n";
+      }
+    }
+  }
+  imu::cli::TextTable table;
+  std::string err;
+  ASSERT_TRUE(imu::cli::read_text_table(f, table, err)) << err;
+  imu::cli::TextChannel ta;
+  imu::cli::TextChannel tb;
+  ASSERT_TRUE(imu::cli::text_channel(table, "a", 0.0, ta, err)) << err;
+  ASSERT_TRUE(imu::cli::text_channel(table, "b", 0.0, tb, err)) << err;
+  ASSERT_EQ(ta.samples.size(), tb.samples.size());
+  ASSERT_GT(ta.time_gap_samples, 0U);
+  const auto same = [](double got, double want) {
+    return std::isnan(want) ? std::isnan(got) : !(got < want || got > want);
+  };
+  for (const std::size_t chunk : {std::size_t{1}, std::size_t{7}, std::size_t{4096}}) {
+    imu::cli::TextColumnStream st;
+    ASSERT_TRUE(st.open(f, std::vector<std::string>{"b", "a"}, 0.0, err)) << err;
+    ASSERT_EQ(st.columns(), 2U);
+    EXPECT_EQ(st.fs_hz(), ta.fs_hz);
+    std::vector<double> buf(2 * chunk);
+    std::size_t got = 0;
+    std::size_t at = 0;
+    std::size_t wrong = 0;
+    while (st.read(buf.data(), chunk, got, err) && got > 0) {
+      for (std::size_t i = 0; i < got && at + i < ta.samples.size(); ++i) {
+        wrong += same(buf[2 * i], tb.samples[at + i]) ? 0U : 1U;
+        wrong += same(buf[2 * i + 1], ta.samples[at + i]) ? 0U : 1U;
+      }
+      at += got;
+    }
+    ASSERT_TRUE(err.empty()) << err;
+    EXPECT_EQ(at, ta.samples.size()) << "chunk " << chunk;
+    EXPECT_EQ(wrong, 0U) << "chunk " << chunk;
+    EXPECT_EQ(st.time_gap_samples(), ta.time_gap_samples);
+  }
+  imu::cli::TextColumnStream st;
+  EXPECT_FALSE(st.open(f, std::vector<std::string>{"a", "q"}, 0.0, err));
+  EXPECT_EQ(err, "no column 'q'; the columns: a, t, b");
+}
+
 // A text file longer than the rows that decide the rate (kRateRows) gives adev the same ADEV,
 // number for number, as the same samples in a MAT-file: the text is streamed, not held.
 TEST(TextInput, LongTextGivesTheMatFilesAdev) {

@@ -43,9 +43,9 @@ constexpr const char* kUsage =
     "  object as before). --yaml: Kalibr's imu.yaml (needs acc* and gyro* channels). --fs (else\n"
     "  the file's fs or Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
     "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
-    "  the report's `gaps`). --plots DIR is created if missing. A MAT channel longer than 2^22\n"
-    "  samples is analysed on block means of 2^k samples (said in the report); the file is\n"
-    "  read in chunks, never whole.\n"
+    "  the report's `gaps`). --plots DIR is created if missing. A channel longer than 2^22\n"
+    "  samples is analysed on block means of 2^k samples (said in the report); the file (MAT\n"
+    "  or text) is read in chunks, never whole.\n"
     "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
     "processed, failed write, out of memory), 2 command-line error\n";
 
@@ -174,21 +174,81 @@ bool resolve_channels(const StreamedFile& m, const std::string& file,
 }
 
 // Records longer than this are analysed on block means: the analysis keeps several doubles per
-// sample (about 100 bytes in flight), so 2^22 samples (11.6 h at 100 Hz) is ~0.4 GB per channel
+// sample (about 40 bytes in flight), so 2^22 samples (11.6 h at 100 Hz) is ~0.16 GB per channel
 // whatever the record's length. The shared records (10^6 samples) stay at full rate.
 constexpr std::uint64_t kMaxAnalysedSamples = std::uint64_t{1} << 22;
 
+// Samples in, means of blocks of B consecutive samples out, one rule for every input: a block
+// with fewer than half of its samples finite is a gap (NaN); a last, partial block is dropped.
+// B starts at `block` (a power of two) and doubles whenever the complete blocks would pass
+// kMaxAnalysedSamples: a block of 2B is two aligned blocks of B, whose sums and finite counts
+// are merged, so the means are those of blocks of the final B read directly, for a record of
+// unknown length (a text stream). B = 1 gives the samples themselves (non-finite ones NaN).
+class BlockMeans {
+ public:
+  explicit BlockMeans(std::uint64_t block) : block_(block) {}
+  void push(double v) {
+    if (std::isfinite(v)) {
+      sum_ += v;
+      ++finite_;
+    }
+    if (++in_block_ == block_) {
+      sums_.push_back(sum_);
+      finite_counts_.push_back(finite_);
+      sum_ = 0.0;
+      finite_ = 0;
+      in_block_ = 0;
+      if (sums_.size() > kMaxAnalysedSamples) {
+        merge_pairs();
+      }
+    }
+  }
+  [[nodiscard]] std::uint64_t block() const { return block_; }
+  // The means (the sums' storage), with the samples of the dropped partial block.
+  std::vector<double> take(std::uint64_t& dropped) {
+    for (std::size_t i = 0; i < sums_.size(); ++i) {
+      sums_[i] = 2 * std::uint64_t{finite_counts_[i]} >= block_
+                     ? sums_[i] / static_cast<double>(finite_counts_[i])
+                     : std::numeric_limits<double>::quiet_NaN();
+    }
+    finite_counts_ = std::vector<std::uint32_t>{};
+    dropped = in_block_;
+    return std::move(sums_);
+  }
+
+ private:
+  void merge_pairs() {
+    const std::size_t pairs = sums_.size() / 2;
+    const bool odd = sums_.size() % 2 != 0;
+    const double last_sum = sums_.back();
+    const std::uint32_t last_finite = finite_counts_.back();
+    for (std::size_t i = 0; i < pairs; ++i) {
+      sums_[i] = sums_[2 * i] + sums_[2 * i + 1];
+      finite_counts_[i] = finite_counts_[2 * i] + finite_counts_[2 * i + 1];
+    }
+    sums_.resize(pairs);
+    finite_counts_.resize(pairs);
+    if (odd) {  // the last complete block is the first half of the block now being filled
+      sum_ += last_sum;
+      finite_ += last_finite;
+      in_block_ += block_;
+    }
+    block_ *= 2;
+  }
+  std::uint64_t block_;
+  std::vector<double> sums_;
+  std::vector<std::uint32_t> finite_counts_;  // a block's finite samples: at most 2^31 here
+  double sum_ = 0.0;
+  std::uint32_t finite_ = 0;
+  std::uint64_t in_block_ = 0;
+};
+
 // Block means of `block` consecutive samples of the stream, read in chunks (nothing of the
-// record is held but the means). A block with fewer than half of its samples finite is a gap
-// (NaN); a last, partial block is dropped (`dropped`: its samples).
+// record is held but the means; BlockMeans' rule).
 bool read_block_means(imu::mat::ChannelStream& st, std::uint64_t block, std::vector<double>& out,
                       std::uint64_t& dropped, std::string& err) {
   std::vector<double> buf(std::size_t{1} << 16U);
-  out.clear();
-  out.reserve(static_cast<std::size_t>(st.size() / block));
-  double sum = 0.0;
-  std::uint64_t finite = 0;
-  std::uint64_t in_block = 0;
+  BlockMeans means(block);
   for (;;) {
     auto got = st.read(buf.data(), buf.size());
     if (!got) {
@@ -199,20 +259,10 @@ bool read_block_means(imu::mat::ChannelStream& st, std::uint64_t block, std::vec
       break;
     }
     for (std::size_t i = 0; i < got.value(); ++i) {
-      if (std::isfinite(buf[i])) {
-        sum += buf[i];
-        ++finite;
-      }
-      if (++in_block == block) {
-        out.push_back(2 * finite >= block ? sum / static_cast<double>(finite)
-                                          : std::numeric_limits<double>::quiet_NaN());
-        sum = 0.0;
-        finite = 0;
-        in_block = 0;
-      }
+      means.push(buf[i]);
     }
   }
-  dropped = in_block;
+  out = means.take(dropped);
   return true;
 }
 
@@ -313,7 +363,7 @@ void run_jobs(std::vector<Job>& jobs) {
   imu::cli::parallel_for(jobs.size(), [&jobs](std::size_t i) {
     Job& j = jobs[i];
     try {
-      j.ok = analyze(j.samples, j.channel, j.o, j.r, j.err);
+      j.ok = analyze(std::move(j.samples), j.channel, j.o, j.r, j.err);
     } catch (const std::bad_alloc&) {
       j.ok = false;
       j.err = "out of memory";
@@ -395,38 +445,91 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const st
   return kExitOk;
 }
 
+// A job read as block means of B > 1 samples (a long record): means of B samples on an LSB grid
+// lie on a grid B times finer, at a rate B times lower; the report's first note says so.
+void on_block_means(Job& j, double fs_hz, std::uint64_t block, std::uint64_t dropped) {
+  if (block <= 1) {
+    return;
+  }
+  const std::uint64_t n = j.samples.size() * block + dropped;
+  j.o.fs_hz = fs_hz / static_cast<double>(block);
+  if (j.o.lsb > 0.0) {
+    j.o.lsb /= static_cast<double>(block);
+  }
+  j.block_note = "long record: its " + std::to_string(n) + " samples analysed as " +
+                 std::to_string(j.samples.size()) + " means of " + std::to_string(block) +
+                 " samples (rate " + imu::cli::json_num(j.o.fs_hz) + " Hz" +
+                 (dropped > 0 ? ", the last " + std::to_string(dropped) + " samples dropped" : "") +
+                 ") to keep memory bounded: taus below " +
+                 imu::cli::json_num(static_cast<double>(block) / fs_hz) +
+                 " s, quantisation and effects faster than " +
+                 imu::cli::json_num(j.o.fs_hz / 2.0) +
+                 " Hz are not resolved here (imu-sim adev gives the full-rate ADEV in constant "
+                 "memory)";
+}
+
 // A text file's channels as jobs: NAME, a comma list, or all (the IMU channels it holds, else
-// every column but the time column). The rate: --fs, else the time column's.
+// every column but the time column). The rate: --fs, else the time column's. One pass over the
+// rows for every channel (imu::cli::TextColumnStream), each into its BlockMeans: a channel is
+// held as its samples, or as block means once it passes kMaxAnalysedSamples, never the table.
 bool text_jobs(const std::string& file, const std::string& spec, double fs, double lsb,
                std::vector<Job>& jobs, std::string& err) {
-  imu::cli::TextTable table;
-  if (!imu::cli::read_text_table(file, table, err)) {
-    return false;
-  }
   std::vector<std::string> names;
-  if (!imu::cli::text_channels(table.names, spec, names, err)) {
-    err.insert(0, file + ": ");
-    return false;
-  }
-  for (const auto& n : names) {
-    imu::cli::TextChannel tc;
-    if (!imu::cli::text_channel(table, n, fs, tc, err)) {
+  {
+    imu::cli::TextRows header;
+    if (!header.open(file, err)) {
+      return false;
+    }
+    if (!imu::cli::text_channels(header.names(), spec, names, err)) {
       err.insert(0, file + ": ");
       return false;
     }
+  }
+  const auto with_file = [&file](std::string& e) {
+    if (e.rfind(file, 0) != 0) {
+      e.insert(0, file + ": ");
+    }
+  };
+  imu::cli::TextColumnStream st;
+  if (!st.open(file, names, fs, err)) {
+    with_file(err);
+    return false;
+  }
+  const std::size_t k = names.size();
+  std::vector<BlockMeans> means(k, BlockMeans(1));
+  constexpr std::size_t kChunk = 4096;
+  std::vector<double> buf(kChunk * k);
+  for (;;) {
+    std::size_t got = 0;
+    if (!st.read(buf.data(), kChunk, got, err)) {
+      with_file(err);
+      return false;
+    }
+    if (got == 0) {
+      break;
+    }
+    for (std::size_t i = 0; i < got; ++i) {
+      for (std::size_t c = 0; c < k; ++c) {
+        means[c].push(buf[i * k + c]);
+      }
+    }
+  }
+  for (std::size_t c = 0; c < k; ++c) {
     Job j;
-    j.channel = n;
-    j.samples = std::move(tc.samples);
-    j.o.fs_hz = tc.fs_hz;
+    j.channel = names[c];
+    std::uint64_t dropped = 0;
+    j.samples = means[c].take(dropped);
+    j.o.fs_hz = st.fs_hz();
     j.o.lsb = lsb;
-    if (!tc.time_column.empty()) {
-      j.text_note = "text input: rate " + std::to_string(tc.fs_hz) + " Hz" +
-                    (fs > 0.0 ? " (--fs)" : " from the time column '" + tc.time_column + "'");
-      if (tc.time_gap_samples > 0) {
-        j.text_note += "; its steps left " + std::to_string(tc.time_gap_samples) +
+    if (!st.time_name().empty()) {
+      j.text_note = "text input: rate " + std::to_string(st.fs_hz()) + " Hz" +
+                    (fs > 0.0 ? " (--fs)" : " from the time column '" + st.time_name() + "'");
+      if (st.time_gap_samples() > 0) {
+        j.text_note += "; its steps left " + std::to_string(st.time_gap_samples()) +
                        " samples missing (gaps)";
       }
     }
+    on_block_means(j, st.fs_hz(), means[c].block(), dropped);
     jobs.push_back(std::move(j));
   }
   return true;
@@ -487,24 +590,7 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
     } else if (integer_class) {
       jobs[i].counts_unscaled = true;
     }
-    if (block > 1) {
-      // Means of B samples on an LSB grid lie on a grid B times finer; the rate is B times lower.
-      const std::uint64_t n = jobs[i].samples.size() * block + dropped;
-      jobs[i].o.fs_hz = o.fs_hz / static_cast<double>(block);
-      if (jobs[i].o.lsb > 0.0) {
-        jobs[i].o.lsb /= static_cast<double>(block);
-      }
-      jobs[i].block_note =
-          "long record: its " + std::to_string(n) + " samples analysed as " +
-          std::to_string(jobs[i].samples.size()) + " means of " + std::to_string(block) +
-          " samples (rate " + imu::cli::json_num(jobs[i].o.fs_hz) + " Hz" +
-          (dropped > 0 ? ", the last " + std::to_string(dropped) + " samples dropped" : "") +
-          ") to keep memory bounded: taus below " +
-          imu::cli::json_num(static_cast<double>(block) / o.fs_hz) +
-          " s, quantisation and effects faster than " +
-          imu::cli::json_num(jobs[i].o.fs_hz / 2.0) +
-          " Hz are not resolved here (imu-sim adev gives the full-rate ADEV in constant memory)";
-    }
+    on_block_means(jobs[i], o.fs_hz, block, dropped);
   }
   return finish(file, jobs, lsb, json, plots, yaml);
 }

@@ -302,11 +302,24 @@ bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
 
 bool TextColumnStream::open(const std::string& path, const std::string& name, double fs_hz,
                             std::string& err) {
+  return open(path, std::vector<std::string>{name}, fs_hz, err);
+}
+
+void TextColumnStream::hold(std::vector<double>& to) const {
+  to.push_back(time_ < row_.size() ? row_[time_] : 0.0);
+  for (const std::size_t c : cols_) {
+    to.push_back(row_[c]);
+  }
+}
+
+bool TextColumnStream::open(const std::string& path, const std::vector<std::string>& names_in,
+                            double fs_hz, std::string& err) {
   head_pos_ = 0;
   row_no_ = 0;
   pending_missing_ = 0;
   have_pending_ = false;
   time_name_.clear();
+  cols_.clear();
   if (!rows_.open(path, err)) {
     return false;
   }
@@ -320,22 +333,31 @@ bool TextColumnStream::open(const std::string& path, const std::string& name, do
     return false;
   }
   const std::vector<std::string>& names = rows_.names();
-  const auto it = std::find(names.begin(), names.end(), name);
-  if (it == names.end()) {
-    err = no_column(names, name);
+  for (const auto& name : names_in) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) {
+      err = no_column(names, name);
+      return false;
+    }
+    cols_.push_back(static_cast<std::size_t>(it - names.begin()));
+  }
+  if (cols_.empty()) {
+    err = "no column asked for";
     return false;
   }
-  col_ = static_cast<std::size_t>(it - names.begin());
+  pending_values_.assign(cols_.size(), 0.0);
+  values_.assign(cols_.size(), 0.0);
   time_ = time_column(names);
   if (time_ == names.size() && !(fs_hz > 0.0)) {
     err = "no --fs and no time column (t, time or timestamp) to take the rate from";
     return false;
   }
   // The rows that decide the rate (as text_channel's), held until they are given out.
+  const std::size_t stride = cols_.size() + 1;
   head_.clear();
-  head_.emplace_back(time_ < names.size() ? row_[time_] : 0.0, row_[col_]);
-  while (head_.size() < kRateRows + 1 && rows_.next(row_, err)) {
-    head_.emplace_back(time_ < names.size() ? row_[time_] : 0.0, row_[col_]);
+  hold(head_);
+  while (head_.size() < (kRateRows + 1) * stride && rows_.next(row_, err)) {
+    hold(head_);
   }
   if (!err.empty()) {
     return false;
@@ -343,9 +365,9 @@ bool TextColumnStream::open(const std::string& path, const std::string& name, do
   double ts = fs_hz > 0.0 ? 1.0 / fs_hz : 0.0;
   if (time_ < names.size()) {
     time_name_ = names[time_];
-    std::vector<double> t(head_.size());
-    for (std::size_t i = 0; i < head_.size(); ++i) {
-      t[i] = head_[i].first;
+    std::vector<double> t(head_.size() / stride);
+    for (std::size_t i = 0; i < t.size(); ++i) {
+      t[i] = head_[i * stride];
     }
     if (!grid_period(t.data(), t.size(), fs_hz, time_name_, ts, err)) {
       return false;
@@ -356,20 +378,24 @@ bool TextColumnStream::open(const std::string& path, const std::string& name, do
   return true;
 }
 
-bool TextColumnStream::next_row(double& t, double& v, bool& have, std::string& err) {
+bool TextColumnStream::next_row(double& t, bool& have, std::string& err) {
   have = false;
-  if (head_pos_ < head_.size()) {
-    t = head_[head_pos_].first;
-    v = head_[head_pos_].second;
+  const std::size_t k = cols_.size();
+  if (head_pos_ < head_.size() / (k + 1)) {
+    const double* r = head_.data() + head_pos_ * (k + 1);
+    t = r[0];
+    std::copy(r + 1, r + 1 + k, values_.begin());
     have = true;
-    if (++head_pos_ == head_.size()) {
+    if (++head_pos_ == head_.size() / (k + 1)) {
       head_ = {};  // the rate is known: hold no more rows
     }
     return true;
   }
   if (head_pos_ > 0 && head_.empty() && rows_.next(row_, err)) {
     t = time_ < row_.size() ? row_[time_] : 0.0;
-    v = row_[col_];
+    for (std::size_t c = 0; c < k; ++c) {
+      values_[c] = row_[cols_[c]];
+    }
     have = true;
   }
   return err.empty();
@@ -377,21 +403,23 @@ bool TextColumnStream::next_row(double& t, double& v, bool& have, std::string& e
 
 bool TextColumnStream::read(double* out, std::size_t n, std::size_t& got, std::string& err) {
   got = 0;
+  const std::size_t k = cols_.size();
   while (got < n) {
     if (pending_missing_ > 0) {
-      out[got++] = std::nan("");
+      std::fill(out + got * k, out + (got + 1) * k, std::nan(""));
+      ++got;
       --pending_missing_;
       continue;
     }
     if (have_pending_) {
-      out[got++] = pending_value_;
+      std::copy(pending_values_.begin(), pending_values_.end(), out + got * k);
+      ++got;
       have_pending_ = false;
       continue;
     }
     double t = 0.0;
-    double v = 0.0;
     bool have = false;
-    if (!next_row(t, v, have, err)) {
+    if (!next_row(t, have, err)) {
       return false;
     }
     if (!have) {
@@ -403,7 +431,7 @@ bool TextColumnStream::read(double* out, std::size_t n, std::size_t& got, std::s
       return false;
     }
     pending_missing_ = missing;
-    pending_value_ = v;
+    pending_values_.swap(values_);
     have_pending_ = true;
   }
   return true;

@@ -93,34 +93,42 @@ struct TextChannel {
 [[nodiscard]] bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
                                 TextChannel& out, std::string& err);
 
-/// One column of a text file on the same grid as text_channel gives, read row by row: memory
+/// Columns of a text file on the same grid as text_channel gives, read row by row: memory
 /// independent of the number of rows (the first kRateRows rows are held while the rate is
-/// taken from them). Same refusals and messages as TextRows and text_channel.
+/// taken from them). Same refusals and messages as TextRows and text_channel. With several
+/// columns a sample is one value per column, interleaved in the order the names were given
+/// (one pass over the file for all of them).
 class TextColumnStream {
  public:
   [[nodiscard]] bool open(const std::string& path, const std::string& name, double fs_hz,
                           std::string& err);
-  /// Up to n samples into out: got, 0 at the end. False on a bad row (err).
+  [[nodiscard]] bool open(const std::string& path, const std::vector<std::string>& names,
+                          double fs_hz, std::string& err);
+  /// Up to n samples into out (n x columns() values): got samples, 0 at the end. False on a
+  /// bad row (err).
   [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err);
+  [[nodiscard]] std::size_t columns() const { return cols_.size(); }
   [[nodiscard]] double fs_hz() const { return fs_hz_; }
   /// Samples inserted for time steps so far (all of them once read() gave 0).
   [[nodiscard]] std::uint64_t time_gap_samples() const { return grid_.gap_samples(); }
   [[nodiscard]] const std::string& time_name() const { return time_name_; }
 
  private:
-  bool next_row(double& t, double& v, bool& have, std::string& err);
+  bool next_row(double& t, bool& have, std::string& err);
+  void hold(std::vector<double>& to) const;  // t, then the columns' values of row_
   TextRows rows_;
   std::vector<double> row_;
-  std::vector<std::pair<double, double>> head_;  // (t, value) of the rows read for the rate
-  std::size_t head_pos_ = 0;
-  std::size_t col_ = 0;
+  std::vector<double> head_;  // (t, values...) of the rows read for the rate
+  std::size_t head_pos_ = 0;  // rows of head_ given out
+  std::vector<std::size_t> cols_;
   std::size_t time_ = 0;
   std::string time_name_;
   double fs_hz_ = 0.0;
   TimeGrid grid_{1.0};
   std::uint64_t row_no_ = 0;
-  std::uint64_t pending_missing_ = 0;  // NaNs still to give before pending_value_
-  double pending_value_ = 0.0;
+  std::uint64_t pending_missing_ = 0;  // NaN samples still to give before pending_values_
+  std::vector<double> pending_values_;
+  std::vector<double> values_;  // of the row next_row gave
   bool have_pending_ = false;
 };
 
