@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdint>
 #include <cstdlib>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <new>
@@ -266,6 +267,64 @@ bool read_block_means(imu::mat::ChannelStream& st, std::uint64_t block, std::vec
   return true;
 }
 
+// The first kMaxAnalysedSamples samples of a channel (a long record's head), from the stream;
+// integer counts times `scale` (> 0).
+bool read_head_mat(const std::string& path, const std::string& spec, double scale,
+                   std::vector<double>& out, std::string& err) {
+  imu::cli::ChannelSpec cs;
+  if (!imu::cli::parse_channel_spec(spec, cs, err)) {
+    return false;
+  }
+  auto st = imu::mat::ChannelStream::open(path, cs.name, cs.column);
+  if (!st) {
+    err = st.error().message;
+    return false;
+  }
+  out.assign(static_cast<std::size_t>(kMaxAnalysedSamples), 0.0);
+  std::size_t have = 0;
+  while (have < out.size()) {
+    auto got = st.value().read(out.data() + have, out.size() - have);
+    if (!got) {
+      err = got.error().message;
+      return false;
+    }
+    if (got.value() == 0) {
+      break;
+    }
+    have += got.value();
+  }
+  out.resize(have);
+  if (scale > 0.0) {
+    for (double& v : out) {
+      v *= scale;
+    }
+  }
+  return true;
+}
+
+// The same from a text file's column (its rows again, the same grid and gaps).
+bool read_head_text(const std::string& file, const std::string& name, double fs,
+                    std::vector<double>& out, std::string& err) {
+  imu::cli::TextColumnStream st;
+  if (!st.open(file, {name}, fs, err)) {
+    return false;
+  }
+  out.assign(static_cast<std::size_t>(kMaxAnalysedSamples), 0.0);
+  std::size_t have = 0;
+  while (have < out.size()) {
+    std::size_t got = 0;
+    if (!st.read(out.data() + have, std::min<std::size_t>(4096, out.size() - have), got, err)) {
+      return false;
+    }
+    if (got == 0) {
+      break;
+    }
+    have += got;
+  }
+  out.resize(have);
+  return true;
+}
+
 // NAME or NAME:K (column K, 1-based as in Octave, of a matrix NAME). A matrix named without a
 // column is refused (reading its first column silently was a wrong answer). A record longer
 // than kMaxAnalysedSamples comes back as block means of `block` samples (a power of two, the
@@ -346,6 +405,11 @@ std::string base_name(const std::string& spec) {
 
 struct Job {
   std::string channel;
+  // A long record (block > 1): its first kMaxAnalysedSamples samples, read again at full rate
+  // (a second pass over the file's first chunks), are analysed with head_o after the means.
+  std::uint64_t block = 1;
+  std::function<bool(std::vector<double>&, std::string&)> read_head;
+  Options head_o;
   bool counts_scaled = false;    // an integer variable, multiplied by its LSB
   bool counts_unscaled = false;  // an integer variable without an LSB: counts
   std::string text_note;         // where a text file's rate and gaps came from
@@ -357,6 +421,20 @@ struct Job {
   bool ok = false;
 };
 
+// The second analysis of a long record: its head at full rate, joined to the block means' report
+// (merge_full_rate_head). A head that cannot be read or analysed is a note, not a failure: the
+// record's own analysis stands.
+void analyze_head(Job& j) {
+  std::vector<double> head;
+  std::string err;
+  Report h;
+  if (!j.read_head(head, err) || !analyze(std::move(head), j.channel, j.head_o, h, err)) {
+    j.r.notes.push_back("full-rate head not analysed: " + err);
+    return;
+  }
+  merge_full_rate_head(j.r, std::move(h), j.block, j.head_o);
+}
+
 // Each channel's analysis is independent (imu::cli::parallel_for: the machine's cores). An
 // exception (out of memory) in one job is that job's error.
 void run_jobs(std::vector<Job>& jobs) {
@@ -364,6 +442,10 @@ void run_jobs(std::vector<Job>& jobs) {
     Job& j = jobs[i];
     try {
       j.ok = analyze(std::move(j.samples), j.channel, j.o, j.r, j.err);
+      j.samples = std::vector<double>{};
+      if (j.ok && j.block > 1 && j.read_head) {
+        analyze_head(j);
+      }
     } catch (const std::bad_alloc&) {
       j.ok = false;
       j.err = "out of memory";
@@ -452,6 +534,9 @@ void on_block_means(Job& j, double fs_hz, std::uint64_t block, std::uint64_t dro
     return;
   }
   const std::uint64_t n = j.samples.size() * block + dropped;
+  j.block = block;
+  j.head_o = j.o;
+  j.head_o.fs_hz = fs_hz;
   j.o.fs_hz = fs_hz / static_cast<double>(block);
   if (j.o.lsb > 0.0) {
     j.o.lsb /= static_cast<double>(block);
@@ -464,8 +549,9 @@ void on_block_means(Job& j, double fs_hz, std::uint64_t block, std::uint64_t dro
                  imu::cli::json_num(static_cast<double>(block) / fs_hz) +
                  " s, quantisation and effects faster than " +
                  imu::cli::json_num(j.o.fs_hz / 2.0) +
-                 " Hz are not resolved here (imu-sim adev gives the full-rate ADEV in constant "
-                 "memory)";
+                 " Hz are not resolved on the means: the first " +
+                 std::to_string(kMaxAnalysedSamples) + " samples are analysed at full rate for "
+                 "them (full_rate_head)";
 }
 
 // A text file's channels as jobs: NAME, a comma list, or all (the IMU channels it holds, else
@@ -530,6 +616,9 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
       }
     }
     on_block_means(j, st.fs_hz(), means[c].block(), dropped);
+    j.read_head = [file, name = names[c], fs](std::vector<double>& out, std::string& e) {
+      return read_head_text(file, name, fs, out, e);
+    };
     jobs.push_back(std::move(j));
   }
   return true;
@@ -591,6 +680,11 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
       jobs[i].counts_unscaled = true;
     }
     on_block_means(jobs[i], o.fs_hz, block, dropped);
+    const double scale = jobs[i].counts_scaled ? jobs[i].head_o.lsb : 0.0;
+    jobs[i].read_head = [file, spec = channels[i], scale](std::vector<double>& out,
+                                                          std::string& e) {
+      return read_head_mat(file, spec, scale, out, e);
+    };
   }
   return finish(file, jobs, lsb, json, plots, yaml);
 }

@@ -140,7 +140,29 @@ std::string to_json(const Report& r) {
     s << (i > 0 ? ", " : "") << "{\"tau_min_s\": " << num(u.tau_min_s) << ", \"tau_max_s\": "
       << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z) << "}";
   }
-  s << "],\n  \"gaps\": {\"samples\": " << r.gap_samples << ", \"runs\": " << r.gap_runs
+  s << "]";
+  if (r.head.samples > 0) {
+    const FullRateHead& h = r.head;
+    s << ",\n  \"full_rate_head\": {\"n_samples\": " << h.samples << ", \"fs_hz\": "
+      << num(h.fs_hz) << ", \"block\": " << h.block << ", \"merged\": "
+      << (h.merged ? "true" : "false") << ",\n    \"model_before\": "
+      << model_json(h.model_before) << ",\n    \"error_before\": " << error_json(h.error_before)
+      << ",\n    \"effects\": [";
+    for (std::size_t i = 0; i < h.effects.size(); ++i) {
+      s << (i > 0 ? ", " : "") << effect_json(h.effects[i]);
+    }
+    s << "],\n    \"model_after\": " << model_json(h.model_after)
+      << ",\n    \"error_after\": " << error_json(h.error_after)
+      << ",\n    \"error_record_model\": " << error_json(h.error_record_model)
+      << ",\n    \"unexplained\": [";
+    for (std::size_t i = 0; i < h.unexplained.size(); ++i) {
+      const UnexplainedRun& u = h.unexplained[i];
+      s << (i > 0 ? ", " : "") << "{\"tau_min_s\": " << num(u.tau_min_s) << ", \"tau_max_s\": "
+        << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z) << "}";
+    }
+    s << "]}";
+  }
+  s << ",\n  \"gaps\": {\"samples\": " << r.gap_samples << ", \"runs\": " << r.gap_runs
     << "},\n  \"seconds\": " << num(r.seconds) << ",\n  \"cpu_seconds\": " << num(r.cpu_seconds)
     << "\n}\n";
   return s.str();
@@ -256,6 +278,31 @@ std::string to_text(const Report& r) {
                   "unexplained: tau %.3g - %.4g s, max |z| %.1f (model %s the data)\n",
                   u.tau_min_s, u.tau_max_s, u.max_abs_z, u.sign > 0 ? "above" : "below");
     s << buf;
+  }
+  if (r.head.samples > 0) {
+    const FullRateHead& h = r.head;
+    std::snprintf(buf, sizeof buf,
+                  "full-rate head: the first %llu samples at %g Hz (%.2f h), analysed on their "
+                  "own; %s\n",
+                  static_cast<unsigned long long>(h.samples), h.fs_hz,
+                  static_cast<double>(h.samples) / h.fs_hz / 3600.0,
+                  h.merged ? "its fast terms are in the model after (notes)"
+                           : "the model after is the block means' (notes)");
+    s << buf;
+    error_line("  head, error before", h.error_before);
+    model_line("  head, model after", h.model_after);
+    error_line("  head, error after", h.error_after);
+    std::snprintf(buf, sizeof buf,
+                  "  head, the model after above: RMS %.3f max %.3f over its %zu taus\n",
+                  h.error_record_model.adev_rms_rel, h.error_record_model.adev_max_rel,
+                  h.error_record_model.n_taus);
+    s << buf;
+    for (const auto& e : h.effects) {
+      std::snprintf(buf, sizeof buf, "  head, effect %s%s\n", e.type.c_str(),
+                    e.freq_hz > 0.0 ? (" at " + std::to_string(e.freq_hz) + " Hz").c_str()
+                                    : "");
+      s << buf;
+    }
   }
   for (const auto& n : r.notes) {
     s << "note: " << n << "\n";

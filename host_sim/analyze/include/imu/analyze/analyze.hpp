@@ -109,6 +109,26 @@ struct UnexplainedRun {
   int sign = 0;  ///< +1: the model lies above the data there, -1: below
 };
 
+/// A record longer than the analysis holds (host_sim/analyze/src/cli.cpp: 2^22 samples) is
+/// analysed on block means of `block` samples for the whole record, and at full rate on its
+/// first `samples` samples (the head), for the taus and effects the means cannot resolve
+/// (issue 14). merge_full_rate_head() says how the two are joined.
+struct FullRateHead {
+  std::uint64_t samples = 0;  ///< 0: none (the record was analysed at full rate)
+  double fs_hz = 0.0;
+  std::uint64_t block = 0;    ///< the record's block means: block samples each
+  ModelParams model_before{};  ///< the head's own analysis
+  ModelParams model_after{};
+  ErrorStats error_before{};   ///< over the head's taus [Ts, T_head/10]
+  ErrorStats error_after{};
+  /// The record's model after the merge, scored on the head's cleaned full-rate ADEV (relative
+  /// errors over the same taus as error_after).
+  ErrorStats error_record_model{};
+  std::vector<Effect> effects;  ///< every effect the head's analysis named
+  std::vector<UnexplainedRun> unexplained;
+  bool merged = false;          ///< the record's model took the head's fast terms
+};
+
 struct Report {
   std::string channel;
   double fs_hz = 0.0;
@@ -128,6 +148,7 @@ struct Report {
   std::uint64_t gap_samples = 0;  ///< non-finite samples (gaps, marked missing)
   std::uint64_t gap_runs = 0;     ///< runs of consecutive non-finite samples
   std::vector<std::string> notes;  ///< warnings and decisions, one line each
+  FullRateHead head;               ///< a long record's full-rate head (samples 0: none)
   double seconds = 0.0;            ///< wall time of analyze()
   double cpu_seconds = 0.0;        ///< CPU time of analyze() (the machine may be shared)
 };
@@ -156,6 +177,29 @@ struct Report {
 /// Returns false if no sample is finite.
 [[nodiscard]] bool fill_gaps(std::vector<double>& y, std::vector<std::uint8_t>& gap,
                              std::uint64_t& samples, std::uint64_t& runs);
+
+/// Errors of model m against ADEV points (relative errors as ErrorStats; cost = sum z^2 with the
+/// points' own EDF) over [tau_min_s, tau_max_s]; the filter figures are left 0.
+[[nodiscard]] ErrorStats score_model(const std::vector<AdevPoint>& pts, const ModelParams& m,
+                                     const Options& o, double tau_min_s, double tau_max_s);
+
+/// Join a long record's report (`record`, analysed on block means of `block` samples at rate
+/// fs / block) with the full-rate analysis of its head (`head`, rate fs). The means cannot
+/// resolve taus below block / fs, quantisation, or anything faster than their Nyquist
+/// fs / (2 block) (which they alias). The candidate model is the record's, with
+///   * the head's white noise N and quantization Q,
+///   * the record's GMs whose ADEV peak (1.89 Tb) is at or above 4 block / fs, and the head's
+///     below it (a GM at the means' shortest taus stands in for the faster terms),
+///   * the head's sinusoids and oscillation above fs / (2 block); the record's sinusoid or
+///     oscillation at the alias of one of them is dropped (it was the alias, a wrong name),
+///   * the record's slow terms (K, R, bias instability) as they are.
+/// It replaces the record's model only if it is no worse (RMS and max relative ADEV error) than
+/// the seed's model on both the record's taus and the head's; then the head's quantization,
+/// fast sinusoids and oscillation become effects of the record, the record's quantization and
+/// alias effects are removed, and the head's unexplained runs below the record's first tau are
+/// added. Either way `record.head` holds the head's findings and each decision is a note.
+/// Cost: a few model evaluations per ADEV point.
+void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, const Options& o);
 
 [[nodiscard]] std::string to_json(const Report& r);
 [[nodiscard]] std::string to_text(const Report& r);
