@@ -315,24 +315,33 @@ TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
   const std::string mat = dir.file("synth.mat");
   auto r = run({"synth", "--out", mat, "--duration", "200"});
   ASSERT_EQ(r.status, 0) << r.err;
-  const std::string f = dir.file("osc.json");
-  {
-    std::ofstream(f) << "{\"channel\": \"acc_z\", \"fs_hz\": 100, \"model_after\": {\"n\": 3.3e-3, "
-                        "\"q\": 0, \"gm\": [{\"sb\": 5.7e-9, \"tb_s\": 158.7}], \"k\": 0, \"r\": 0, "
-                        "\"sin_a\": 0, \"sin_f0_hz\": 0, \"sin2_a\": 0, \"sin2_f0_hz\": 0, "
-                        "\"bias_instability\": {\"b\": 0, \"tau_lo_s\": 0, \"tau_hi_s\": 0}, "
-                        "\"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, \"beta_per_s\": 1.57}}}";
+  const std::string model =
+      "\"model_after\": {\"n\": 3.3e-3, "
+      "\"q\": 0, \"gm\": [{\"sb\": 5.7e-9, \"tb_s\": 158.7}], \"k\": 0, \"r\": 0, "
+      "\"sin_a\": 0, \"sin_f0_hz\": 0, \"sin2_a\": 0, \"sin2_f0_hz\": 0, "
+      "\"bias_instability\": {\"b\": 0, \"tau_lo_s\": 0, \"tau_hi_s\": 0}, "
+      "\"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, \"beta_per_s\": 1.57}}";
+  // A 100 Hz record's report, and a long record's (analysed on means of 4 at 25 Hz, its head at
+  // the recording's 100 Hz): the node samples at 100 Hz in both (the long one used to be folded
+  // in at the means' rate, 4 x the variance).
+  for (const std::string& head : {std::string(), std::string(", \"full_rate_head\": "
+                                                              "{\"n_samples\": 4194304, "
+                                                              "\"fs_hz\": 100, \"block\": 4}")}) {
+    const std::string f = dir.file("osc.json");
+    std::ofstream(f) << "{\"channel\": \"acc_z\", \"fs_hz\": " << (head.empty() ? "100" : "25")
+                     << ", " << model << head << "}";
+    r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--sim-windows", "10", "--out",
+             dir.file("o")});
+    ASSERT_EQ(r.status, 0) << r.err;
+    const std::string report = simtest::read_text(dir.file("o") + "/report.txt");
+    EXPECT_NE(report.find("its variance is added to the white noise"), std::string::npos)
+        << report;
+    const std::string json = simtest::read_text(dir.file("o") + "/report.json");
+    // What the node echoes it runs (float in the record): sqrt(3.3e-3^2 + 0.02^2 / 100).
+    const std::string node = json.substr(json.find("\"node\": {"));
+    const double n_node = simtest::json_number_in(node, "model", "n");
+    EXPECT_NEAR(n_node, std::sqrt(3.3e-3 * 3.3e-3 + 0.02 * 0.02 / 100.0), 1e-6) << head;
   }
-  r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--sim-windows", "10", "--out",
-           dir.file("o")});
-  ASSERT_EQ(r.status, 0) << r.err;
-  const std::string report = simtest::read_text(dir.file("o") + "/report.txt");
-  EXPECT_NE(report.find("its variance is added to the white noise"), std::string::npos) << report;
-  const std::string json = simtest::read_text(dir.file("o") + "/report.json");
-  // What the node echoes it runs (float in the record): sqrt(3.3e-3^2 + 0.02^2 / 100).
-  const std::string node = json.substr(json.find("\"node\": {"));
-  const double n_node = simtest::json_number_in(node, "model", "n");
-  EXPECT_NEAR(n_node, std::sqrt(3.3e-3 * 3.3e-3 + 0.02 * 0.02 / 100.0), 1e-6);
 }
 
 /// A malformed or missing model file is a one-line error, exit 1.

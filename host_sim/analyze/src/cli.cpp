@@ -45,8 +45,9 @@ constexpr const char* kUsage =
     "  the file's fs or Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
     "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
     "  the report's `gaps`). --plots DIR is created if missing. A channel longer than 2^22\n"
-    "  samples is analysed on block means of 2^k samples (said in the report); the file (MAT\n"
-    "  or text) is read in chunks, never whole.\n"
+    "  samples is analysed on block means of 2^k samples, and its first 2^22 samples at full\n"
+    "  rate for what the means cannot resolve (said in the report); the file (MAT or text) is\n"
+    "  read in chunks, never whole.\n"
     "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
     "processed, failed write, out of memory), 2 command-line error\n";
 

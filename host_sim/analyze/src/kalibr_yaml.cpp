@@ -92,7 +92,8 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
   std::vector<const Report*> gyro_r;
   double fs = 0.0;
   for (const Report& r : reports) {
-    fs = r.fs_hz;
+    fs = r.head.samples > 0 ? r.head.fs_hz : r.fs_hz;  // a long record: the IMU's rate, not
+                                                       // its block means'
     if (r.channel.rfind("acc", 0) == 0) {
       acc.push_back(project(r));
       acc_r.push_back(&r);

@@ -208,7 +208,12 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
   double fs_hz = 0.0;
   if (osc != std::string::npos && get_number(json, osc, "sigma", osc_sigma, err) &&
       osc_sigma > 0.0) {
-    if (!number_at(json, member(json, root, "fs_hz"), fs_hz) || !(fs_hz > 0.0)) {
+    // A long record's report is at its block means' rate; the node samples at the recording's,
+    // which its full-rate head carries.
+    const std::size_t head = member(json, root, "full_rate_head");
+    const std::size_t rate =
+        member(json, head != std::string::npos ? head : root, "fs_hz");
+    if (!number_at(json, rate, fs_hz) || !(fs_hz > 0.0)) {
       err = "model_after has an oscillation but the JSON has no valid fs_hz";
       return false;
     }
