@@ -42,6 +42,18 @@ std::string slurp(const std::string& path) {
   return s.str();
 }
 
+// A MAT file with one channel and fs = 100 Hz; false if it could not be written.
+bool write_channel(const std::string& path, const std::string& name, const std::vector<double>& y) {
+  imu::mat::MatWriter w;
+  if (!w.add_column(name, y).ok() || !w.add_scalar("fs", 100.0).ok()) {
+    return false;
+  }
+  std::ofstream f(path, std::ios::binary);
+  f.write(reinterpret_cast<const char*>(w.bytes().data()),
+          static_cast<std::streamsize>(w.bytes().size()));
+  return f.good();
+}
+
 // The number after `key` at or after position `from` of a JSON text (NaN if absent).
 double number_after(const std::string& j, std::size_t from, const std::string& key) {
   const std::size_t p = from == std::string::npos ? from : j.find(key, from);
@@ -136,15 +148,8 @@ TEST_F(AnalyzeCli, NanDropoutsAreGapsNotARefusal) {
   sp.nan_gaps = 3;
   sp.nan_gap_len = 500;
   const std::vector<double> y = imu::analyze::synthesize(sp);
-  imu::mat::MatWriter w;
-  ASSERT_TRUE(w.add_column("acc_x", y).ok());
-  ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
   const std::string mat = tmp_path("nan.mat");
-  {
-    std::ofstream f(mat, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(w.bytes().data()),
-            static_cast<std::streamsize>(w.bytes().size()));
-  }
+  ASSERT_TRUE(write_channel(mat, "acc_x", y));
   const std::string json = tmp_path("nan.json");
   ASSERT_EQ(call({"analyze", mat, "--channel", "acc_x", "--json", json}), 0);
   const std::string j = slurp(json);
@@ -279,16 +284,8 @@ TEST(AnalyzeLongRecord, FastSinusoidIsFoundAtFullRateNotAtItsAlias) {
   sp.sin_f_hz = 30.0;
   const std::vector<double> y = imu::analyze::synthesize(sp);
   ASSERT_EQ(y.size(), sp.samples);
-  imu::mat::MatWriter w;
-  ASSERT_TRUE(w.add_column("acc_z", y).ok());
-  ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
   const std::string mat = tmp_path("long_sine.mat");
-  {
-    std::ofstream f(mat, std::ios::binary);
-    f.write(reinterpret_cast<const char*>(w.bytes().data()),
-            static_cast<std::streamsize>(w.bytes().size()));
-    ASSERT_TRUE(f.good());
-  }
+  ASSERT_TRUE(write_channel(mat, "acc_z", y));
   const std::string json = tmp_path("long_sine.json");
   ASSERT_EQ(call({"analyze", mat, "--channel", "acc_z", "--lsb", "1e-6", "--json", json}), 0);
   const std::string j = slurp(json);
