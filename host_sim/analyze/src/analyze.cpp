@@ -2472,13 +2472,7 @@ class Analysis {
 ErrorStats score_model(const std::vector<AdevPoint>& pts, const ModelParams& m, const Options& o,
                        double tau_min_s, double tau_max_s) {
   ErrorStats e;
-  Points in;
-  for (const auto& p : pts) {
-    if (p.tau_s >= tau_min_s * (1.0 - 1e-9)) {
-      in.push_back(p);
-    }
-  }
-  fill_errors(in, m, o, tau_min_s, tau_max_s, e);
+  fill_errors(pts, m, o, tau_min_s, tau_max_s, e);
   return e;
 }
 

@@ -268,8 +268,27 @@ bool read_block_means(imu::mat::ChannelStream& st, std::uint64_t block, std::vec
   return true;
 }
 
-// The first kMaxAnalysedSamples samples of a channel (a long record's head), from the stream;
-// integer counts times `scale` (> 0).
+// The first kMaxAnalysedSamples samples of a stream (a long record's head). read(dst, max, got,
+// err) hands out at most max samples; got = 0 is the end.
+template <typename Read>
+bool read_head(Read&& read, std::vector<double>& out, std::string& err) {
+  out.assign(static_cast<std::size_t>(kMaxAnalysedSamples), 0.0);
+  std::size_t have = 0;
+  std::size_t got = 0;
+  while (have < out.size()) {
+    if (!read(out.data() + have, out.size() - have, got, err)) {
+      return false;
+    }
+    if (got == 0) {
+      break;
+    }
+    have += got;
+  }
+  out.resize(have);
+  return true;
+}
+
+// A MAT channel's head (NAME or NAME:K); integer counts times `scale` (> 0).
 bool read_head_mat(const std::string& path, const std::string& spec, double scale,
                    std::vector<double>& out, std::string& err) {
   imu::cli::ChannelSpec cs;
@@ -281,20 +300,18 @@ bool read_head_mat(const std::string& path, const std::string& spec, double scal
     err = st.error().message;
     return false;
   }
-  out.assign(static_cast<std::size_t>(kMaxAnalysedSamples), 0.0);
-  std::size_t have = 0;
-  while (have < out.size()) {
-    auto got = st.value().read(out.data() + have, out.size() - have);
-    if (!got) {
-      err = got.error().message;
+  const auto read = [&st](double* dst, std::size_t max, std::size_t& got, std::string& e) {
+    auto r = st.value().read(dst, max);
+    if (!r) {
+      e = r.error().message;
       return false;
     }
-    if (got.value() == 0) {
-      break;
-    }
-    have += got.value();
+    got = r.value();
+    return true;
+  };
+  if (!read_head(read, out, err)) {
+    return false;
   }
-  out.resize(have);
   if (scale > 0.0) {
     for (double& v : out) {
       v *= scale;
@@ -303,27 +320,14 @@ bool read_head_mat(const std::string& path, const std::string& spec, double scal
   return true;
 }
 
-// The same from a text file's column (its rows again, the same grid and gaps).
+// A text file's column's head (its rows again: the same grid and gaps as the first pass).
 bool read_head_text(const std::string& file, const std::string& name, double fs,
                     std::vector<double>& out, std::string& err) {
   imu::cli::TextColumnStream st;
-  if (!st.open(file, {name}, fs, err)) {
-    return false;
-  }
-  out.assign(static_cast<std::size_t>(kMaxAnalysedSamples), 0.0);
-  std::size_t have = 0;
-  while (have < out.size()) {
-    std::size_t got = 0;
-    if (!st.read(out.data() + have, std::min<std::size_t>(4096, out.size() - have), got, err)) {
-      return false;
-    }
-    if (got == 0) {
-      break;
-    }
-    have += got;
-  }
-  out.resize(have);
-  return true;
+  const auto read = [&st](double* dst, std::size_t max, std::size_t& got, std::string& e) {
+    return st.read(dst, std::min<std::size_t>(4096, max), got, e);
+  };
+  return st.open(file, {name}, fs, err) && read_head(read, out, err);
 }
 
 // NAME or NAME:K (column K, 1-based as in Octave, of a matrix NAME). A matrix named without a
@@ -406,8 +410,9 @@ std::string base_name(const std::string& spec) {
 
 struct Job {
   std::string channel;
-  // A long record (block > 1): its first kMaxAnalysedSamples samples, read again at full rate
-  // (a second pass over the file's first chunks), are analysed with head_o after the means.
+  // A long record (block > 1, read_head set): its first kMaxAnalysedSamples samples, read again
+  // at full rate (a second pass over the file's first chunks), are analysed with head_o after
+  // the means.
   std::uint64_t block = 1;
   std::function<bool(std::vector<double>&, std::string&)> read_head;
   Options head_o;
@@ -442,9 +447,8 @@ void run_jobs(std::vector<Job>& jobs) {
   imu::cli::parallel_for(jobs.size(), [&jobs](std::size_t i) {
     Job& j = jobs[i];
     try {
-      j.ok = analyze(std::move(j.samples), j.channel, j.o, j.r, j.err);
-      j.samples = std::vector<double>{};
-      if (j.ok && j.block > 1 && j.read_head) {
+      j.ok = analyze(std::move(j.samples), j.channel, j.o, j.r, j.err);  // leaves it empty
+      if (j.ok && j.read_head) {
         analyze_head(j);
       }
     } catch (const std::bad_alloc&) {
@@ -617,9 +621,11 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
       }
     }
     on_block_means(j, st.fs_hz(), means[c].block(), dropped);
-    j.read_head = [file, name = names[c], fs](std::vector<double>& out, std::string& e) {
-      return read_head_text(file, name, fs, out, e);
-    };
+    if (j.block > 1) {
+      j.read_head = [file, name = names[c], fs](std::vector<double>& out, std::string& e) {
+        return read_head_text(file, name, fs, out, e);
+      };
+    }
     jobs.push_back(std::move(j));
   }
   return true;
@@ -681,11 +687,13 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
       jobs[i].counts_unscaled = true;
     }
     on_block_means(jobs[i], o.fs_hz, block, dropped);
-    const double scale = jobs[i].counts_scaled ? jobs[i].head_o.lsb : 0.0;
-    jobs[i].read_head = [file, spec = channels[i], scale](std::vector<double>& out,
-                                                          std::string& e) {
-      return read_head_mat(file, spec, scale, out, e);
-    };
+    if (block > 1) {
+      const double scale = jobs[i].counts_scaled ? jobs[i].head_o.lsb : 0.0;
+      jobs[i].read_head = [file, spec = channels[i], scale](std::vector<double>& out,
+                                                            std::string& e) {
+        return read_head_mat(file, spec, scale, out, e);
+      };
+    }
   }
   return finish(file, jobs, lsb, json, plots, yaml);
 }

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <string>
 #include <sstream>
+#include <vector>
 
 #include "imu/analyze/analyze.hpp"
 #include "imu/cli/file_out.hpp"
@@ -93,6 +94,57 @@ std::string effect_json(const Effect& e) {
   return s.str();
 }
 
+// A list of effects, `sep` between them (a line break and indent in the report's main list).
+std::string effects_json(const std::vector<Effect>& effects, const char* sep) {
+  std::string s;
+  for (std::size_t i = 0; i < effects.size(); ++i) {
+    s += (i > 0 ? "," : "") + std::string(sep) + effect_json(effects[i]);
+  }
+  return s;
+}
+
+std::string unexplained_json(const std::vector<UnexplainedRun>& runs) {
+  std::ostringstream s;
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    const UnexplainedRun& u = runs[i];
+    s << (i > 0 ? ", " : "") << "{\"tau_min_s\": " << num(u.tau_min_s) << ", \"tau_max_s\": "
+      << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z) << "}";
+  }
+  return s.str();
+}
+
+// One effect with its parameters and evidence, as the text report prints it (no line break).
+std::string effect_text(const Effect& e) {
+  char buf[256];
+  if (e.type == "quantization") {
+    std::snprintf(buf, sizeof buf, "effect quantization: Q = %.4e", e.q);
+  } else if (e.type == "rate_random_walk") {
+    std::snprintf(buf, sizeof buf, "effect rate_random_walk: K = %.4e", e.k);
+  } else if (e.type == "ramp") {
+    std::snprintf(buf, sizeof buf, "effect ramp: R = %.4e", e.r);
+  } else if (e.type == "sinusoid") {
+    std::snprintf(buf, sizeof buf, "effect sinusoid: f = %.6g Hz (period %.4g s), A = %.4e",
+                  e.freq_hz, 1.0 / e.freq_hz, e.amplitude);
+  } else if (e.type == "oscillation") {
+    std::snprintf(buf, sizeof buf,
+                  "effect oscillation: f0 = %.5g Hz, half-power width %.3g Hz, sigma = %.4e",
+                  e.freq_hz, e.bandwidth_hz, e.amplitude);
+  } else if (e.type == "bias_step") {
+    std::snprintf(buf, sizeof buf, "effect bias_step: at t = %.1f s, size %.4e", e.time_s,
+                  e.size);
+  } else if (e.type == "bias_instability") {
+    std::snprintf(buf, sizeof buf, "effect bias_instability: B = %.4e (ADEV floor %.4e)", e.b,
+                  kFlickerAdevFactor * e.b);
+  } else {
+    std::snprintf(buf, sizeof buf, "effect outliers: %llu samples",
+                  static_cast<unsigned long long>(e.count));
+  }
+  std::string line = buf;
+  std::snprintf(buf, sizeof buf, " (statistic %.3g > threshold %.3g)", e.statistic,
+                e.threshold);
+  return line + buf;
+}
+
 // The unit of a channel from its name (its last field for a struct's): acc* m/s^2, gyro* rad/s;
 // otherwise the file's own, which the analysis does not know.
 std::string channel_unit_of(const std::string& channel) {
@@ -126,41 +178,24 @@ std::string to_json(const Report& r) {
   }
   s << "\n  ],\n  \"model_before\": " << model_json(r.model_before)
     << ",\n  \"error_before\": " << error_json(r.error_before) << ",\n  \"effects\": [";
-  for (std::size_t i = 0; i < r.effects.size(); ++i) {
-    s << (i > 0 ? "," : "") << "\n    " << effect_json(r.effects[i]);
-  }
+  s << effects_json(r.effects, "\n    ");
   s << (r.effects.empty() ? "" : "\n  ") << "],\n  \"model_after\": " << model_json(r.model_after)
     << ",\n  \"error_after\": " << error_json(r.error_after) << ",\n  \"notes\": [";
   for (std::size_t i = 0; i < r.notes.size(); ++i) {
     s << (i > 0 ? ", " : "") << quoted(r.notes[i]);
   }
-  s << "],\n  \"unexplained\": [";
-  for (std::size_t i = 0; i < r.unexplained.size(); ++i) {
-    const UnexplainedRun& u = r.unexplained[i];
-    s << (i > 0 ? ", " : "") << "{\"tau_min_s\": " << num(u.tau_min_s) << ", \"tau_max_s\": "
-      << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z) << "}";
-  }
-  s << "]";
+  s << "],\n  \"unexplained\": [" << unexplained_json(r.unexplained) << "]";
   if (r.head.samples > 0) {
     const FullRateHead& h = r.head;
     s << ",\n  \"full_rate_head\": {\"n_samples\": " << h.samples << ", \"fs_hz\": "
       << num(h.fs_hz) << ", \"block\": " << h.block << ", \"merged\": "
       << (h.merged ? "true" : "false") << ",\n    \"model_before\": "
       << model_json(h.model_before) << ",\n    \"error_before\": " << error_json(h.error_before)
-      << ",\n    \"effects\": [";
-    for (std::size_t i = 0; i < h.effects.size(); ++i) {
-      s << (i > 0 ? ", " : "") << effect_json(h.effects[i]);
-    }
-    s << "],\n    \"model_after\": " << model_json(h.model_after)
+      << ",\n    \"effects\": [" << effects_json(h.effects, " ")
+      << "],\n    \"model_after\": " << model_json(h.model_after)
       << ",\n    \"error_after\": " << error_json(h.error_after)
       << ",\n    \"error_record_model\": " << error_json(h.error_record_model)
-      << ",\n    \"unexplained\": [";
-    for (std::size_t i = 0; i < h.unexplained.size(); ++i) {
-      const UnexplainedRun& u = h.unexplained[i];
-      s << (i > 0 ? ", " : "") << "{\"tau_min_s\": " << num(u.tau_min_s) << ", \"tau_max_s\": "
-        << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z) << "}";
-    }
-    s << "]}";
+      << ",\n    \"unexplained\": [" << unexplained_json(h.unexplained) << "]}";
   }
   s << ",\n  \"gaps\": {\"samples\": " << r.gap_samples << ", \"runs\": " << r.gap_runs
     << "},\n  \"seconds\": " << num(r.seconds) << ",\n  \"cpu_seconds\": " << num(r.cpu_seconds)
@@ -240,33 +275,7 @@ std::string to_text(const Report& r) {
               : "effects: none (the first-order model explains the data within the intervals)\n");
   }
   for (const auto& e : r.effects) {
-    if (e.type == "quantization") {
-      std::snprintf(buf, sizeof buf, "effect quantization: Q = %.4e", e.q);
-    } else if (e.type == "rate_random_walk") {
-      std::snprintf(buf, sizeof buf, "effect rate_random_walk: K = %.4e", e.k);
-    } else if (e.type == "ramp") {
-      std::snprintf(buf, sizeof buf, "effect ramp: R = %.4e", e.r);
-    } else if (e.type == "sinusoid") {
-      std::snprintf(buf, sizeof buf, "effect sinusoid: f = %.6g Hz (period %.4g s), A = %.4e",
-                    e.freq_hz, 1.0 / e.freq_hz, e.amplitude);
-    } else if (e.type == "oscillation") {
-      std::snprintf(buf, sizeof buf,
-                    "effect oscillation: f0 = %.5g Hz, half-power width %.3g Hz, sigma = %.4e",
-                    e.freq_hz, e.bandwidth_hz, e.amplitude);
-    } else if (e.type == "bias_step") {
-      std::snprintf(buf, sizeof buf, "effect bias_step: at t = %.1f s, size %.4e", e.time_s,
-                    e.size);
-    } else if (e.type == "bias_instability") {
-      std::snprintf(buf, sizeof buf, "effect bias_instability: B = %.4e (ADEV floor %.4e)", e.b,
-                    kFlickerAdevFactor * e.b);
-    } else {
-      std::snprintf(buf, sizeof buf, "effect outliers: %llu samples",
-                    static_cast<unsigned long long>(e.count));
-    }
-    s << buf;
-    std::snprintf(buf, sizeof buf, " (statistic %.3g > threshold %.3g)\n", e.statistic,
-                  e.threshold);
-    s << buf;
+    s << effect_text(e) << "\n";
   }
   model_line("model after (joint fit over [Ts, T/10])", r.model_after);
   error_line("error after", r.error_after);
@@ -298,10 +307,7 @@ std::string to_text(const Report& r) {
                   h.error_record_model.n_taus);
     s << buf;
     for (const auto& e : h.effects) {
-      std::snprintf(buf, sizeof buf, "  head, effect %s%s\n", e.type.c_str(),
-                    e.freq_hz > 0.0 ? (" at " + std::to_string(e.freq_hz) + " Hz").c_str()
-                                    : "");
-      s << buf;
+      s << "  head, " << effect_text(e) << "\n";
     }
   }
   for (const auto& n : r.notes) {
