@@ -287,8 +287,8 @@ TEST_P(ScipyFile, ScalarAndStrings) {
 TEST_P(ScipyFile, WrongKindOrShapeIsAClearError) {
   const std::string f = kDir + "/" + GetParam();
   EXPECT_EQ(err("d_row", 1),
-            f + ": variable 'd_row': is a vector (1x4): column 1 does not exist");
-  EXPECT_EQ(err("d_mat", 2), f + ": variable 'd_mat': has 2 columns (3x2): column 2 does not exist");
+            f + ": variable 'd_row': is a vector (1x4): column 2 does not exist (columns count from 1)");
+  EXPECT_EQ(err("d_mat", 2), f + ": variable 'd_mat': has 2 columns (3x2): column 3 does not exist (columns count from 1)");
   EXPECT_TRUE(contains(err("cellvar"), "variable 'cellvar': is a cell array, not numeric"));
   EXPECT_TRUE(contains(err("structvar"), "is a struct array"));
   EXPECT_TRUE(contains(err("text"), "variable 'text': is a char array, not numeric"));

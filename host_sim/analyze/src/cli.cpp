@@ -97,8 +97,13 @@ class StreamedFile {
 };
 
 int fail(const std::string& msg, int status) {
-  std::fprintf(stderr, "imu-sim analyze: %s\n", msg.c_str());
+  std::fprintf(stderr, "imu-sim analyze: %s\n", imu::cli::term_safe(msg).c_str());
   return status;
+}
+
+// A channel the file does not hold is a command-line mistake (exit 2), as in adev and run.
+int read_status(const std::string& err) {
+  return imu::cli::names_missing_channel(err) ? kExitUsage : kExitRuntime;
 }
 
 // The rate: --fs, else the file's `fs`, else its `Fs`.
@@ -463,8 +468,19 @@ void run_jobs(std::vector<Job>& jobs) {
 int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const std::string& json,
            const std::string& plots, const std::string& yaml) {
   std::string err;
-  if (!plots.empty() && !imu::cli::make_dirs(plots, err)) {
-    return fail(err, kExitRuntime);
+  if (!yaml.empty()) {
+    // Kalibr takes both sensors: said before the analysis, not after it.
+    bool acc = false;
+    bool gyro = false;
+    for (const Job& j : jobs) {
+      acc = acc || base_name(j.channel).rfind("acc", 0) == 0;
+      gyro = gyro || base_name(j.channel).rfind("gyro", 0) == 0;
+    }
+    if (!acc || !gyro) {
+      return fail("--yaml needs at least one acc* and one gyro* channel (Kalibr takes both "
+                  "sensors); use --channel all",
+                  kExitUsage);
+    }
   }
   run_jobs(jobs);
   std::vector<Report> reports;
@@ -490,43 +506,57 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const st
     }
     reports.push_back(std::move(j.r));
   }
+  // With --json - (or --yaml -) standard output carries that document alone: the text report
+  // and the "wrote" lines go to standard error.
+  FILE* info = json == "-" || yaml == "-" ? stderr : stdout;
   for (const Report& r : reports) {
     if (reports.size() > 1) {
-      std::printf("==== %s ====\n", r.channel.c_str());
+      std::fprintf(info, "==== %s ====\n", imu::cli::term_safe(r.channel).c_str());
     }
-    std::fputs(to_text(r).c_str(), stdout);
+    std::fputs(imu::cli::term_safe_text(to_text(r)).c_str(), info);
   }
   if (!json.empty()) {
     std::string text;
     if (reports.size() == 1) {
       text = to_json(reports[0]);
     } else {
-      text = "{\n\"file\": \"" + file + "\",\n\"channels\": {";
+      text = "{\n\"file\": " + imu::cli::json_str(file) + ",\n\"channels\": {";
       for (std::size_t i = 0; i < reports.size(); ++i) {
-        text += std::string(i > 0 ? "," : "") + "\n\"" + reports[i].channel + "\": " +
-                to_json(reports[i]);
+        text += std::string(i > 0 ? "," : "") + "\n" + imu::cli::json_str(reports[i].channel) +
+                ": " + to_json(reports[i]);
       }
       text += "\n}\n}\n";
     }
     if (!imu::cli::write_file_atomic(json, text, err)) {
       return fail(err, kExitRuntime);
     }
-    std::printf("wrote %s\n", json.c_str());
+    if (json != "-") {
+      std::fprintf(info, "wrote %s\n", imu::cli::term_safe(json).c_str());
+    }
   }
   if (!yaml.empty()) {
     std::string text;
     if (!kalibr_yaml(reports, file, text, err) || !imu::cli::write_file_atomic(yaml, text, err)) {
       return fail(err, kExitRuntime);
     }
-    std::printf("wrote %s\n", yaml.c_str());
+    if (yaml != "-") {
+      std::fprintf(info, "wrote %s\n", imu::cli::term_safe(yaml).c_str());
+    }
   }
   if (!plots.empty()) {
+    // File names from channel names (a CSV header is user data): one safe component each,
+    // distinct, inside DIR.
+    std::vector<std::string> names;
     for (const Report& r : reports) {
+      names.push_back(r.channel);
+    }
+    const std::vector<std::string> stems = imu::cli::safe_components(names);
+    for (std::size_t i = 0; i < reports.size(); ++i) {
       std::string msg;
-      if (!write_plots(r, plots, msg)) {
+      if (!write_plots(reports[i], plots, stems[i], msg)) {
         return fail(msg, kExitRuntime);
       }
-      std::printf("%s\n", msg.c_str());
+      std::fprintf(info, "%s\n", imu::cli::term_safe(msg).c_str());
     }
   }
   return kExitOk;
@@ -638,7 +668,7 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
   if (imu::cli::looks_like_text(file)) {
     std::vector<Job> jobs;
     if (!text_jobs(file, channel_spec, fs, lsb, jobs, err)) {
-      return fail(err, kExitRuntime);
+      return fail(err, read_status(err));
     }
     return finish(file, jobs, lsb, json, plots, yaml);
   }
@@ -648,11 +678,11 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
   }
   std::vector<std::string> channels;
   if (!resolve_channels(m, file, channel_spec, channels, err)) {
-    return fail(err, kExitRuntime);
+    return fail(err, read_status(err));
   }
   if (lsb > 0.0 && channels.size() > 1) {
     return fail("--lsb applies to one channel; with several, each takes its LSB from the file",
-                kExitRuntime);
+                kExitUsage);
   }
   Options o;
   const std::size_t dot = base_name(channels[0]).rfind('.');
@@ -668,7 +698,7 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
     std::uint64_t block = 1;
     std::uint64_t dropped = 0;
     if (!read_channel(m, channels[i], jobs[i].samples, integer_class, block, dropped, err)) {
-      return fail(err, kExitRuntime);
+      return fail(err, read_status(err));
     }
     jobs[i].channel = channels[i];
     jobs[i].o = o;
@@ -721,6 +751,26 @@ int cli_main(int argc, char** argv) {
   }
   if (a.positional().empty() || !a.has("--channel")) {
     return fail("FILE and --channel NAME are required (imu-sim analyze --help)", kExitUsage);
+  }
+  // Output paths are checked before the work (an analysis is not lost to a typo in --json).
+  for (const char* opt : {"--json", "--yaml"}) {
+    if (a.has(opt) && !imu::cli::check_output_path(a.get(opt), err)) {
+      return fail(std::string(opt) + ": " + err, kExitUsage);
+    }
+  }
+  if (a.has("--json") && a.has("--yaml") && a.get("--json") == "-" && a.get("--yaml") == "-") {
+    return fail("--json - and --yaml - cannot both be standard output", kExitUsage);
+  }
+  if (a.has("--plots") && !imu::cli::check_output_dir(a.get("--plots"), err)) {
+    return fail("--plots: " + err, kExitUsage);
+  }
+  if (a.has("--yaml")) {
+    const std::string spec = a.get("--channel");
+    if (spec != "all" && spec.find(',') == std::string::npos) {
+      return fail("--yaml needs several channels (at least one acc* and one gyro*; Kalibr takes "
+                  "both sensors): use --channel all or a list",
+                  kExitUsage);
+    }
   }
   // Sizes are bounded by the MAT reader's budget; this is the last line of defence (a machine
   // short of memory): one line, exit 1, no exception escapes.

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "imu/analyze/analyze.hpp"
+#include "imu/cli/file_out.hpp"
+#include "imu/cli/json.hpp"
 #include "imu/model_fit.hpp"
 
 namespace imu::analyze {
@@ -117,7 +119,7 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
   const auto names = [](const std::vector<KalibrAxis>& v) {
     std::string s;
     for (const auto& a : v) {
-      s += (s.empty() ? "" : ", ") + a.channel;
+      s += (s.empty() ? "" : ", ") + imu::cli::json_str(a.channel);  // a quoted YAML scalar
     }
     return s;
   };
@@ -132,7 +134,7 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
     std::string s;
     for (const Report* r : v) {
       const ModelParams& p = r->model_after;
-      s += "#   " + r->channel + ": N " + g(p.n);
+      s += "#   " + imu::cli::term_safe(r->channel) + ": N " + g(p.n);
       for (std::size_t i = 0; i < p.n_gm; ++i) {
         s += ", GM (Sb " + g(p.gm[i].sb) + ", Tb " + g(p.gm[i].tb_s) + " s)";
       }
@@ -154,7 +156,7 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
     return s + "]";
   };
   yaml = "# IMU noise parameters for Kalibr (github.com/ethz-asl/kalibr/wiki/IMU-Noise-Model),\n"
-         "# written by imu-sim analyze from " + source + ".\n"
+         "# written by imu-sim analyze from " + imu::cli::term_safe(source) + ".\n"
          "# noise_density: white noise N, continuous time (AVAR N^2/tau); random_walk: bias\n"
          "# random walk K (AVAR K^2 tau/3). N: the white + walk model fitted to the analysed\n"
          "# model's ADEV over [Ts, T/10] (equal relative weight per tau), Kalibr's two-term family\n"

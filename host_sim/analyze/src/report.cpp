@@ -372,15 +372,12 @@ std::string gq(const std::string& s) { return imu::cli::gnuplot_str(s); }
 
 }  // namespace
 
-bool write_plots(const Report& r, const std::string& dir, std::string& message) {
-  const std::string base = absolute(dir) + "/" + r.channel;
+bool write_plots(const Report& r, const std::string& dir, const std::string& stem,
+                 std::string& message) {
+  const std::string base = absolute(dir) + "/" + imu::cli::safe_component(stem);
   const std::string csv = base + "_adev.csv";
   {
-    std::ofstream f(csv);
-    if (!f) {
-      message = "cannot write " + csv;
-      return false;
-    }
+    std::ostringstream f;
     f << "tau_s,adev_raw,ci_lo_raw,ci_hi_raw,adev_clean,ci_lo_clean,ci_hi_clean,model_before,"
          "model_after";
     for (const char* t : kTermNames) {
@@ -409,6 +406,9 @@ bool write_plots(const Report& r, const std::string& dir, std::string& message) 
       }
       f << '\n';
     }
+    if (!imu::cli::write_file_atomic(csv, f.str(), message)) {
+      return false;
+    }
   }
   message = "wrote " + csv;
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
@@ -421,8 +421,8 @@ bool write_plots(const Report& r, const std::string& dir, std::string& message) 
   const double tau_fit_hi = r.error_after.tau_max_s;
   const double tau_fit_lo = r.error_after.tau_min_s;
   {
-    std::ofstream g(gp);
-    g << "# ADEV of " << r.channel << ": data with its 68 % interval, the model and its terms.\n"
+    std::ostringstream g;
+    g << "# ADEV of " << imu::cli::term_safe(r.channel) << ": data with its 68 % interval, the model and its terms.\n"
       << "# Run from any directory: gnuplot " << gq(gp) << "\n"
       << "set datafile separator ','\nset logscale xy\nset format y '%.0e'\nset grid\n"
       << "set key bottom left noenhanced\nset xlabel 'tau [s]'\n"
@@ -469,11 +469,20 @@ bool write_plots(const Report& r, const std::string& dir, std::string& message) 
            "before (white + GM over [Ts, 100 s])");
     figure("after", 5, 9, 10, r.model_after,
            "after (joint fit with the effects found; data cleaned)");
+    if (!imu::cli::write_file_atomic(gp, g.str(), message)) {
+      return false;
+    }
   }
-  const std::string cmd = "gnuplot " + gq(gp) + " 2>/dev/null";
+  // gnuplot is started on the script's absolute path, quoted for the shell (the path passed
+  // check_output_dir: no control characters).
+  std::string sh = "'";
+  for (const char c : gp) {
+    sh += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  }
+  const std::string cmd = "gnuplot " + sh + "' 2>/dev/null";
   if (std::system(cmd.c_str()) != 0) {
-    message += "; gnuplot failed on " + gp;
-    return true;
+    message = "gnuplot failed on " + gp + " (the CSV and the script were written)";
+    return false;
   }
   message += ", " + base + "_{before,after}.{svg,png} (" + gp + ")";
   return true;

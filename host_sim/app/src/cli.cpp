@@ -456,20 +456,20 @@ void adev_channel(const AdevOptions& o, bool text, AdevResult& r) {
   }
 }
 
-void print_adev(const std::string& path, const AdevResult& r) {
+void print_adev(FILE* out, const std::string& path, const AdevResult& r) {
   const ChannelData& ch = r.sd.ch[r.chan];
-  std::printf("%s %s: %zu samples at %g Hz, LSB %g %s%s\n", path.c_str(), r.name.c_str(),
+  std::fprintf(out, "%s %s: %zu samples at %g Hz, LSB %g %s%s\n", imu::cli::term_safe(path).c_str(), imu::cli::term_safe(r.name).c_str(),
               r.sd.n_samples, r.sd.fs_hz, ch.lsb, adev_unit(r.name, r.chan).c_str(),
               ch.lsb_from_file ? " (from the file)" : "");
-  std::fputs(format_adev_table(r.rows).c_str(), stdout);
-  std::printf("time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", r.t.read,
+  std::fputs(format_adev_table(r.rows).c_str(), out);
+  std::fprintf(out, "time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", r.t.read,
               r.t.quantize, r.t.adev, r.t.total);
   if (ch.non_finite > 0) {
-    std::printf("note: %llu non-finite samples (NaN/Inf) treated as gaps\n",
+    std::fprintf(out, "note: %llu non-finite samples (NaN/Inf) treated as gaps\n",
                 static_cast<unsigned long long>(ch.non_finite));
   }
   if (ch.off_grid > 0) {
-    std::printf("note: %llu samples off the LSB grid (quantised to it)\n",
+    std::fprintf(out, "note: %llu samples off the LSB grid (quantised to it)\n",
                 static_cast<unsigned long long>(ch.off_grid));
   }
 }
@@ -532,11 +532,9 @@ std::string adev_csv_all(const std::vector<AdevResult>& rs) {
 // One channel's plot in `abs` (an absolute folder): adev_NAME.csv, .gp (runs from any
 // directory), and with gnuplot (`have`) .svg and .png: the ADEV with its 68.3 % intervals, the
 // unit on the axis, the name as given (noenhanced). False with err.
-bool adev_plot(const std::string& abs, bool have, const AdevResult& r, std::string& err) {
-  std::string base = "adev_";
-  for (const char ch : r.name) {
-    base += std::isalnum(static_cast<unsigned char>(ch)) != 0 || ch == '_' ? ch : '_';
-  }
+bool adev_plot(const std::string& abs, bool have, const AdevResult& r, const std::string& stem,
+               std::string& err) {
+  const std::string base = "adev_" + stem;
   std::string gp = "cd " + imu::cli::gnuplot_str(abs) + "\n";
   gp += "set datafile separator ','\nset logscale xy\nset format x '10^{%L}'\n";
   gp += "set format y '10^{%L}'\nset grid xtics ytics mxtics mytics lc rgb '#dddddd'\n";
@@ -553,12 +551,13 @@ bool adev_plot(const std::string& abs, bool have, const AdevResult& r, std::stri
     return false;
   }
   if (!have) {
-    std::printf("plots: gnuplot NOT FOUND: %s.{csv,gp} written, no SVG/PNG\n", path.c_str());
+    std::printf("plots: gnuplot NOT FOUND: %s.{csv,gp} written, no SVG/PNG\n",
+                imu::cli::term_safe(path).c_str());
   } else if (!imu::cli::gnuplot_render(abs, base, 700)) {
     err = "gnuplot failed on " + path + ".gp (see " + base + ".gnuplot.log)";
     return false;
   } else {
-    std::printf("plots: %s.{svg,png}\n", path.c_str());
+    std::printf("plots: %s.{svg,png}\n", imu::cli::term_safe(path).c_str());
   }
   return true;
 }
@@ -571,8 +570,18 @@ bool adev_plots(const std::string& dir, const std::vector<AdevResult>& rs, std::
   std::error_code ec;
   const std::string abs = std::filesystem::absolute(dir, ec).lexically_normal().string();
   const bool have = imu::cli::gnuplot_available();
-  return std::all_of(rs.begin(), rs.end(),
-                     [&](const AdevResult& r) { return adev_plot(abs, have, r, err); });
+  // File names from channel names (user data): one safe component each, distinct.
+  std::vector<std::string> names;
+  for (const AdevResult& r : rs) {
+    names.push_back(r.name);
+  }
+  const std::vector<std::string> stems = imu::cli::safe_components(names);
+  for (std::size_t i = 0; i < rs.size(); ++i) {
+    if (!adev_plot(abs, have, rs[i], stems[i], err)) {
+      return false;
+    }
+  }
+  return true;
 }
 
 // The channels --channel names: from the text file's header or the MAT-file's variables.
@@ -622,11 +631,26 @@ int cmd_adev(int argc, char** argv) {
   const bool text = imu::cli::looks_like_text(o.path);
   std::vector<std::string> names;
   if (!adev_channels(o, text, names, err)) {
-    return fail(cmd, err, err.find("empty name") != std::string::npos ? kExitUsage : kExitRuntime);
+    return fail(cmd, err,
+                err.find("empty name") != std::string::npos || imu::cli::names_missing_channel(err)
+                    ? kExitUsage
+                    : kExitRuntime);
   }
   if (o.lsb > 0.0 && names.size() > 1) {
     return fail(cmd, "--lsb applies to one channel; with several, each takes its LSB from the file",
                 kExitUsage);
+  }
+  // Output paths are checked before the work.
+  for (const char* opt : {"--json", "--csv"}) {
+    if (a.has(opt) && !imu::cli::check_output_path(a.get(opt), err)) {
+      return fail(cmd, std::string(opt) + ": " + err, kExitUsage);
+    }
+  }
+  if (a.get("--json") == "-" && a.get("--csv") == "-") {
+    return fail(cmd, "--json - and --csv - cannot both be standard output", kExitUsage);
+  }
+  if (a.has("--plots") && !imu::cli::check_output_dir(a.get("--plots"), err)) {
+    return fail(cmd, "--plots: " + err, kExitUsage);
   }
   // The channels in parallel (each streamed from the file on its own: memory per channel is
   // constant), reported in the order named.
@@ -642,8 +666,11 @@ int cmd_adev(int argc, char** argv) {
       return fail(cmd, (rs.size() > 1 ? r.name + ": " : std::string()) + r.err, r.status);
     }
   }
+  // With --json - or --csv -, standard output carries that document alone: the tables go to
+  // standard error.
+  FILE* info = a.get("--json") == "-" || a.get("--csv") == "-" ? stderr : stdout;
   for (const AdevResult& r : rs) {
-    print_adev(o.path, r);
+    print_adev(info, o.path, r);
   }
   if ((a.has("--json") && !write_file(a.get("--json"), adev_json(o, rs), err)) ||
       (a.has("--csv") && !write_file(a.get("--csv"), adev_csv_all(rs), err)) ||

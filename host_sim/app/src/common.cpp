@@ -68,7 +68,7 @@ bool write_file(const std::string& path, const std::string& text, std::string& e
 }
 
 int fail(const char* cmd, const std::string& msg, int status) {
-  std::fprintf(stderr, "%s: %s\n", cmd, msg.c_str());
+  std::fprintf(stderr, "%s: %s\n", cmd, imu::cli::term_safe(msg).c_str());
   return status;
 }
 

@@ -993,12 +993,12 @@ Status MatFile::read_column_into(std::string_view name, std::size_t column,
   if (m.rows == 1U || m.cols == 1U) {
     if (column != 0U) {
       return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
-                      std::to_string(column) + " does not exist"};
+                      std::to_string(column + 1U) + " does not exist (columns count from 1)"};
     }
   } else {
     if (column >= m.cols) {
       return MatError{where + "has " + std::to_string(m.cols) + " columns (" + dims_text(m.dims) +
-                      "): column " + std::to_string(column) + " does not exist"};
+                      "): column " + std::to_string(column + 1U) + " does not exist (columns count from 1)"};
     }
     first = static_cast<std::uint64_t>(column) * m.rows;
     count = m.rows;
@@ -1711,12 +1711,12 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
   if (m.rows == 1U || m.cols == 1U) {
     if (column != 0U) {
       return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
-                      std::to_string(column) + " does not exist"};
+                      std::to_string(column + 1U) + " does not exist (columns count from 1)"};
     }
   } else {
     if (column >= m.cols) {
       return MatError{where + "has " + std::to_string(m.cols) + " columns (" + dims_text(m.dims) +
-                      "): column " + std::to_string(column) + " does not exist"};
+                      "): column " + std::to_string(column + 1U) + " does not exist (columns count from 1)"};
     }
     first = static_cast<std::uint64_t>(column) * m.rows;
     s.count = m.rows;

@@ -203,8 +203,13 @@ void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, co
 
 [[nodiscard]] std::string to_json(const Report& r);
 [[nodiscard]] std::string to_text(const Report& r);
-/// CSV always (DIR/CHANNEL_adev.csv); SVG via gnuplot if found. message says what was written.
-[[nodiscard]] bool write_plots(const Report& r, const std::string& dir, std::string& message);
+/// CSV always (DIR/STEM_adev.csv), the gnuplot script (DIR/STEM_adev.gp) and, if gnuplot is
+/// found, DIR/STEM_{before,after}.{svg,png}. `stem` is made one safe file-name component
+/// (imu::cli::safe_component; callers with several channels pass imu::cli::safe_components'
+/// distinct names). Every write is checked: false with the reason (a full disk, gnuplot
+/// failing); message says what was written.
+[[nodiscard]] bool write_plots(const Report& r, const std::string& dir, const std::string& stem,
+                               std::string& message);
 /// Kalibr's imu.yaml (accelerometer/gyroscope noise density and random walk, update_rate,
 /// rostopic) from the reports of one IMU's channels (acc* and gyro*, at least one of each):
 /// per sensor the largest axis of the white + walk model fitted to each after-model's ADEV;

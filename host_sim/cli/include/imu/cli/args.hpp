@@ -68,6 +68,10 @@ struct ChannelSpec {
   bool has_column = false;  ///< :K was given
 };
 
+/// The reader's error names a channel the file does not hold (a variable, struct field, text
+/// column or matrix column): a command-line mistake, exit kExitUsage in every command.
+[[nodiscard]] bool names_missing_channel(const std::string& err);
+
 /// Parse NAME or NAME:K; false with a one-line err when K is not a number in [1, 1e6].
 [[nodiscard]] bool parse_channel_spec(const std::string& text, ChannelSpec& out, std::string& err);
 

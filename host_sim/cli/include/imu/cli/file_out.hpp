@@ -1,12 +1,21 @@
-// Outputs written whole or not at all: the bytes go to a temporary file next to `path` (same
-// folder, so the rename cannot cross file systems), are flushed and synced, and the file is
-// renamed over `path` only when all of it was written. On any failure (full disk, file size
-// limit, I/O error) the temporary file is removed and `path` is left as it was. POSIX.
+// The one output layer of every command: files written whole or not at all, names from user data
+// made safe, paths checked before the work.
+//
+// A regular file (or a path that does not exist yet) is written atomically: the bytes go to a
+// temporary file next to it (same folder, so the rename cannot cross file systems), are flushed
+// and synced, and the file is renamed over `path` only when all of it was written. On any
+// failure (full disk, file size limit, I/O error) the temporary file is removed and `path` is
+// left as it was; the temporary file is also removed when the process is stopped by SIGINT,
+// SIGTERM, SIGHUP or SIGPIPE (install_cleanup_handlers). A symbolic link is followed: the file
+// it points to is replaced, the link stays. A character device or a FIFO (/dev/null, /dev/stdout,
+// a pipe) is written through, never replaced. A directory, a block device or a socket is refused
+// with the reason. "-" is standard output. POSIX.
 #ifndef IMU_CLI_FILE_OUT_HPP
 #define IMU_CLI_FILE_OUT_HPP
 
 #include <cstddef>
 #include <string>
+#include <vector>
 
 namespace imu::cli {
 
@@ -32,7 +41,10 @@ class AtomicFileWriter {
   void abort();
   std::string path_;
   std::string tmp_;
+  std::string target_;  // the regular file renamed over (`path_`, a link resolved)
   int fd_ = -1;
+  int slot_ = -1;         // the signal handler's table slot of tmp_
+  bool through_ = false;  // fd_ is the target itself (device, FIFO, stdout): no rename
 };
 
 /// Write `size` bytes at `data` as the file `path`. False with a one-line err naming the path
@@ -50,9 +62,38 @@ class AtomicFileWriter {
 /// one-line err if a component cannot be created or `path` is not a directory.
 [[nodiscard]] bool make_dirs(const std::string& path, std::string& err);
 
-/// A gnuplot string literal: single-quoted, a quote doubled. For the paths in .gp scripts,
-/// which name their files absolutely so that they run from any directory.
+/// A gnuplot string literal: single-quoted, a quote doubled, and every control character
+/// (a newline would end the string and start a command) replaced by '?'. Paths in .gp scripts
+/// come from check_output_dir, which refuses control characters, so they are never altered.
 [[nodiscard]] std::string gnuplot_str(const std::string& s);
+
+/// A name from user data (a channel, a column header, a variable) as one safe file-name
+/// component: letters, digits, '.', '_' and '-' kept, every other byte '_', no leading '.'
+/// (so never "." or ".."), at most 64 bytes, "_" if nothing is left. Never a path.
+[[nodiscard]] std::string safe_component(const std::string& name);
+/// safe_component of each name, made distinct: a name whose component another already took
+/// ("a-b" and "a:b" both give "a-b") gets "-2", "-3", ... in the order given.
+[[nodiscard]] std::vector<std::string> safe_components(const std::vector<std::string>& names);
+
+/// Text from a file or the command line made safe for a terminal or a log line: control
+/// characters (C0, DEL, C1) and bytes that are not UTF-8 are written as \xNN, so an escape
+/// sequence in a file's bytes is shown, never executed by the terminal.
+[[nodiscard]] std::string term_safe(const std::string& s);
+/// term_safe for a multi-line text (a report): newlines and tabs kept, the rest as term_safe.
+[[nodiscard]] std::string term_safe_text(const std::string& s);
+
+/// Check an output file's path before any work: not empty, no control characters, its folder
+/// exists and is a folder, and the path is not a folder, a block device or a socket. "-"
+/// (standard output) passes. False with a one-line reason.
+[[nodiscard]] bool check_output_path(const std::string& path, std::string& err);
+/// Check (and create, like mkdir -p) an output folder before any work: not empty, no control
+/// characters in its absolute form (the .gp scripts name it), a folder. False with the reason.
+[[nodiscard]] bool check_output_dir(const std::string& path, std::string& err);
+
+/// Remove the atomic writers' temporary files when SIGINT, SIGTERM, SIGHUP or SIGPIPE stops
+/// the process (the signal's default action then runs). Call once at the start of main.
+/// Async-signal-safe: the handler only unlinks paths registered in a fixed table.
+void install_cleanup_handlers();
 
 /// gnuplot is on the PATH.
 [[nodiscard]] bool gnuplot_available();

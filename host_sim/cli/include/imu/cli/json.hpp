@@ -1,4 +1,4 @@
-// The JSON scalars every imu-sim command writes (issue 13: one JSON writer): numbers with 10
+// The JSON scalars every imu-sim command writes (one JSON writer): numbers with 10
 // significant digits (%.10g; NaN and Inf, which JSON lacks, as null) and strings with the
 // escapes JSON requires. One vocabulary rides on them: counts are n_*, times *_s, rates *_hz;
 // the noise terms are lower-case IEEE 952 symbols (n, q, b, k, r; a GM term's sb and tb_s),
@@ -6,14 +6,20 @@
 #ifndef IMU_CLI_JSON_HPP
 #define IMU_CLI_JSON_HPP
 
+#include <cstddef>
 #include <string>
 
 namespace imu::cli {
 
 /// A JSON number: %.10g, non-finite -> null.
 [[nodiscard]] std::string json_num(double v);
-/// A JSON string literal (quotes, backslash and control characters escaped).
+/// A JSON string literal (quotes, backslash and control characters escaped; a byte that is not
+/// part of valid UTF-8 becomes U+FFFD). Also a valid YAML double-quoted scalar (YAML 1.2 reads
+/// JSON strings), which is how the YAML writer quotes names and paths.
 [[nodiscard]] std::string json_str(const std::string& s);
+/// The length of the valid UTF-8 sequence starting at s[i] (1 for ASCII), 0 if the bytes there
+/// are not valid UTF-8 (a stray continuation byte, a cut, overlong or surrogate sequence).
+[[nodiscard]] std::size_t utf8_sequence(const std::string& s, std::size_t i);
 /// The "units" object of a JSON whose channel is in `unit` (e.g. "m/s^2"): each noise term's
 /// unit, e.g. {"n": "m/s^2/sqrt(Hz)", "k": "m/s^2*sqrt(Hz)", ...}.
 [[nodiscard]] std::string json_units(const std::string& unit);
