@@ -258,12 +258,13 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   const std::string j2 = slurp(json);
   EXPECT_NE(j2.find("\"gyro_y\": {"), std::string::npos);
   EXPECT_EQ(j2.find("\"gyro_x\": {"), std::string::npos);
-  // --yaml without both sensors is a run-time error (exit 1), nothing written.
+  // --yaml without both sensors is refused as a usage error before any analysis (exit 2),
+  // nothing written.
   std::remove(yaml.c_str());
-  EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x", "--yaml", yaml}), 1);
+  EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x", "--yaml", yaml}), 2);
   EXPECT_FALSE(std::ifstream(yaml).good());
-  // An unknown name in the list: exit 1.
-  EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x,acc_q"}), 1);
+  // An unknown name in the list is a usage error: exit 2.
+  EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x,acc_q"}), 2);
 }
 
 // Issue 14 item 3: a record past 2^22 samples is analysed on block means for the whole record,
