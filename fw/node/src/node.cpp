@@ -459,9 +459,12 @@ void Node::update_alarm() {
 }
 
 void Node::send_frames(const hal::EncodedFrames& fr) {
+  bool stalled = false;  // a frame of this record waited send_timeout_ms in vain
   for (std::size_t i = 0; i < fr.count; ++i) {
-    if (tx_down_) {
-      ++stats_.telemetry_failures;  // not tried: the link was down at the last try
+    if (tx_down_ || stalled) {
+      // Not tried: the link was down at the last try, or the peer took no frame of this record
+      // (each try would wait send_timeout_ms again).
+      ++stats_.telemetry_failures;
       continue;
     }
     const hal::IoStatus st = tx_->send(fr.frame[i], cfg_node_.send_timeout_ms);
@@ -471,6 +474,7 @@ void Node::send_frames(const hal::EncodedFrames& fr) {
     } else {
       ++stats_.telemetry_failures;
       tx_down_ = st == hal::IoStatus::kLinkDown;
+      stalled = st == hal::IoStatus::kWouldBlock;
     }
   }
 }

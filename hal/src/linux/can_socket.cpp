@@ -131,6 +131,7 @@ void CanSocket::move_from(CanSocket& other) noexcept {
   tx_broken_ = other.tx_broken_;
   rx_eof_pending_ = other.rx_eof_pending_;
   opt_ = other.opt_;
+  stall_since_ms_ = other.stall_since_ms_;
   std::memcpy(name_, other.name_, sizeof name_);
   std::memcpy(error_, other.error_, sizeof error_);
   stats_ = other.stats_;
@@ -502,6 +503,23 @@ IoStatus CanSocket::send_raw(const void* bytes, std::size_t nbytes, int timeout_
   return write_bytes(bytes, nbytes, timeout_ms);
 }
 
+// A send given up on back-pressure: kWouldBlock, or, when a loopback peer has taken nothing for
+// opt_.tx_stall_limit_ms, the peer dropped (kLinkDown; a new peer may connect).
+IoStatus CanSocket::stalled() {
+  const std::int64_t now = now_monotonic_ms();
+  if (stall_since_ms_ < 0) {
+    stall_since_ms_ = now;
+  }
+  if (kind_ == BusKind::kLoopback && !pair_ && opt_.tx_stall_limit_ms > 0 &&
+      now - stall_since_ms_ >= opt_.tx_stall_limit_ms) {
+    stall_since_ms_ = -1;
+    ++stats_.tx_stall_disconnects;
+    ++stats_.tx_link_down;
+    return link_lost(ETIMEDOUT);
+  }
+  return IoStatus::kWouldBlock;
+}
+
 IoStatus CanSocket::write_bytes(const void* bytes, std::size_t nbytes, int timeout_ms) {
   if (tx_broken_) {  // loopback: an earlier send met the closed peer
     int queued = 0;
@@ -526,6 +544,7 @@ IoStatus CanSocket::write_bytes(const void* bytes, std::size_t nbytes, int timeo
     const ssize_t w = ::send(data_fd_, bytes, nbytes, MSG_DONTWAIT | MSG_NOSIGNAL);
     if (w >= 0 && static_cast<std::size_t>(w) == nbytes) {
       ++stats_.tx_frames;
+      stall_since_ms_ = -1;
       if (down_ && !pair_) {
         down_ = false;
         ++stats_.link_up;
@@ -548,16 +567,19 @@ IoStatus CanSocket::write_bytes(const void* bytes, std::size_t nbytes, int timeo
         const std::int64_t left = deadline - now_monotonic_ms();
         wait_ms = left > 0 ? static_cast<int>(left) : 0;
       }
-      if (wait_ms == 0) {
+      const bool abort = opt_.abort_wait != nullptr && opt_.abort_wait->load();
+      if (wait_ms == 0 || abort) {
         ++stats_.tx_would_block;
-        return IoStatus::kWouldBlock;
+        return stalled();
       }
       if (err == ENOBUFS) {
         // A full CAN device queue does not always raise POLLOUT when it drains: nap 1 ms.
         poll(nullptr, 0, 1);
       } else {
+        // At most 100 ms per wait, so that the abort flag is seen soon (a signal may also cut
+        // the wait short: EINTR).
         pollfd p{data_fd_, POLLOUT, 0};
-        poll(&p, 1, wait_ms);
+        poll(&p, 1, wait_ms < 0 || wait_ms > 100 ? 100 : wait_ms);
       }
       continue;
     }

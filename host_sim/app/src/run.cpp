@@ -26,6 +26,7 @@
 
 #include "common.hpp"
 #include "data.hpp"
+#include "imu/cli/file_out.hpp"
 #include "imu/edf.hpp"
 #include "imu/hal/linux/can_socket.hpp"
 #include "imu/hal/sim/memory_line.hpp"
@@ -91,8 +92,13 @@ struct Telemetry {
       case hal::RxEvent::Type::kAdev: {
         const hal::AdevRecord& a = e.rec.adev;
         ++adev_records;
+        // A point no estimator can give (a hostile or broken node): counted, never plotted.
+        const bool finite = std::isfinite(a.tau_s) && std::isfinite(a.adev) &&
+                            std::isfinite(a.ci_lo) && std::isfinite(a.ci_hi);
+        const bool possible = finite && a.tau_s > 0.0F && a.adev >= 0.0F && a.ci_lo >= 0.0F &&
+                              a.ci_lo <= a.ci_hi;
         if (a.channel >= kNumChannels || a.n_points == 0 || a.n_points > node::kMaxAdevPoints ||
-            a.index >= a.n_points) {
+            a.index >= a.n_points || !possible) {
           ++bad_adev_records;
           break;
         }
@@ -329,6 +335,9 @@ bool parse_run_names(const Args& a, RunOptions& o, std::string& err) {
   }
   o.layout = o.layout_s == "classic" ? hal::Layout::kClassic : hal::Layout::kFd;
   o.out_dir = a.get("--out", "out/run");
+  if (err.empty() && o.out_dir.empty()) {
+    err = "--out: empty output folder";
+  }
   o.fw = a.get("--fw", "");
   o.quiet = a.has("--quiet");
   o.only_channel = a.has("--only-channel");
@@ -1097,6 +1106,11 @@ int cmd_run(int argc, char** argv) {
   if (o.help) {
     return print_help("run");
   }
+  // Output paths are checked before the work (a run is not lost to a typo in --json).
+  if (!imu::cli::check_output_dir(o.out_dir, err) ||
+      !imu::cli::check_output_path(o.ro.json_path, err)) {
+    return fail(kCmd, err, kExitUsage);
+  }
   std::string model_note;
   if (o.push_model) {
     std::ifstream in(o.model_path, std::ios::binary);
@@ -1161,6 +1175,18 @@ int cmd_run(int argc, char** argv) {
                           std::to_string(span) + " samples)");
   }
 
+  if (tel.bad_adev_records > 0) {
+    return fail(kCmd, "the firmware node sent " + std::to_string(tel.bad_adev_records) +
+                          " impossible ADEV records (index out of range, tau <= 0, negative or "
+                          "non-finite ADEV, ci_lo > ci_hi): its telemetry cannot be trusted");
+  }
+  if (o.push_model && tel.rejects.model_rejected > 0) {
+    return fail(kCmd, "the firmware node refused the pushed model (" +
+                          std::to_string(tel.rejects.model_rejected) +
+                          " channel filters could not be configured: a negative or zero "
+                          "parameter, or more states than the node holds); it ran its default "
+                          "model instead");
+  }
   ReportInput ri;
   ri.source = o.path;
   ri.channel = o.chan_name;

@@ -214,7 +214,9 @@ int fw_main(int argc, char** argv) {
   }
 
   hal::CanSocket sock;
-  if (sock.open(bus.c_str()) != hal::IoStatus::kOk) {
+  hal::BusOptions bo;
+  bo.abort_wait = &g_stop;  // SIGTERM cuts a telemetry send's back-pressure wait short
+  if (sock.open(bus.c_str(), bo) != hal::IoStatus::kOk) {
     return fail(kCmd, std::string("cannot open bus: ") + sock.error());
   }
   if (layout == "auto" && !sock.fd_capable()) {
@@ -253,7 +255,7 @@ int fw_main(int argc, char** argv) {
   const hal::RxStats& rs = n.rx_stats();
   std::printf("imu-fw: stream ended (%s): %llu samples, %llu missing, %llu frames, "
               "%llu crc errors, %llu before config, %llu telemetry frames (%llu failed), "
-              "kernel drops %llu\n",
+              "kernel drops %llu, peers dropped for not reading %llu\n",
               node::to_string(end), static_cast<unsigned long long>(st.samples),
               static_cast<unsigned long long>(st.missing),
               static_cast<unsigned long long>(rs.frames),
@@ -261,7 +263,8 @@ int fw_main(int argc, char** argv) {
               static_cast<unsigned long long>(st.samples_before_config),
               static_cast<unsigned long long>(st.telemetry_frames),
               static_cast<unsigned long long>(st.telemetry_failures),
-              static_cast<unsigned long long>(sock.stats().kernel_drops));
+              static_cast<unsigned long long>(sock.stats().kernel_drops),
+              static_cast<unsigned long long>(sock.stats().tx_stall_disconnects));
   if (n.have_config()) {
     AdevPoint pts[node::kMaxAdevPoints];
     for (std::size_t c = 0; c < node::kChannels; ++c) {

@@ -45,6 +45,9 @@ LoopEnd run_node_loop(Node& node, hal::CanSocket& bus, const LoopOptions& opt) {
     switch (st) {
       case hal::IoStatus::kOk:
         for (std::size_t i = 0; i < n; ++i) {
+          if (opt.stop != nullptr && opt.stop->load(std::memory_order_relaxed)) {
+            break;  // a stop is honoured within one frame (the loop's top finishes the node)
+          }
           node.on_frame(local[i].frame, local[i].nbytes, local[i].rx_time_ns);
         }
         last_frame_ms = now_ms();

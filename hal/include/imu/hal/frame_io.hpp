@@ -50,6 +50,7 @@ struct LinkStats {
   std::uint64_t tx_backpressure = 0;  ///< sends that met EAGAIN / ENOBUFS at least once
   std::uint64_t tx_would_block = 0;   ///< sends given up after the timeout (kWouldBlock)
   std::uint64_t tx_link_down = 0;     ///< sends refused because the link was down
+  std::uint64_t tx_stall_disconnects = 0;  ///< loopback peers dropped: not reading (stalled)
   std::uint64_t sys_errors = 0;
   std::uint64_t peer_refused = 0;     ///< loopback peers of another user id, closed unread
   int last_errno = 0;

@@ -19,6 +19,7 @@
 #ifndef IMU_HAL_CAN_SOCKET_HPP
 #define IMU_HAL_CAN_SOCKET_HPP
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 
@@ -30,6 +31,13 @@ enum class BusKind : std::uint8_t { kNone, kSocketCan, kLoopback };
 
 struct BusOptions {
   int rcvbuf_bytes = 1 << 20;  ///< SO_RCVBUF request (the kernel may cap it at rmem_max)
+  /// Loopback only: a peer that has taken no frame for this long while sends wait on it (it
+  /// stopped reading) is disconnected (counted in LinkStats::tx_stall_disconnects), so a stuck
+  /// peer cannot hold the node. 0: never.
+  int tx_stall_limit_ms = 10000;
+  /// While set, a send waiting on back-pressure gives up at once (kWouldBlock): the owner's
+  /// stop flag (SIGTERM), so a peer that does not read cannot delay a stop. May be null.
+  const std::atomic<bool>* abort_wait = nullptr;
 };
 
 class CanSocket final : public FrameSource, public FrameSink {
@@ -77,6 +85,7 @@ class CanSocket final : public FrameSource, public FrameSink {
   IoStatus link_lost(int err);
   IoStatus fail(IoStatus s, int err, const char* what);
   IoStatus write_bytes(const void* bytes, std::size_t nbytes, int timeout_ms);
+  IoStatus stalled();
   void move_from(CanSocket& other) noexcept;
 
   BusKind kind_ = BusKind::kNone;
@@ -90,6 +99,7 @@ class CanSocket final : public FrameSource, public FrameSink {
   bool tx_broken_ = false;  // loopback: a send met the closed peer; receive() drains, then closes
   bool rx_eof_pending_ = false;  // loopback: a send closed the ended link; receive() reports it
   BusOptions opt_{};
+  std::int64_t stall_since_ms_ = -1;  // first send given up on the current peer's stall, or -1
   char name_[64] = {};
   char error_[160] = {};
   LinkStats stats_{};
