@@ -160,6 +160,21 @@ bool file_lsb(const StreamedFile& m, const std::string& channel, double& lsb,
 }
 
 // --channel: NAME, a comma list, or `all` (the IMU channels the file holds, in the usual order).
+// Channels in one run: four 6-axis IMUs. Each is held (up to kMaxAnalysedSamples values) and
+// analysed in turn, so a file of thousands of short columns would take minutes and gigabytes.
+constexpr std::size_t kMaxChannels = 24;
+
+bool within_channel_limit(const std::string& file, const std::vector<std::string>& names,
+                          std::string& err) {
+  if (names.size() <= kMaxChannels) {
+    return true;
+  }
+  err = file + ": " + std::to_string(names.size()) + " channels, more than the " +
+        std::to_string(kMaxChannels) + " one run analyses; name those to analyse with --channel " +
+        "A,B,...";
+  return false;
+}
+
 bool resolve_channels(const StreamedFile& m, const std::string& file,
                       const std::string& spec, std::vector<std::string>& out, std::string& err) {
   std::vector<std::string> held;
@@ -177,7 +192,7 @@ bool resolve_channels(const StreamedFile& m, const std::string& file,
     err = file + ": " + err;
     return false;
   }
-  return true;
+  return within_channel_limit(file, out, err);
 }
 
 // Records longer than this are analysed on block means: the analysis keeps several doubles per
@@ -603,6 +618,9 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     }
     if (!imu::cli::text_channels(header.names(), spec, names, err)) {
       err.insert(0, file + ": ");
+      return false;
+    }
+    if (!within_channel_limit(file, names, err)) {
       return false;
     }
   }

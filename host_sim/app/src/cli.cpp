@@ -337,7 +337,59 @@ struct AdevResult {
   AdevTiming t{};
   std::string err;
   int status = kExitOk;
+  // Text input with several channels: the column read in the run's one pass, and its rate
+  // (nullptr: the channel streams the file on its own).
+  const std::vector<double>* read_samples = nullptr;
+  double read_fs_hz = 0.0;
 };
+
+// Several text columns read in one pass over the file (imu::cli::TextColumnStream), each on
+// the grid, when they fit kOnePassSamples values; else none (each channel then streams the
+// file: at most kMaxStreamedColumns of them). Exit status; err set.
+constexpr std::size_t kOnePassSamples = std::size_t{1} << 26U;  // 512 MiB of doubles
+constexpr std::size_t kMaxStreamedColumns = 16;
+int read_text_columns(const AdevOptions& o, const std::vector<std::string>& names,
+                      std::vector<std::vector<double>>& cols, double& fs_hz, std::string& err) {
+  cols.assign(names.size(), {});
+  imu::cli::TextColumnStream st;
+  if (!st.open(o.path, names, o.fs, err)) {
+    const bool usage = err.rfind("no column", 0) == 0;
+    err = err.rfind(o.path, 0) == 0 ? err : o.path + ": " + err;
+    return usage ? kExitUsage : kExitRuntime;
+  }
+  fs_hz = st.fs_hz();
+  const std::size_t k = names.size();
+  constexpr std::size_t kChunk = 4096;
+  std::vector<double> buf(kChunk * k);
+  std::size_t held = 0;
+  for (;;) {
+    std::size_t got = 0;
+    if (!st.read(buf.data(), kChunk, got, err)) {
+      err = err.rfind(o.path, 0) == 0 ? err : o.path + ": " + err;
+      return kExitRuntime;
+    }
+    if (got == 0) {
+      return kExitOk;
+    }
+    held += got * k;
+    if (held > kOnePassSamples) {
+      cols.clear();
+      if (k > kMaxStreamedColumns) {
+        err = o.path + ": " + std::to_string(k) + " channels of over " +
+              std::to_string(held / k) + " samples are more than one pass holds (" +
+              std::to_string(kOnePassSamples) + " values); name at most " +
+              std::to_string(kMaxStreamedColumns) + " with --channel";
+        return kExitUsage;
+      }
+      return kExitOk;
+    }
+    for (std::size_t i = 0; i < got; ++i) {
+      for (std::size_t c = 0; c < k; ++c) {
+        cols[c].push_back(buf[i * k + c]);
+      }
+    }
+  }
+}
 
 // Rate, LSB and length of the channel: a text column's rate from its first rows (the samples
 // are streamed later, their number known at the end), or a MAT variable's header. Exit status;
@@ -349,14 +401,18 @@ int adev_load(const AdevOptions& o, bool text, AdevResult& r) {
     return kExitUsage;
   }
   if (text) {
-    imu::cli::TextColumnStream probe;
-    if (!probe.open(o.path, r.name, o.fs, r.err)) {
-      const bool usage = r.err.rfind("no column", 0) == 0;  // like a MAT variable not found
-      r.err = r.err.rfind(o.path, 0) == 0 ? r.err : o.path + ": " + r.err;
-      return usage ? kExitUsage : kExitRuntime;
+    if (r.read_samples != nullptr) {
+      r.sd.fs_hz = r.read_fs_hz;
+    } else {
+      imu::cli::TextColumnStream probe;
+      if (!probe.open(o.path, r.name, o.fs, r.err)) {
+        const bool usage = r.err.rfind("no column", 0) == 0;  // like a MAT variable not found
+        r.err = r.err.rfind(o.path, 0) == 0 ? r.err : o.path + ": " + r.err;
+        return usage ? kExitUsage : kExitRuntime;
+      }
+      r.sd.fs_hz = probe.fs_hz();
     }
     r.sd.path = o.path;
-    r.sd.fs_hz = probe.fs_hz();
     ChannelData& ch = r.sd.ch[r.chan];
     ch.present = true;
     ch.lsb = o.lsb > 0.0 ? o.lsb : default_lsb(r.chan);
@@ -404,7 +460,7 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     return kExitUsage;
   }
   StreamTiming tm;
-  TextChannelSource text_src(o.path, r.name, o.fs);
+  TextChannelSource text_src(o.path, r.name, o.fs, r.read_samples);
   const auto feed = [&](CountSink& sink) {
     int st = text ? stream_counts(text_src, o.path + ": column '" + r.name + "': ", ch, sink, tm,
                                   r.err)
@@ -652,11 +708,24 @@ int cmd_adev(int argc, char** argv) {
   if (a.has("--plots") && !imu::cli::check_output_dir(a.get("--plots"), err)) {
     return fail(cmd, "--plots: " + err, kExitUsage);
   }
-  // The channels in parallel (each streamed from the file on its own: memory per channel is
-  // constant), reported in the order named.
+  // The channels in parallel, reported in the order named. Several text columns are read in
+  // one pass; a MAT variable (or one text column) is streamed from the file on its own: memory
+  // per channel is constant.
   std::vector<AdevResult> rs(names.size());
   for (std::size_t i = 0; i < names.size(); ++i) {
     rs[i].name = names[i];
+  }
+  std::vector<std::vector<double>> text_cols;
+  if (text && names.size() > 1) {
+    double fs_hz = 0.0;
+    const int st = read_text_columns(o, names, text_cols, fs_hz, err);
+    if (st != kExitOk) {
+      return fail(cmd, err, st);
+    }
+    for (std::size_t i = 0; i < text_cols.size(); ++i) {
+      rs[i].read_samples = &text_cols[i];
+      rs[i].read_fs_hz = fs_hz;
+    }
   }
   imu::cli::parallel_for(rs.size(), [&](std::size_t i) {
     adev_channel(o, text, rs[i]);

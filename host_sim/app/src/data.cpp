@@ -208,6 +208,9 @@ bool MatChannelSource::read(double* out, std::size_t n, std::size_t& got, std::s
 
 bool TextChannelSource::open(std::string& err) {
   samples_ = 0;
+  if (read_samples_ != nullptr) {
+    return true;
+  }
   stream_ = imu::cli::TextColumnStream{};
   if (!stream_.open(path_, column_, fs_hz_, err)) {
     err = err.rfind(path_, 0) == 0 ? err : path_ + ": " + err;
@@ -217,6 +220,13 @@ bool TextChannelSource::open(std::string& err) {
 }
 
 bool TextChannelSource::read(double* out, std::size_t n, std::size_t& got, std::string& err) {
+  if (read_samples_ != nullptr) {
+    const std::size_t at = static_cast<std::size_t>(samples_);
+    got = std::min(n, read_samples_->size() - at);
+    std::copy_n(read_samples_->data() + at, got, out);
+    samples_ += got;
+    return true;
+  }
   if (!stream_.read(out, n, got, err)) {
     err = err.rfind(path_, 0) == 0 ? err : path_ + ": " + err;
     return false;

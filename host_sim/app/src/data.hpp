@@ -139,10 +139,14 @@ class MatChannelSource final : public ChunkSource {
 
 /// A text file's column on its regular grid (imu::cli::TextColumnStream): rows are read as
 /// they are needed, never held. samples(): the grid samples the last pass gave.
+/// With `read_samples` (the column already read on its grid, in one pass over the file for
+/// several columns), the passes are over those samples instead of the file.
 class TextChannelSource final : public ChunkSource {
  public:
-  TextChannelSource(std::string path, std::string column, double fs_hz)
-      : path_(std::move(path)), column_(std::move(column)), fs_hz_(fs_hz) {}
+  TextChannelSource(std::string path, std::string column, double fs_hz,
+                    const std::vector<double>* read_samples = nullptr)
+      : path_(std::move(path)), column_(std::move(column)), fs_hz_(fs_hz),
+        read_samples_(read_samples) {}
   [[nodiscard]] bool open(std::string& err) override;
   [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err) override;
   [[nodiscard]] double fs_hz() const { return stream_.fs_hz(); }
@@ -152,6 +156,7 @@ class TextChannelSource final : public ChunkSource {
   std::string path_;
   std::string column_;
   double fs_hz_;
+  const std::vector<double>* read_samples_;
   imu::cli::TextColumnStream stream_;
   std::uint64_t samples_ = 0;
 };

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -49,6 +50,13 @@ std::vector<std::string> split(const std::string& line, char delim) {
   }
 }
 
+// A number for a message: %g's 6 significant digits (never 300 digits for 1e300).
+std::string num_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
 bool parse_field(const std::string& f, double& v) {
   if (f.empty() || f == "nan" || f == "NaN" || f == "NAN") {
     v = std::nan("");
@@ -82,6 +90,33 @@ bool looks_like_text(const std::string& path) {
   return n > 0 && std::memchr(head, '\0', n) == nullptr;
 }
 
+int TextRows::read_line(std::string& err) {
+  line_.clear();
+  std::streambuf* sb = in_.rdbuf();
+  bool any = false;
+  for (;;) {
+    const int c = sb->sbumpc();
+    if (c == std::char_traits<char>::eof()) {
+      return any ? 1 : 0;
+    }
+    any = true;
+    if (c == '\n') {
+      break;
+    }
+    if (line_.size() >= kMaxLineBytes) {
+      err = path_ + ": line " + std::to_string(line_no_ + 1) + " is longer than " +
+            std::to_string(kMaxLineBytes) + " bytes (text input: one row per sample)";
+      return -1;
+    }
+    line_.push_back(static_cast<char>(c));
+  }
+  ++line_no_;
+  if (!line_.empty() && line_.back() == '\r') {
+    line_.pop_back();
+  }
+  return 1;
+}
+
 bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max_bytes) {
   path_ = path;
   names_.clear();
@@ -102,18 +137,21 @@ bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max
   }
   in_.close();
   in_.clear();
-  in_.open(path);
-  while (std::getline(in_, line_)) {
-    ++line_no_;
-    if (!line_.empty() && line_.back() == '\r') {
-      line_.pop_back();
-    }
+  in_.open(path, std::ios::binary);
+  err.clear();
+  int got = 0;
+  while ((got = read_line(err)) > 0) {
     if (line_.empty() || line_[0] == '#') {
       continue;
     }
     delim_ = line_.find(',') != std::string::npos ? ','
              : (line_.find('\t') != std::string::npos ? '\t' : ' ');
     names_ = split(line_, delim_);
+    if (names_.size() > kMaxColumns) {
+      err = path + ": line " + std::to_string(line_no_) + ": " + std::to_string(names_.size()) +
+            " columns, more than " + std::to_string(kMaxColumns) + " (text input of IMU channels)";
+      return false;
+    }
     double probe = 0.0;
     for (const auto& n : names_) {
       if (n.empty() || parse_field(n, probe)) {
@@ -124,17 +162,16 @@ bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max
     }
     return true;
   }
+  if (got < 0) {
+    return false;
+  }
   err = path + ": no header and data rows (text input: a header row, then one row per sample)";
   return false;
 }
 
 bool TextRows::next(std::vector<double>& row, std::string& err) {
   err.clear();
-  while (std::getline(in_, line_)) {
-    ++line_no_;
-    if (!line_.empty() && line_.back() == '\r') {
-      line_.pop_back();
-    }
+  while (read_line(err) > 0) {
     if (line_.empty() || line_[0] == '#') {
       continue;
     }
@@ -199,25 +236,38 @@ namespace {
 bool grid_period(const double* t, std::size_t n, double fs_hz, const std::string& column,
                  double& ts_s, std::string& err) {
   std::vector<double> steps;
+  steps.reserve(n);
   for (std::size_t i = 1; i < n; ++i) {
     if (!(t[i] > t[i - 1])) {
       err = "the time column '" + column + "' does not increase at row " + std::to_string(i + 1) +
-            " (" + std::to_string(t[i - 1]) + " then " + std::to_string(t[i]) + ")";
+            " (" + num_text(t[i - 1]) + " then " + num_text(t[i]) + ")";
       return false;
     }
     steps.push_back(t[i] - t[i - 1]);
   }
-  if (fs_hz > 0.0) {
-    ts_s = 1.0 / fs_hz;
-    return true;
-  }
   if (steps.empty()) {
+    if (fs_hz > 0.0) {
+      ts_s = 1.0 / fs_hz;
+      return true;
+    }
     err = "one row: no rate from the time column";
     return false;
   }
   std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
                    steps.end());
-  ts_s = steps[steps.size() / 2];
+  const double median_s = steps[steps.size() / 2];
+  if (fs_hz > 0.0) {
+    // A given rate must agree with the time column it places the samples by.
+    if (!(std::fabs(median_s * fs_hz - 1.0) <= 0.02)) {
+      err = "--fs " + num_text(fs_hz) + " Hz contradicts the time column '" + column +
+            "': its median step " + num_text(median_s) + " s is " + num_text(1.0 / median_s) +
+            " Hz (drop --fs, or give the column's rate; a time column must be in seconds)";
+      return false;
+    }
+    ts_s = 1.0 / fs_hz;
+    return true;
+  }
+  ts_s = median_s;
   return true;
 }
 
@@ -241,19 +291,50 @@ bool TimeGrid::place(double t_s, std::uint64_t row, const std::string& column,
   }
   if (!(t_s > last_t_s_)) {
     err = "the time column '" + column + "' does not increase at row " + std::to_string(row) +
-          " (" + std::to_string(last_t_s_) + " then " + std::to_string(t_s) + ")";
+          " (" + num_text(last_t_s_) + " then " + num_text(t_s) + ")";
     return false;
   }
   const double step = t_s - last_t_s_;
-  const double k = std::round(step / ts_s_);
+  const double periods = step / ts_s_;
+  const double k = std::round(periods);
+  const std::string at = "the time column '" + column + "' steps by " + num_text(step) +
+                         " s at row " + std::to_string(row);
+  if (k < 1.0) {
+    err = at + ", under half the sample period " + num_text(ts_s_) + " s (" +
+          num_text(1.0 / ts_s_) + " Hz): the rate rises there (split the file at that row)";
+    return false;
+  }
+  if (std::fabs(periods - k) > kJitterPeriods &&
+      ++off_grid_ > 16 + row / 100) {
+    err = "the time column '" + column + "' is too irregular for one rate: " +
+          std::to_string(off_grid_) + " of its first " + std::to_string(row) +
+          " steps are off the " + num_text(ts_s_) + " s grid by more than " +
+          num_text(kJitterPeriods) + " period (resample the log to a constant rate)";
+    return false;
+  }
   if (k >= 2.0) {
-    if (k > 1e8) {
-      err = "the time column jumps by " + std::to_string(step) + " s at row " +
-            std::to_string(row) + ": more than 1e8 missing samples";
+    const auto whole = static_cast<std::uint64_t>(k);
+    run_ = whole == run_k_ ? run_ + 1 : 1;
+    run_k_ = whole;
+    if (run_ >= kRateRunSteps) {
+      err = "the time column '" + column + "' changes rate: rows " +
+            std::to_string(row - run_) + " to " + std::to_string(row) + " step by " +
+            num_text(k) + " sample periods each (" + num_text(1.0 / (k * ts_s_)) +
+            " Hz), the record's median step is " + num_text(ts_s_) + " s (" +
+            num_text(1.0 / ts_s_) + " Hz): split the file where the rate changes";
+      return false;
+    }
+    const double cap = static_cast<double>(kGapAllowance) + 4.0 * static_cast<double>(row);
+    if (static_cast<double>(gap_samples_) + (k - 1.0) > cap) {
+      err = at + ": the gaps would fill in " + num_text(static_cast<double>(gap_samples_) + k - 1.0) +
+            " missing samples by then, more than " + num_text(cap) +
+            " (2^20 + 4 per row; split the file at its long gaps)";
       return false;
     }
     missing = static_cast<std::uint64_t>(k) - 1;
     gap_samples_ += missing;
+  } else {
+    run_ = 0;
   }
   last_t_s_ = t_s;
   return true;

@@ -100,6 +100,7 @@ class CanSocket final : public FrameSource, public FrameSink {
   bool rx_eof_pending_ = false;  // loopback: a send closed the ended link; receive() reports it
   BusOptions opt_{};
   std::int64_t stall_since_ms_ = -1;  // first send given up on the current peer's stall, or -1
+  bool stall_dropped_ = false;  // a peer was dropped for not reading: sends wait for no other
   char name_[64] = {};
   char error_[160] = {};
   LinkStats stats_{};

@@ -1,8 +1,10 @@
-// Text input for imu-sim (issue 13): CSV, TSV or whitespace-separated columns with a header row
-// of names, as loggers and spreadsheets write them. Lines starting with '#' are comments. An
-// empty field or nan/NaN is a missing sample. A column named t, time or timestamp (seconds)
-// gives the rate when none is given, and its irregularities become gaps: a step of k sample
-// periods (k >= 1.5) inserts k - 1 missing samples, counted and reported. Host code.
+// Text input for imu-sim: CSV, TSV or whitespace-separated columns with a header row of names,
+// as loggers and spreadsheets write them. Lines starting with '#' are comments. An empty field
+// or nan/NaN is a missing sample. A column named t, time or timestamp (seconds) gives the rate
+// when none is given, and its irregularities become gaps: a step of k sample periods (k >= 1.5)
+// inserts k - 1 missing samples, counted and reported. The work is bounded by the file: lines
+// of at most kMaxLineBytes, at most kMaxColumns columns, at most kGapAllowance + 4 per row
+// missing samples filled in from the time column. Host code.
 #ifndef IMU_CLI_TEXT_INPUT_HPP
 #define IMU_CLI_TEXT_INPUT_HPP
 
@@ -20,6 +22,13 @@ struct TextTable {
   std::vector<std::vector<double>> cols;   ///< one vector per column, NaN where missing
 };
 
+/// Longest line read (a longer one is refused with its line number).
+inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20U;
+/// Most columns in a header (a wider one is refused).
+inline constexpr std::size_t kMaxColumns = 4096;
+/// Missing samples filled in from the time column's steps: at most this plus 4 per row read.
+inline constexpr std::uint64_t kGapAllowance = std::uint64_t{1} << 20U;
+
 /// True if the file is text rather than a MAT-file: no "MATLAB" header text, no MAT endian mark
 /// at byte 126, no NUL byte in its first 512 bytes (an empty or binary file goes to the MAT
 /// reader, which says what is wrong with it).
@@ -30,16 +39,18 @@ struct TextTable {
 class TextRows {
  public:
   /// Refused with a one-line err: not a regular file, larger than max_bytes, no header (a
-  /// first row of names).
+  /// first row of names), more than kMaxColumns columns, a line longer than kMaxLineBytes.
   [[nodiscard]] bool open(const std::string& path, std::string& err,
                           std::uint64_t max_bytes = std::uint64_t{2} << 30U);
   [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
   /// The next data row as numbers (names().size() of them; NaN for an empty or nan field).
   /// False at the end (err empty) or on a bad row (err names the line: another number of fields
-  /// than the header, a field that is not a number).
+  /// than the header, a field that is not a number, a line longer than kMaxLineBytes).
   [[nodiscard]] bool next(std::vector<double>& row, std::string& err);
 
  private:
+  // The next line into line_ (without its end): 1, 0 at the end, -1 too long (err set).
+  int read_line(std::string& err);
   std::string path_;
   std::ifstream in_;
   std::string line_;
@@ -61,22 +72,35 @@ class TextRows {
 inline constexpr std::size_t kRateRows = 65536;
 
 /// Places rows on the regular grid of period ts_s: a row after a step of k periods (k = the
-/// step / ts rounded, k >= 2) comes after k - 1 missing samples (NaN), counted. The time
-/// column must increase. One rule for the whole table and the stream.
+/// step / ts rounded, k >= 2) comes after k - 1 missing samples (NaN), counted. One rule for the
+/// whole table and the stream. Refused, with the row and the reason (never a wrong rate):
+/// - a time that does not increase;
+/// - a step under half a period (the rate rises there: a 100 Hz log that goes on at 1 kHz);
+/// - kRateRunSteps steps in a row of the same k >= 2 (the rate falls there to 1/k);
+/// - more than 16 + 1 % of the steps off the grid by over kJitterPeriods (timestamps too
+///   irregular for one rate);
+/// - missing samples beyond kGapAllowance + 4 per row (a small file that would fill in
+///   millions of samples: split it at its gaps).
 class TimeGrid {
  public:
+  static constexpr double kJitterPeriods = 0.25;
+  static constexpr std::uint64_t kRateRunSteps = 64;
   explicit TimeGrid(double ts_s) : ts_s_(ts_s) {}
-  /// The missing samples before a row at time t_s (0 for the first row). False with err if the
-  /// time does not increase or jumps by more than 1e8 samples.
+  /// The missing samples before a row at time t_s (0 for the first row). False with err.
   [[nodiscard]] bool place(double t_s, std::uint64_t row, const std::string& column,
                            std::uint64_t& missing, std::string& err);
   [[nodiscard]] std::uint64_t gap_samples() const { return gap_samples_; }
+  /// Steps off the grid by more than kJitterPeriods (within the tolerance).
+  [[nodiscard]] std::uint64_t off_grid_steps() const { return off_grid_; }
 
  private:
   double ts_s_;
   double last_t_s_ = 0.0;
   bool started_ = false;
   std::uint64_t gap_samples_ = 0;
+  std::uint64_t off_grid_ = 0;
+  std::uint64_t run_k_ = 0;
+  std::uint64_t run_ = 0;
 };
 
 struct TextChannel {
@@ -88,8 +112,8 @@ struct TextChannel {
 
 /// Column `name` of the table on a regular grid. fs_hz > 0: that rate (the time column, if
 /// any, still places the samples); else the time column's median step (kRateRows). Refused:
-/// unknown name (the names are listed), no rate and no time column, a time column that does
-/// not increase.
+/// unknown name (the names are listed), no rate and no time column, a time column TimeGrid
+/// refuses, an fs_hz more than 2 % from the time column's median step.
 [[nodiscard]] bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
                                 TextChannel& out, std::string& err);
 
