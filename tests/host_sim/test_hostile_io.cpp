@@ -264,6 +264,14 @@ TEST(HostileIo, SmallFilesAreBoundedWork) {
   r = run({"adev", wider, "--channel", "all", "--fs", "100"});
   EXPECT_EQ(r.status, 1);
   EXPECT_NE(r.err.find("5000 columns, more than 4096"), std::string::npos) << r.err;
+  // A header of blanks only (the text fuzzer's first finding: the table had no column).
+  const std::string blanks = dir.file("blanks.csv");
+  {
+    std::ofstream(blanks) << " \n\t\n";
+  }
+  r = run({"analyze", blanks, "--channel", "gyro_x", "--fs", "100"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("no header and data rows"), std::string::npos) << r.err;
   const std::string longline = dir.file("long.csv");
   {
     std::ofstream f(longline);

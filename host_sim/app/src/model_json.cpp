@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 namespace imu::sim {
 namespace {
@@ -104,6 +105,10 @@ bool get_number(const std::string& s, std::size_t obj, const std::string& key, d
                 std::string& err) {
   if (!number_at(s, member(s, obj, key), v)) {
     err = "model_after." + key + " missing or not a finite number";
+    return false;
+  }
+  if (std::fabs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
+    err = "model_after." + key + " is beyond the node's single precision";
     return false;
   }
   return true;

@@ -50,6 +50,12 @@ std::vector<std::string> split(const std::string& line, char delim) {
   }
 }
 
+// A line without data: empty, blanks only, or a comment ('#' first).
+bool blank_or_comment(const std::string& line) {
+  const std::size_t i = line.find_first_not_of(" \t");
+  return i == std::string::npos || line[0] == '#';
+}
+
 // A number for a message: %g's 6 significant digits (never 300 digits for 1e300).
 std::string num_text(double v) {
   char b[32];
@@ -141,7 +147,7 @@ bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max
   err.clear();
   int got = 0;
   while ((got = read_line(err)) > 0) {
-    if (line_.empty() || line_[0] == '#') {
+    if (blank_or_comment(line_)) {
       continue;
     }
     delim_ = line_.find(',') != std::string::npos ? ','
@@ -172,7 +178,7 @@ bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max
 bool TextRows::next(std::vector<double>& row, std::string& err) {
   err.clear();
   while (read_line(err) > 0) {
-    if (line_.empty() || line_[0] == '#') {
+    if (blank_or_comment(line_)) {
       continue;
     }
     const std::vector<std::string> fields = split(line_, delim_);
