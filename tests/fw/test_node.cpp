@@ -339,6 +339,25 @@ TEST_F(NodeTest, ConfigOutOfRangeIsRefusedAndCounted) {
   EXPECT_EQ(node_->stats().bad_config, std::size(cases));
 }
 
+// After a refused config (id 2, rate out of range) the samples of the config in use (id 1)
+// are valid: they were counted as cfg_mismatch against the refused record's id.
+TEST_F(NodeTest, ARefusedConfigLeavesTheSamplesOfTheConfigInUseValid) {
+  send_config(100.0, 1e-3, 1);
+  const std::int32_t c[6] = {3, 1, 4, 1, 5, 9};
+  for (std::uint32_t k = 0; k < 100; ++k) {
+    send_sample(k, c, 1);
+  }
+  send_config(1e-300, 1e-3, 2);
+  EXPECT_EQ(node_->stats().bad_config, 1U);
+  for (std::uint32_t k = 100; k < 200; ++k) {
+    send_sample(k, c, 1);
+  }
+  EXPECT_EQ(node_->rx_stats().cfg_mismatch, 0U);
+  EXPECT_EQ(node_->adev().channel(0).samples(), 200U);
+  send_sample(200, c, 7);  // a sample of no config at all still counts
+  EXPECT_EQ(node_->rx_stats().cfg_mismatch, 1U);
+}
+
 // Model parameters that are finite and positive but absurd used to pass configure() (checked
 // at 100 Hz only, where first_order_gm_from_asd returned kOk with phi = 1, a NaN or an infinite
 // Qn) and left the filters unconfigured. Also the range limits and the rate limits.

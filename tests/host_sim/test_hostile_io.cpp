@@ -340,6 +340,19 @@ TEST(HostileIo, NamesAreEscapedForJsonYamlAndTheTerminal) {
   EXPECT_NE(r.err.find("not a number"), std::string::npos) << r.err;
 }
 
+// A time column stepping by 1e-300 s: the rate 1e+300 Hz was printed with 300 digits.
+TEST(HostileIo, HugeNumbersArePrintedShort) {
+  TempDir dir;
+  const std::string csv = dir.file("tiny.csv");
+  {
+    std::ofstream(csv) << "t,gyro_x\n0,1\n1e-300,2\n2e-300,3\n";
+  }
+  const auto r = run({"adev", csv, "--channel", "gyro_x"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("1e+300 Hz"), std::string::npos) << r.err;
+  EXPECT_LT(r.err.size(), 200U) << r.err;
+}
+
 // On a full disk `analyze --plots` said "wrote ... svg, png" and exited 0 with a cut CSV and an
 // empty .gp. Needs a small tmpfs: root only.
 TEST(HostileIo, AFullDiskIsAnErrorNotAWrite) {

@@ -229,6 +229,7 @@ void Node::on_config(const hal::ConfigRecord& c) {
   }
   if (!config_in_range(c)) {
     ++stats_.bad_config;
+    rx_.use_config(cfg_, have_cfg_);  // samples are still checked against the config in use
     return;
   }
   if (have_cfg_ && same_values(c, cfg_)) {

@@ -121,7 +121,7 @@ bool file_rate(const StreamedFile& m, const std::string& file, const std::string
     }
   }
   if (!found.empty() && !(fs_hz >= 1e-3 && fs_hz <= 1e6)) {
-    err = file + ": " + found + " = " + std::to_string(fs_hz) +
+    err = file + ": " + found + " = " + imu::cli::num_text(fs_hz) +
           " Hz is not a rate in [0.001, 1e+06] Hz (give --fs)";
     return false;
   }
@@ -661,7 +661,7 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     j.o.fs_hz = st.fs_hz();
     j.o.lsb = lsb;
     if (!st.time_name().empty()) {
-      j.text_note = "text input: rate " + std::to_string(st.fs_hz()) + " Hz" +
+      j.text_note = "text input: rate " + imu::cli::num_text(st.fs_hz()) + " Hz" +
                     (fs > 0.0 ? " (--fs)" : " from the time column '" + st.time_name() + "'");
       if (st.time_gap_samples() > 0) {
         j.text_note += "; its steps left " + std::to_string(st.time_gap_samples()) +

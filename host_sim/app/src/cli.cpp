@@ -157,8 +157,8 @@ int synth_write(const SynthOptions& o, ModelSimulator<4>& sim, mat::MatWriter& w
       const double x = sim.next();
       const QuantizeResult q = quantize(x, o.lsb);
       if (q.saturated || !std::isfinite(x)) {
-        err = "the model's values reach " + std::to_string(x) +
-              ", beyond int32 counts of --lsb " + std::to_string(o.lsb) +
+        err = "the model's values reach " + imu::cli::num_text(x) +
+              ", beyond int32 counts of --lsb " + imu::cli::num_text(o.lsb) +
               " (lower --N/--B/--K or raise --lsb)";
         return kExitUsage;  // `out` removes its temporary file
       }
@@ -418,7 +418,7 @@ int adev_load(const AdevOptions& o, bool text, AdevResult& r) {
     ch.lsb = o.lsb > 0.0 ? o.lsb : default_lsb(r.chan);
     ch.lsb_from_option = o.lsb > 0.0;
     if (!(r.sd.fs_hz >= kMinFsHz && r.sd.fs_hz <= kMaxFsHz)) {
-      r.err = o.path + ": the time column gives " + std::to_string(r.sd.fs_hz) +
+      r.err = o.path + ": the time column gives " + imu::cli::num_text(r.sd.fs_hz) +
               " Hz, outside [1e-3, 1e6] Hz (give --fs)";
       return kExitRuntime;
     }
@@ -450,7 +450,7 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     const double cost = o.full ? full_adev_cost(r.sd.n_samples, grid) : 0.0;
     if (cost > 2e9) {
       r.err = "--taus " + o.taus + " on " + std::to_string(r.sd.n_samples) +
-              " samples would sum " + std::to_string(cost) +
+              " samples would sum " + imu::cli::num_text(cost) +
               " second differences (limit 2e9): use --taus quarter or octave";
       return false;
     }

@@ -3,11 +3,19 @@
 #include "model_json.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 
 namespace imu::sim {
 namespace {
+
+// A number for a message: 6 significant digits.
+std::string num_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
 
 // Index one past the value starting at i (object, array, string or scalar); npos if unclosed.
 std::size_t skip_value(const std::string& s, std::size_t i) {
@@ -225,7 +233,7 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
     const double n_eff = std::sqrt(n * n + osc_sigma * osc_sigma / fs_hz);
     rec.n = static_cast<float>(n_eff);
     dropped += std::string(dropped.empty() ? "" : "; ") +
-               "oscillation of model_after (sigma " + std::to_string(osc_sigma) +
+               "oscillation of model_after (sigma " + num_text(osc_sigma) +
                ") not sent as states: the model record (v1) has no slot for it; its variance "
                "is added to the white noise (N " + std::to_string(n) + " -> " +
                std::to_string(n_eff) + ")";

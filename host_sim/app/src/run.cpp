@@ -538,8 +538,8 @@ bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& e
   const auto windows = static_cast<double>(o.ro.sim_windows);
   const auto max_samples = static_cast<double>(kMaxSamples);
   if (n_avg < 1.0 || n_int < 1.0 || win > max_samples) {
-    err = "--T-avg and --T-int (" + std::to_string(o.ro.t_avg_s) + " s, " +
-          std::to_string(o.ro.t_int_s) + " s at " + std::to_string(sd.fs_hz) +
+    err = "--T-avg and --T-int (" + imu::cli::num_text(o.ro.t_avg_s) + " s, " +
+          imu::cli::num_text(o.ro.t_int_s) + " s at " + imu::cli::num_text(sd.fs_hz) +
           " Hz) must each be at least one sample and together at most " +
           std::to_string(kMaxSamples) + " samples";
     return false;

@@ -83,4 +83,10 @@ std::string json_units(const std::string& unit) {
          "\", \"size\": \"" + base + "\", \"adev\": \"" + base + "\"}";
 }
 
+std::string num_text(double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%g", v);
+  return b;
+}
+
 }  // namespace imu::cli

@@ -2,6 +2,7 @@
 #include "imu/cli/text_input.hpp"
 
 #include "imu/cli/args.hpp"
+#include "imu/cli/json.hpp"
 
 #include <sys/stat.h>
 
@@ -54,13 +55,6 @@ std::vector<std::string> split(const std::string& line, char delim) {
 bool blank_or_comment(const std::string& line) {
   const std::size_t i = line.find_first_not_of(" \t");
   return i == std::string::npos || line[0] == '#';
-}
-
-// A number for a message: %g's 6 significant digits (never 300 digits for 1e300).
-std::string num_text(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%g", v);
-  return b;
 }
 
 bool parse_field(const std::string& f, double& v) {

@@ -164,6 +164,13 @@ class Receiver {
   [[nodiscard]] std::size_t held() const;
   [[nodiscard]] std::size_t events_pending() const { return q_count_; }
   [[nodiscard]] const RxStats& stats() const { return stats_; }
+  /// The config its consumer runs, after the consumer refused a newer one (out of range): the
+  /// samples that follow are checked against it, not against the refused record (whose id
+  /// would count every valid sample as cfg_mismatch). have = false: no config yet.
+  void use_config(const ConfigRecord& c, bool have) {
+    cfg_ = c;
+    have_cfg_ = have;
+  }
   /// The last configuration received; false if none yet.
   [[nodiscard]] bool config(ConfigRecord& out) const {
     out = cfg_;

@@ -13,6 +13,9 @@ namespace imu::cli {
 
 /// A JSON number: %.10g, non-finite -> null.
 [[nodiscard]] std::string json_num(double v);
+/// A number for a message or a note: 6 significant digits, an exponent when it helps (1e+300,
+/// 1e-13, 100): never 300 digits, never 0.000000 for a small value.
+[[nodiscard]] std::string num_text(double v);
 /// A JSON string literal (quotes, backslash and control characters escaped; a byte that is not
 /// part of valid UTF-8 becomes U+FFFD). Also a valid YAML double-quoted scalar (YAML 1.2 reads
 /// JSON strings), which is how the YAML writer quotes names and paths.
