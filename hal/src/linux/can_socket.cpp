@@ -132,7 +132,7 @@ void CanSocket::move_from(CanSocket& other) noexcept {
   rx_eof_pending_ = other.rx_eof_pending_;
   opt_ = other.opt_;
   stall_since_ms_ = other.stall_since_ms_;
-  stall_dropped_ = other.stall_dropped_;
+  peer_lost_ = other.peer_lost_;
   std::memcpy(name_, other.name_, sizeof name_);
   std::memcpy(error_, other.error_, sizeof error_);
   stats_ = other.stats_;
@@ -261,7 +261,7 @@ IoStatus CanSocket::open_loopback() {
                       static_cast<unsigned long>(uid), static_cast<unsigned long>(geteuid()));
         return fail(IoStatus::kSysError, 0, what);
       }
-      stall_dropped_ = false;
+      peer_lost_ = false;
   kernel_ts_ = configure_data_fd(fd, opt_);
       data_fd_ = fd;
       connector_ = true;
@@ -333,6 +333,7 @@ IoStatus CanSocket::link_lost(int err) {
     ::close(data_fd_);  // peer gone: reconnect or accept a new peer on the next call
     data_fd_ = -1;
     tx_broken_ = false;
+    peer_lost_ = listen_fd_ >= 0;
   } else {
     down_ = true;  // in-process pair: the other end is closed for good
   }
@@ -379,7 +380,7 @@ IoStatus CanSocket::ensure_link(int timeout_ms) {
     ++stats_.peer_refused;
     return IoStatus::kTimeout;
   }
-  stall_dropped_ = false;
+  peer_lost_ = false;
   kernel_ts_ = configure_data_fd(fd, opt_);
   data_fd_ = fd;
   ++stats_.link_up;
@@ -513,10 +514,9 @@ IoStatus CanSocket::stalled() {
   if (stall_since_ms_ < 0) {
     stall_since_ms_ = now;
   }
-  if (kind_ == BusKind::kLoopback && !pair_ && opt_.tx_stall_limit_ms > 0 &&
+  if (kind_ == BusKind::kLoopback && !pair_ && listen_fd_ >= 0 && opt_.tx_stall_limit_ms > 0 &&
       now - stall_since_ms_ >= opt_.tx_stall_limit_ms) {
     stall_since_ms_ = -1;
-    stall_dropped_ = true;
     ++stats_.tx_stall_disconnects;
     ++stats_.tx_link_down;
     return link_lost(ETIMEDOUT);
@@ -534,9 +534,10 @@ IoStatus CanSocket::write_bytes(const void* bytes, std::size_t nbytes, int timeo
     (void)link_lost(EPIPE);  // nothing left to read: drop it and reconnect / accept below
     rx_eof_pending_ = true;  // the reader has not seen the end of that stream: tell it once
   }
-  // A loopback listener waits for its peer, except after dropping one for not reading: the
-  // telemetry of the frames that peer sent goes nowhere at once (a receive waits for the next).
-  const IoStatus link = ensure_link(stall_dropped_ && data_fd_ < 0 ? 0 : timeout_ms);
+  // A loopback listener waits for its first peer, but not for the next one after losing a peer
+  // (it closed, or was dropped for not reading): what answers the frames of the lost peer goes
+  // nowhere at once (a receive waits for the next peer).
+  const IoStatus link = ensure_link(peer_lost_ && data_fd_ < 0 ? 0 : timeout_ms);
   if (link != IoStatus::kOk) {
     if (link == IoStatus::kNotOpen) {
       return link;

@@ -31,9 +31,9 @@ enum class BusKind : std::uint8_t { kNone, kSocketCan, kLoopback };
 
 struct BusOptions {
   int rcvbuf_bytes = 1 << 20;  ///< SO_RCVBUF request (the kernel may cap it at rmem_max)
-  /// Loopback only: a peer that has taken no frame for this long while sends wait on it (it
-  /// stopped reading) is disconnected (counted in LinkStats::tx_stall_disconnects), so a stuck
-  /// peer cannot hold the node. 0: never.
+  /// Loopback listener only (the node's side): a peer that has taken no frame for this long
+  /// while sends wait on it (it stopped reading) is disconnected (counted in
+  /// LinkStats::tx_stall_disconnects), so a stuck peer cannot hold the node. 0: never.
   int tx_stall_limit_ms = 10000;
   /// While set, a send waiting on back-pressure gives up at once (kWouldBlock): the owner's
   /// stop flag (SIGTERM), so a peer that does not read cannot delay a stop. May be null.
@@ -100,7 +100,7 @@ class CanSocket final : public FrameSource, public FrameSink {
   bool rx_eof_pending_ = false;  // loopback: a send closed the ended link; receive() reports it
   BusOptions opt_{};
   std::int64_t stall_since_ms_ = -1;  // first send given up on the current peer's stall, or -1
-  bool stall_dropped_ = false;  // a peer was dropped for not reading: sends wait for no other
+  bool peer_lost_ = false;  // a listener lost its peer: sends do not wait for the next one
   char name_[64] = {};
   char error_[160] = {};
   LinkStats stats_{};
