@@ -1,4 +1,4 @@
-// The synthetic cases of the analysis tests: the seed's model (N = 3.3e-3, B = 9e-4, Tp = 300 s,
+// The synthetic cases of the analysis tests: the first-order model (N = 3.3e-3, B = 9e-4, Tp = 300 s,
 // 100 Hz, 1e6 samples) plus one effect each, at a size where an expert sees it on the ADEV plot
 // or in the time series. Shared by test_analyze_synthetic and the tuning tool.
 #ifndef IMU_TESTS_ANALYZE_SYNTH_CASES_HPP
@@ -22,7 +22,7 @@ inline constexpr double kStepSize = 0.03;
 inline constexpr std::size_t kOutliers = 50;  // outliers: 10 x the white std per sample (0.033)
 inline constexpr double kOutlierSize = 0.33;
 
-// Issue 11 cases (the seed's model plus one effect; sizes of our own, not the shared data's):
+// Cases (the first-order model plus one effect; sizes of our own, not the shared data's):
 inline constexpr double kBi = 2e-3;  // bias instability B: flicker floor 0.664 B = 1.33e-3, flat
                                      // from ~20 s (where white N/sqrt(tau) meets it) to T/10
 inline constexpr double kGmSigma = 1.46e-3;      // the seed GM's std sqrt(Pss)
@@ -38,7 +38,7 @@ inline constexpr double kOscBeta = 3.14159265358979323846 * 0.5;
 inline constexpr double kDriftWalk = 2e-6;  // "unknown": AVAR q^2 tau^3 / 20 meets the model near 200 s
 
 // "_alt" cases: another first-order model (N = 5e-4, B = 2e-4, Tp = 60 s, 3e5 samples), so the
-// thresholds are not tied to the seed's model.
+// thresholds are not tied to the first-order model.
 inline constexpr double kAltSinA = 2e-3;
 inline constexpr double kAltSinF = 2.0;
 inline constexpr double kAltStepTime = 1000.0;
@@ -100,7 +100,7 @@ inline SynthSpec make_case(const std::string& name, std::uint64_t seed) {
       s.ramp_r = kAltR;
     }
   }
-  return s;  // "control": the seed's model alone
+  return s;  // "control": the first-order model alone
 }
 
 }  // namespace imu::analyze::test

@@ -140,7 +140,7 @@ TEST_F(AnalyzeCli, BadInputGivesNonZeroExit) {
   EXPECT_NE(call({"analyze", mat_, "--channel", "acc_x", "--bogus"}), 0);
 }
 
-// Issue 11: a logger dropout (NaN samples) is a gap, counted and reported, not a refusal.
+// A logger dropout (NaN samples) is a gap, counted and reported, not a refusal.
 TEST_F(AnalyzeCli, NanDropoutsAreGapsNotARefusal) {
   imu::analyze::SynthSpec sp;
   sp.samples = 200000;
@@ -159,7 +159,7 @@ TEST_F(AnalyzeCli, NanDropoutsAreGapsNotARefusal) {
   EXPECT_NE(j.find("\"n_states\": "), std::string::npos);
 }
 
-// Issue 11: integrated delta-velocity differentiated back (multiples of one step up to
+// Integrated delta-velocity differentiated back (multiples of one step up to
 // floating-point residue) gives that step, not 1e-9; an LSB that would overflow int32 counts
 // falls back and says so.
 TEST(AnalyzeInputs, LsbToleratesFloatingPointResidueAndNeverOverflows) {
@@ -229,7 +229,7 @@ std::string write_kalibr_imu() {
 
 }  // namespace
 
-// Issue 13 item 3: --channel all analyses every IMU channel the file holds, one report and one
+// --channel all analyses every IMU channel the file holds, one report and one
 // JSON keyed by channel; a comma list takes those; --yaml writes Kalibr's keys with the largest
 // axis of each sensor, recovered within 15 % of the N and K the record was made with.
 TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
@@ -267,8 +267,8 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x,acc_q"}), 2);
 }
 
-// Issue 14 item 3: a record past 2^22 samples is analysed on block means for the whole record,
-// and its first 2^22 samples at full rate for what the means cannot resolve. The seed's model
+// A record past 2^22 samples is analysed on block means for the whole record,
+// and its first 2^22 samples at full rate for what the means cannot resolve. The first-order model
 // plus a 30 Hz sinusoid (A = 0.02, 0.6 x the white std per sample: an 8 % ADEV bump at Ts), 4.5e6
 // samples at 100 Hz: the means of 2 (50 Hz) cannot hold 30 Hz, it aliases to 20 Hz at 0.59 A.
 // Before the full-rate head the report named a 20 Hz sinusoid: a wrong name. Now the sinusoid
@@ -315,11 +315,11 @@ TEST(AnalyzeLongRecord, FastSinusoidIsFoundAtFullRateNotAtItsAlias) {
   for (std::size_t p = j.find("\"tb_s\": ", after); p < gm_end; p = j.find("\"tb_s\": ", p + 1)) {
     EXPECT_GE(1.89 * number_after(j, p, "\"tb_s\": "), 0.08);
   }
-  // The head's own errors: its after-model and the record's are both better than the seed's.
+  // The head's own errors: its after-model and the record's are both better than the example's.
   const double before_rms = number_after(j, j.find("\"error_before\"", head_at),
                                          "\"adev_rms_rel\": ");
   const double record_rms = number_after(j, j.find("\"error_record_model\"", head_at),
                                          "\"adev_rms_rel\": ");
-  std::printf("head: seed model RMS %.4f, record's model RMS %.4f\n", before_rms, record_rms);
+  std::printf("head: first-order model RMS %.4f, record's model RMS %.4f\n", before_rms, record_rms);
   EXPECT_LT(record_rms, before_rms);
 }

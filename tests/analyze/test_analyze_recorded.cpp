@@ -1,9 +1,9 @@
 // The analysis on the 12 shared ADIS16405 channels (label golden: reads ../shared/data).
-// What is checked: it runs, within the issue's 10 s per 1e6-sample channel (Release build), the
+// What is checked: it runs, within the 10 s target per 1e6-sample channel (Release build), the
 // LSB comes from the file, every effect has a known type, the augmented model lowers the
 // weighted ADEV cost sum(z^2) of the first-order model, it is never worse than before (RMS and
-// max over every tau up to T/10, issue 11), and the RMS error after is at most half the error
-// before on all 12 channels (issue 11; imu1 gyro_z reached only 0.76 x until the narrowband
+// max over every tau up to T/10), and the RMS error after is at most half the error
+// before on all 12 channels (imu1 gyro_z reached only 0.76 x until the narrowband
 // oscillation term: both gyro_z carry a ~1 Hz wide band at 20 Hz). The table of effects is
 // printed (it is the README's table).
 #include <gtest/gtest.h>
@@ -42,7 +42,7 @@ TEST(AnalyzeRecorded, AllTwelveChannels) {
       imu::analyze::Report r;
       std::string err;
       ASSERT_TRUE(imu::analyze::analyze(col.value(), ch, o, r, err)) << err;
-      // Issue: < 10 s per 1e6-sample channel. CPU time, because the test machine is shared by
+      // Target: < 10 s per 1e6-sample channel. CPU time, because the test machine is shared by
       // several builds (wall time is printed too).
       EXPECT_LT(r.cpu_seconds, 10.0) << file << " " << ch;
       EXPECT_LT(r.error_after.cost, r.error_before.cost) << file << " " << ch;

@@ -1,4 +1,4 @@
-// The analysis on synthetic channels (issues 6 and 11): the seed's model plus one effect at a
+// The analysis on synthetic channels: the first-order model plus one effect at a
 // time, 10 seeds each (seeds 101..110; the "_alt" model 1..5; the thresholds were tuned on seeds
 // >= 1000 with tune_analyze), 20 controls. True values come from synth_cases.hpp, not from the
 // code under test.
@@ -52,7 +52,7 @@ void expect_error_lower(const ia::Report& r) {
   EXPECT_EQ(r.error_after.n_taus, r.error_before.n_taus);
 }
 
-// ---- One effect at a time, 10 seeds each (issue 11: found with its parameter in tolerance on
+// ---- One effect at a time, 10 seeds each (found with its parameter in tolerance on
 // >= 9 of 10). A seed counts when the effect is named with its parameter in tolerance; a seed
 // where anything else is named beside it is counted apart (printed), as a false extra effect.
 struct Tally {
@@ -86,14 +86,14 @@ Tally tally(const std::string& name, const std::string& type, Pred in_tolerance)
 
 TEST(AnalyzeSynthetic, Quantization) {
   const Tally t = tally("quantization", "quantization", [](const ia::Effect& e) {
-    return std::fabs(e.q - tc::kQ) <= 0.25 * tc::kQ;  // issue: within 25 %
+    return std::fabs(e.q - tc::kQ) <= 0.25 * tc::kQ;  // target: within 25 %
   });
   EXPECT_GE(t.found, 9);
   EXPECT_LE(t.extra, 1);
 }
 
 TEST(AnalyzeSynthetic, RateRandomWalk) {
-  // The issue: K within 25 % on >= 9 of 10 (seeds 101..110). Before the slow-GM check
+  // Target: K within 25 % on >= 9 of 10 (seeds 101..110). Before the slow-GM check
   // (analyze.cpp drop_unneeded_slow_gm) it was 7/10: the joint ADEV fit gave part of the walk's
   // power to a slow GM (K -38 % to -51 %); the record's likelihood with the walk alone now
   // gives K within 5 % on all ten.
@@ -106,7 +106,7 @@ TEST(AnalyzeSynthetic, RateRandomWalk) {
 
 TEST(AnalyzeSynthetic, Ramp) {
   const Tally t = tally("ramp", "ramp", [](const ia::Effect& e) {
-    return std::fabs(e.r - tc::kR) <= 0.25 * tc::kR;  // issue: within 25 %
+    return std::fabs(e.r - tc::kR) <= 0.25 * tc::kR;  // target: within 25 %
   });
   EXPECT_GE(t.found, 9);
   EXPECT_LE(t.extra, 1);
@@ -115,7 +115,7 @@ TEST(AnalyzeSynthetic, Ramp) {
 
 TEST(AnalyzeSynthetic, Sinusoid) {
   const Tally t = tally("sinusoid", "sinusoid", [](const ia::Effect& e) {
-    return std::fabs(e.freq_hz - tc::kSinF) <= 0.05 * tc::kSinF &&    // issue: 5 %
+    return std::fabs(e.freq_hz - tc::kSinF) <= 0.05 * tc::kSinF &&    // target: 5 %
            std::fabs(e.amplitude - tc::kSinA) <= 0.25 * tc::kSinA;  // 25 %
   });
   EXPECT_GE(t.found, 9);
@@ -148,7 +148,7 @@ TEST(AnalyzeSynthetic, BiasStep) {
 TEST(AnalyzeSynthetic, Outliers) {
   const Tally t = tally("outliers", "outliers", [](const ia::Effect& e) {
     return std::fabs(static_cast<double>(e.count) - static_cast<double>(tc::kOutliers)) <=
-           0.2 * static_cast<double>(tc::kOutliers);  // issue: within 20 %
+           0.2 * static_cast<double>(tc::kOutliers);  // target: within 20 %
   });
   EXPECT_GE(t.found, 9);
   EXPECT_LE(t.extra, 1);
@@ -163,8 +163,8 @@ TEST(AnalyzeSynthetic, OtherModelControlAndEffects) {
 
     const ia::Report s = run("sinusoid_alt", seed);
     if (const ia::Effect* e = single_effect(s, "sinusoid")) {
-      EXPECT_NEAR(e->freq_hz, tc::kAltSinF, 0.05 * tc::kAltSinF);    // issue: 5 %
-      EXPECT_NEAR(e->amplitude, tc::kAltSinA, 0.25 * tc::kAltSinA);  // issue: 25 %
+      EXPECT_NEAR(e->freq_hz, tc::kAltSinF, 0.05 * tc::kAltSinF);    // target: 5 %
+      EXPECT_NEAR(e->amplitude, tc::kAltSinA, 0.25 * tc::kAltSinA);  // target: 25 %
     }
     expect_error_lower(s);
 
@@ -188,7 +188,7 @@ TEST(AnalyzeSynthetic, OtherModelControlAndEffects) {
   }
 }
 
-// ---- Issue 11: the long-tau family, dropouts and an effect the analysis has no term for.
+// ---- The long-tau family, dropouts and an effect the analysis has no term for.
 
 bool is_named(const ia::Report& r, const std::string& type) {
   for (const auto& e : r.effects) {
@@ -221,7 +221,7 @@ TEST(AnalyzeSynthetic, BiasInstabilityIsFoundWithBWithin30Percent) {
   }
   std::printf("bias instability: B within 30 %% on %d of %d seeds; a walk, ramp or step named "
               "on %d\n", found, kSeeds11, wrong_name);
-  EXPECT_GE(found, 9);       // issue: >= 9 of 10, B within 30 %
+  EXPECT_GE(found, 9);       // target: >= 9 of 10, B within 30 %
   EXPECT_LE(wrong_name, 1);
 }
 
@@ -234,7 +234,7 @@ TEST(AnalyzeSynthetic, StepOfThreeGmSigmasLateInALongRecordIsAStep) {
     bool ok = false;
     for (const auto& e : r.effects) {
       ok = ok || (e.type == "bias_step" &&
-                  std::fabs(e.time_s - tc::kStep3Time) <= 0.02 * record_s);  // issue: 2 %
+                  std::fabs(e.time_s - tc::kStep3Time) <= 0.02 * record_s);  // target: 2 %
     }
     found += ok ? 1 : 0;
     extra += r.effects.size() > 1 ? 1 : 0;
@@ -257,7 +257,7 @@ TEST(AnalyzeSynthetic, TwentyControlsGiveNoEffect) {
     }
   }
   std::printf("controls without an effect: %d of 20\n", clean);
-  EXPECT_GE(clean, 19);  // issue: >= 19 of 20
+  EXPECT_GE(clean, 19);  // target: >= 19 of 20
 }
 
 TEST(AnalyzeSynthetic, NanDropoutsGiveTheControlsAnswer) {
@@ -308,7 +308,7 @@ TEST(AnalyzeSynthetic, AnEffectWithoutATermIsUnexplainedNotAWrongName) {
 }
 
 TEST(AnalyzeSynthetic, MillionSamplesUnderTenSeconds) {
-  // Issue: < 10 s for a 1e6-sample channel on this machine (Release build). The sinusoid case
+  // Target: < 10 s for a 1e6-sample channel on this machine (Release build). The sinusoid case
   // is the slowest path (periodogram, extra ADEVs and fits).
   const ia::Report r = run("sinusoid", 1);
   EXPECT_LT(r.cpu_seconds, 10.0);  // CPU time: the machine is shared (wall printed)

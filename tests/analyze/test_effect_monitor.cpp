@@ -163,7 +163,7 @@ TEST(AdevResidualCheck, FindsARunAndIgnoresSmallResiduals) {
   EXPECT_EQ(r.runs[0].count, 1U);
 }
 
-// The co-processor scenario: OnlineAdev snapshot of the seed's model against the true model (no
+// The co-processor scenario: OnlineAdev snapshot of the first-order model against the true model (no
 // alarm), and of the same record with a sinusoid added (alarm, run at the bump near 0.371 / f).
 TEST(AdevResidualCheck, OnlineSnapshotAgainstTheTrueModel) {
   imu::FirstOrderGm gm{};

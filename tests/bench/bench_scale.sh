@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Peak RSS and wall time of `imu-sim synth`, `adev`, `run` and `analyze` on synthesised records
-# of 10^6, 10^7, ... samples (issue 14: memory flat in the record's length, <= 64 MB at 10^8 for
+# of 10^6, 10^7, ... samples (memory flat in the record's length, <= 64 MB at 10^8 for
 # adev and run; analyze bounded by its 2^22 analysed samples, block means beyond). Not a test
 # (ctest does not run it): it prints figures, with the load average, for the README.
 #

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Whole-process `imu-sim adev` against allantools' `oadev` (taus="octave") on the same MAT-file,
-# alternating runs, medians and their ratio (issue 14: target >= 40). Not a test (ctest does not
+# alternating runs, medians and their ratio (target >= 40). Not a test (ctest does not
 # run it): it prints figures, with the load average.
 #
 #   tests/bench/bench_vs_allantools.sh [RUNS [FILE [CHANNEL]]]

@@ -70,7 +70,7 @@ int main(int argc, char** argv) {
   const double t_3f = ns_per_sample(n / 10, [&](std::size_t i) {
     sink_f = k3.step(zf[i & 4095U], (i & 1023U) < 900U).innovation;
   });
-  // The node's largest pushed model (issue 12): 2 GM + RRW + a flicker bank, 8 states.
+  // The node's largest pushed model: 2 GM + RRW + a flicker bank, 8 states.
   imu::ContinuousModel<8> c8;
   (void)c8.add_white(3.3e-3);
   (void)c8.add_gauss_markov(m.sb, m.tb_s);
@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
               "(NIS + whiteness lags 1..4 + CUSUM)\n",
               t_scalar_mon, sizeof(imu::ScalarBiasKf<float>), sizeof(imu::ResidualMonitors<4>));
 
-  // The fit (runs rarely, e.g. after a calibration run): seed model, 1e6 samples, white + GM.
+  // The fit (runs rarely, e.g. after a calibration run): first-order model, 1e6 samples, white + GM.
   imu::ContinuousModel<1> c1;
   (void)c1.add_white(m.n);
   (void)c1.add_gauss_markov(m.sb, m.tb_s);

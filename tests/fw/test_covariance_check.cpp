@@ -1,6 +1,6 @@
 // Tests of imu/covariance_check.hpp: closed forms for white and quantization noise, the robust
 // standard deviation against a sort-based reference, and the exact prediction against Monte
-// Carlo from the simulator (the seed's check on model-simulated data).
+// Carlo from the simulator (the example's check on model-simulated data).
 #include "imu/covariance_check.hpp"
 
 #include <gtest/gtest.h>
@@ -99,7 +99,7 @@ McResult monte_carlo(const imu::DiscreteModel<1>& d, std::size_t na, std::size_t
 }
 
 TEST(CovarianceCheck, ExactPredictionMatchesMonteCarloOnTheSeedModel) {
-  // The seed's check: T_avg = 10 s, T_int = 20 s, 100 Hz, seed model; 2000 windows.
+  // The example's check: T_avg = 10 s, T_int = 20 s, 100 Hz, first-order model; 2000 windows.
   imu::FirstOrderGm m{};
   ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, m), imu::ModelStatus::kOk);
   imu::ContinuousModel<1> c;
@@ -120,7 +120,7 @@ TEST(CovarianceCheck, ExactPredictionMatchesMonteCarloOnTheSeedModel) {
   const double ratio_robust = mc.robust_end / exact[kNi - 1];
   const double ratio_plain = mc.plain_end / exact[kNi - 1];
   const double ratio_ignored = mc.robust_end / ignored[kNi - 1];
-  std::printf("covariance check (seed model, %zu windows, T_avg 10 s, T_int 20 s): predicted std "
+  std::printf("covariance check (first-order model, %zu windows, T_avg 10 s, T_int 20 s): predicted std "
               "at 20 s %.4e (exact), %.4e (correlation ignored); empirical robust %.4e, plain "
               "%.4e; ratio robust/exact %.3f, plain/exact %.3f, robust/ignored %.3f\n",
               kWindows, exact[kNi - 1], ignored[kNi - 1], mc.robust_end, mc.plain_end,

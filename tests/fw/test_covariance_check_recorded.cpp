@@ -1,6 +1,6 @@
 // The covariance check on recorded data (label golden: reads ../shared/data, skipped if absent):
 // ADIS16405 acc_z, model fitted automatically to the data's online ADEV (white + GM over
-// [Ts, 100 s], the seed's "before" model), 1000 windows of T_avg = 10 s + T_int = 20 s, exact
+// [Ts, 100 s], the example's "before" model), 1000 windows of T_avg = 10 s + T_int = 20 s, exact
 // prediction from the fitted model. Reports the ratio of empirical (robust) to predicted
 // standard deviation at the end of the window.
 #include <gtest/gtest.h>
@@ -96,7 +96,7 @@ void check_channel(const char* file, const char* var, const imu::FitOptions& o, 
   EXPECT_NEAR(ratio_mid, 1.0, tolerance);
 }
 
-// The seed's "before" model fitted with the pure 1/var weights: reported, loosely bounded. The
+// The example's "before" model fitted with the pure 1/var weights: reported, loosely bounded. The
 // ADIS16405 has a bump near 0.6 s (a ~0.6 Hz periodic component) and a flicker plateau from
 // 10 s that white + one GM cannot both follow; the EDF ~1e6 points at tau < 0.1 s then decide
 // the fit, the plateau is underestimated and the model underpredicts the 20 s integral by ~20 %.

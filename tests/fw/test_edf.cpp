@@ -72,7 +72,7 @@ TEST(GreenhallEdf, ReproducesAllantoolsIntervals) {
   EXPECT_GT(checked, 800);
 }
 
-// Issue 2: the partially overlapping estimate keeps >= 90 % of the fully overlapping EDF for
+// The partially overlapping estimate keeps >= 90 % of the fully overlapping EDF for
 // white FM at every tau. Prints the table for the README.
 TEST(GreenhallEdf, PartialOverlapKeepsNinetyPercent) {
   const double n_samples = 1e6;

@@ -1,4 +1,4 @@
-// Tests of imu/error_model.hpp and imu/linalg.hpp (expm, solve): the seed's printed numbers,
+// Tests of imu/error_model.hpp and imu/linalg.hpp (expm, solve): the example's printed numbers,
 // closed forms written here from MODELS.md, and Van Loan against known discretisations.
 #include "imu/error_model.hpp"
 
@@ -62,7 +62,7 @@ TEST(ErrorModel, RejectsBadInputs) {
             imu::ModelStatus::kBadParameter);
   EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, std::nan(""), 300.0, 100.0, m),
             imu::ModelStatus::kBadParameter);
-  // Finite, positive, but absurd (issue 12): each gave kOk with a NaN phi, phi = 1 or an
+  // Finite, positive, but absurd: each gave kOk with a NaN phi, phi = 1 or an
   // infinite Qn before the derived quantities were checked.
   EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 1e-300, 100.0, m),
             imu::ModelStatus::kBadParameter);

@@ -68,7 +68,7 @@ TEST(FwNoAlloc, MillionUpdatesFilterAndFitAllocateNothing) {
     const std::size_t n = adev.channel(0).snapshot(pts, std::size(pts));
     EXPECT_GT(n, 50U);
 
-    // The rest of what the co-processor runs: seed model, float bias filter and monitors per
+    // The rest of what the co-processor runs: first-order model, float bias filter and monitors per
     // sample, and the fit of the model to the ADEV.
     imu::FirstOrderGm gm{};
     ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, gm), imu::ModelStatus::kOk);

@@ -1,5 +1,5 @@
 // Tests of imu/model_fit.hpp: exact recovery from noise-free AVAR curves, option checking, and
-// the issue's acceptance test on the seed's model simulated for 10,000 s.
+// the acceptance test on the first-order model simulated for 10,000 s.
 #include "imu/model_fit.hpp"
 
 #include <gtest/gtest.h>
@@ -114,7 +114,7 @@ TEST(ModelFit, RejectsBadOptionsAndTooFewPoints) {
   EXPECT_EQ(imu::fit(many.data(), many.size(), o).status, imu::FitStatus::kTooManyPoints);
 }
 
-// The issue's acceptance test: the seed's model (N = 3.3e-3, B = 9e-4, Tp = 300 s, 100 Hz)
+// The acceptance test: the first-order model (N = 3.3e-3, B = 9e-4, Tp = 300 s, 100 Hz)
 // simulated for 10,000 s, quantized with LSB 1e-5, through OnlineAdev<8, 22>, white + GM fitted
 // over [0.01, 100] s.
 TEST(ModelFit, SeedModelSimulatedTenThousandSecondsIsRecovered) {
@@ -142,7 +142,7 @@ TEST(ModelFit, SeedModelSimulatedTenThousandSecondsIsRecovered) {
   ASSERT_EQ(r.status, imu::FitStatus::kOk);
   ASSERT_EQ(r.params.n_gm, 1U);
 
-  EXPECT_NEAR(r.params.n, 3.3e-3, 0.05 * 3.3e-3);  // issue: N within 5 %
+  EXPECT_NEAR(r.params.n, 3.3e-3, 0.05 * 3.3e-3);  // target: N within 5 %
   std::size_t inside = 0;
   std::size_t total = 0;
   double ss = 0.0;
@@ -169,8 +169,8 @@ TEST(ModelFit, SeedModelSimulatedTenThousandSecondsIsRecovered) {
               total, 100.0 * frac, 100.0 * rms, r.evaluations, r.tb_at_bound ? "yes" : "no",
               secs);
   EXPECT_GE(total, 40U);     // [0.01, 100] s holds 48 taus of OnlineAdev<8, 22>
-  EXPECT_GE(frac, 0.90);     // issue: >= 90 % inside the data's 95 % interval
-  EXPECT_LT(rms, 0.03);      // issue: RMS relative error < 3 %
+  EXPECT_GE(frac, 0.90);     // target: >= 90 % inside the data's 95 % interval
+  EXPECT_LT(rms, 0.03);      // target: RMS relative error < 3 %
   EXPECT_NEAR(r.rms_rel, rms, 1e-12);  // the fit's own figure is the same quantity
 }
 

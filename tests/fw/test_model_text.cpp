@@ -1,4 +1,4 @@
-// Test of host_sim/model_text: the seed's report, compared with the text typed from the seed
+// Test of host_sim/model_text: the example's report, compared with the text typed from the example
 // document (../shared/seed/000_*.txt section 4), not with this code's own output.
 #include "imu/model_text.hpp"
 

@@ -267,7 +267,7 @@ TEST_F(NodeTest, RefusedTelemetryIsCounted) {
   EXPECT_EQ(node_->stats().last_send_status, imu::hal::IoStatus::kLinkDown);
 }
 
-// ---- Hostile bus (issue 12, item 5): each of these failed before its fix. ----
+// ---- Hostile bus : each of these failed before its fix. ----
 
 // A valid sample whose sequence number jumps 2^31 - 16 ahead: one missing run of that length.
 // It used to cost 2^31 prediction steps of six filters (tens of seconds); now mark_missing is
@@ -452,7 +452,7 @@ imu::hal::ModelRecord echo_of(const std::vector<imu::hal::RxEvent>& ev, std::siz
 
 }  // namespace
 
-// Issue 12 item 2: a pushed model is validated completely before it is swapped in; a refused
+// A pushed model is validated completely before it is swapped in; a refused
 // one keeps the old model and is counted; the echo says what runs.
 TEST_F(NodeTest, PushedModelIsValidatedSwappedAndEchoed) {
   send_config(100.0, 1e-4);
@@ -474,7 +474,7 @@ TEST_F(NodeTest, PushedModelIsValidatedSwappedAndEchoed) {
   EXPECT_EQ(e.flags & imu::hal::kModelPushed, imu::hal::kModelPushed);
   EXPECT_EQ(e.n_states, 2U);
   EXPECT_EQ(node_->stats().model_rejected, 0U);
-  EXPECT_EQ(echo_of(ev, 1).n_states, 1U) << "other channels keep the seed's one-state model";
+  EXPECT_EQ(echo_of(ev, 1).n_states, 1U) << "other channels keep the first-order one-state model";
   EXPECT_EQ(echo_of(ev, 1).flags, 0U);
 
   imu::hal::ModelRecord nan_rec = good;

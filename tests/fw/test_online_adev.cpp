@@ -101,7 +101,7 @@ TEST(OnlineAdev, MatchesBruteForceOnTheSameGrid) {
   }
 }
 
-// Against the fully overlapping estimator (stride 1), issue 2's criterion: within 1 % or a
+// Against the fully overlapping estimator (stride 1), the criterion: within 1 % or a
 // quarter of the 68 % interval's relative half-width, for taus up to a tenth of the record.
 // The two estimators legitimately differ: the partial one uses a subset of the full one's terms,
 // so their relative difference has a standard deviation of about
@@ -339,7 +339,7 @@ TEST(OnlineAdev, SnapshotRespectsCapacity) {
 }
 
 TEST(OnlineAdev, StateIsSmallAndFixed) {
-  // Issue 2 budget: at most 6 KiB per channel for L = 24, M = 8.
+  // Budget: at most 6 KiB per channel for L = 24, M = 8.
   EXPECT_LE(sizeof(imu::OnlineAdev<8, 24>), 6U * 1024U);
   // Six channels plus push_frame's buffer of kAdevFrameBufferDefault frames and its count.
   constexpr std::size_t kBuffer = imu::kAdevFrameBufferDefault * 6 * 4 + 8;

@@ -193,7 +193,7 @@ TEST(ResidualMonitor, CusumReconfiguredCountsFromZero) {
 }
 
 TEST(ResidualMonitor, FilterOnSeedDataWithABiasStepRaisesTheCusum) {
-  // The seed model simulated, a 0.02 m/s^2 step added at sample 300000 (static all along):
+  // The first-order model simulated, a 0.02 m/s^2 step added at sample 300000 (static all along):
   // the monitors stay quiet before (mostly) and the CUSUM fires soon after.
   imu::FirstOrderGm m{};
   ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, m), imu::ModelStatus::kOk);

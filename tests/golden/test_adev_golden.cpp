@@ -1,5 +1,5 @@
 // The online ADEV of the real ADIS16405 data against allantools' fully overlapping oadev
-// (../shared/golden), issue 2's criterion, and the end-to-end time of one 10^6-sample channel.
+// (../shared/golden), the criterion, and the end-to-end time of one 10^6-sample channel.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -93,7 +93,7 @@ TEST_P(Golden, MatchesAllantoolsOadev) {
       r.worst_level0 = std::max(r.worst_level0, rel);
       EXPECT_LT(rel, 1e-9) << "af " << g.af;
     }
-    // Issue 2's criterion, with a 3-sigma floor for the statistical part: see fw/README.md
+    // the criterion, with a 3-sigma floor for the statistical part: see fw/README.md
     // ("Consequence for comparisons"): the partial and full estimators differ by
     // 0.14..0.22 half-widths (1 sigma) at long tau.
     const double edf_full = imu::edf_greenhall(0, 2, g.af, g.af, g.n_terms);

@@ -1,5 +1,5 @@
 // 2^32 samples through the online ADEV must lose no more than 1e-9 relative accuracy against an
-// exact reference (issue 2). The input is periodic with period P = 2^16 and large values, so the
+// exact reference. The input is periodic with period P = 2^16 and large values, so the
 // exact sum of squared second differences over the whole record is computable in 128-bit
 // integers from one period: every term's value depends only on its start index modulo P.
 #include <gtest/gtest.h>

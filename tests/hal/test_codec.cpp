@@ -201,7 +201,7 @@ TEST(Codec, TelemetryRoundTripsExactly) {
   EXPECT_EQ(st2.kernel_drops, 0xDEADBEEFU);
 }
 
-// The RejectsRecord (added for issue 12): 64 bytes, FD id 0x240 (len 64), classic 0x241 in 10
+// The RejectsRecord (added later): 64 bytes, FD id 0x240 (len 64), classic 0x241 in 10
 // fragments; every field at its own offset (distinct values), through the Receiver in both layouts.
 TEST(Codec, RejectsRecordRoundTripsInBothLayouts) {
   imu::hal::RejectsRecord r{};
@@ -316,7 +316,7 @@ TEST(Codec, FineLsbAddsLessThanOnePercentOfWhiteNoise) {
 
 }  // namespace
 
-// ModelRecord (issue 12): 48 bytes, 0x090/0x091 as a push and 0x250/0x251 as the node's echo,
+// ModelRecord: 48 bytes, 0x090/0x091 as a push and 0x250/0x251 as the node's echo,
 // every field back bit-exact in both layouts; a wrong version or a channel >= 6 is refused as
 // bad_record even with a valid CRC.
 TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {

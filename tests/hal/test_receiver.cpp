@@ -383,8 +383,8 @@ TEST(Receiver, FullEventQueueRefusesFramesWithoutLosingThem) {
 }
 
 // A CRC-valid Config record whose channel count byte is not 6 (a forged or foreign record):
-// its LSB list would not mean what it says. Refused and counted, no Config event (issue 12:
-// every parameter of a config checked); the count 6 still passes.
+// its LSB list would not mean what it says. Refused and counted, no Config event
+// (every parameter of a config checked); the count 6 still passes.
 TEST(Receiver, ConfigWithAnotherChannelCountIsRefused) {
   imu::hal::ConfigRecord c{};
   c.cfg_id = 3;

@@ -1,4 +1,4 @@
-// `imu-sim adev --estimator full --taus ...` (issue 13 item 4): the fully overlapping estimator
+// `imu-sim adev --estimator full --taus ...`: the fully overlapping estimator
 // against allantools' oadev on the 12 shared channels (../shared/golden, written by allantools,
 // not by us) and against GNU Octave's own sum (tests/host_sim/octave), the tau grids, the CSV.
 #include <gtest/gtest.h>
@@ -71,7 +71,7 @@ TEST(AdevFull, MatchesAllantoolsOadevOnTheSharedData) {
   }
 }
 
-// A whole IMU in one call (issue 13 item 3): `--channel all` gives each of the six channels
+// A whole IMU in one call: `--channel all` gives each of the six channels
 // allantools' oadev, in one JSON keyed by channel and one CSV with a channel column; a comma
 // list gives those channels, in the order named.
 TEST(AdevFull, WholeImuInOneCallMatchesAllantools) {

@@ -32,7 +32,7 @@ TEST(SimAdis, RunAtMaxRateOverLoopback) {
   const double t_run = now_s() - t0;
   ASSERT_EQ(r.status, 0) << r.err;
   std::printf("imu-sim run on adis16405_imu1 acc_z (1e6 samples): %.2f s\n", t_run);
-  EXPECT_LT(t_run, 30.0) << "issue 5: the 1,000,000-sample channel in under 30 s";
+  EXPECT_LT(t_run, 30.0) << "the 1,000,000-sample channel in under 30 s";
   const std::string json = simtest::read_text(dir.file("run") + "/report.json");
   const char* node = "node_stats";
   EXPECT_EQ(simtest::json_number_in(json, node, "samples"), 1e6);

@@ -1,5 +1,5 @@
 // Tests of the imu-sim / imu-fw command lines (host_sim/app), run in-process: parse errors,
-// bad files, the model subcommand against the seed's printed numbers, and synth -> run over
+// bad files, the model subcommand against the example's printed numbers, and synth -> run over
 // the loopback bus through the firmware node, compared with imu-sim adev on the same file.
 #include <gtest/gtest.h>
 
@@ -83,7 +83,7 @@ TEST(SimCli, FwParseErrors) {
   }
 }
 
-TEST(SimCli, ModelPrintsTheSeedsNumbers) {
+TEST(SimCli, ModelPrintsTheExamplesNumbers) {
   const auto r = run({"model", "--N", "3.3e-3", "--B", "9e-4", "--Tp", "300", "--fs", "100"});
   ASSERT_EQ(r.status, 0) << r.err;
   // Typed from the seed document, section 4 (the notebook's output), not produced by the code.
@@ -232,7 +232,7 @@ TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
     EXPECT_NE(simtest::read_text(out + "/fig1_adev.svg").find("<svg"), std::string::npos);
     EXPECT_NE(simtest::read_text(out + "/fig2_covariance.svg").find("<svg"), std::string::npos);
     EXPECT_NE(r.out.find("plots: fig1_adev.svg"), std::string::npos) << r.out;
-    // The scripts run from any directory (issue 13 item 5): here from /, into another file.
+    // The scripts run from any directory: here from /, into another file.
     for (const char* gp : {"fig1_adev", "fig2_covariance"}) {
       const std::string svg = dir.file(std::string(gp) + "_elsewhere.svg");
       std::string cmd = "cd / && gnuplot -e \"set terminal svg; set output '";
@@ -252,12 +252,12 @@ TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
 
 }  // namespace
 
-/// Issue 12's criterion on the demo's synthetic data (synth defaults: the seed's model + RRW,
-/// 1e6 samples): the seed's model on the node raises the CUSUM alarm, and the model
+/// the criterion on the demo's synthetic data (synth defaults: the first-order model + RRW,
+/// 1e6 samples): the first-order model on the node raises the CUSUM alarm, and the model
 /// `imu-sim analyze` finds, pushed with `run --model`, is the one the node reports it runs,
-/// gives no CUSUM alarm and an NIS mean in [0.8, 1.25] (the issue's band). The CUSUM threshold
+/// gives no CUSUM alarm and an NIS mean in [0.8, 1.25] (the target band). The CUSUM threshold
 /// is sized for an in-control ARL of 1e8 updates (imu/residual_monitor.hpp), so a correct model
-/// has a ~1 % chance of a false alarm over this record; the seed's model is not one.
+/// has a ~1 % chance of a false alarm over this record; the first-order model is not one.
 namespace {
 void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::string& push_json) {
   const std::string mat = dir.file("synth.mat");
@@ -283,15 +283,15 @@ void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::str
 }
 }  // namespace
 
-TEST(SimCli, SeedModelAlarmsAndPushedAnalysisModelIsQuietOnTheDemoData) {
+TEST(SimCli, FirstOrderModelAlarmsAndPushedAnalysisModelIsQuietOnTheDemoData) {
   SKIP_IF_EMULATED();
   simtest::TempDir dir;
   std::string seed_json;
   std::string push_json;
   run_seed_and_pushed(dir, seed_json, push_json);
-  EXPECT_NE(seed_json.find("\"origin\": \"seed\""), std::string::npos) << seed_json;
+  EXPECT_NE(seed_json.find("\"origin\": \"default\""), std::string::npos) << seed_json;
   EXPECT_NE(seed_json.find("\"cusum_alarm\": true"), std::string::npos)
-      << "the seed's model raises the CUSUM alarm on the demo data";
+      << "the first-order model raises the CUSUM alarm on the demo data";
   EXPECT_NE(push_json.find("\"origin\": \"pushed\""), std::string::npos) << push_json;
   EXPECT_NE(push_json.find("\"model_pushed\": true"), std::string::npos);
   EXPECT_NE(push_json.find("\"cusum_alarm\": false"), std::string::npos)

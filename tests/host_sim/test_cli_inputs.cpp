@@ -1,4 +1,4 @@
-// Tests of what imu-sim does with wrong or hostile input (issue 13): non-finite samples are gaps,
+// Tests of what imu-sim does with wrong or hostile input: non-finite samples are gaps,
 // never numbers; an LSB or rate that cannot represent the data is refused; files that are not
 // regular files, or declare more than the memory budget, are refused with one line; numeric
 // options are range-checked before they become sizes or integers; outputs are written whole or
@@ -239,7 +239,7 @@ TEST(SimCliInputs, AdevAndAnalyzeTakeTheSameLsbFromTheFile) {
   }
 }
 
-// adev --channel all --plots DIR (issue 13 item 3: plots per axis): per channel a CSV, a
+// adev --channel all --plots DIR (plots per axis): per channel a CSV, a
 // gnuplot script that renders from any directory, and its SVG/PNG when gnuplot is there.
 TEST(SimCliInputs, AdevPlotsEveryAxis) {
   simtest::TempDir dir;
@@ -558,8 +558,8 @@ TEST(SimCliInputs, FailedWritesLeaveNoPartialFile) {
 
 // Defect: an allocation failure escaped as std::bad_alloc (abort, core dump). It is caught at the
 // top of every command: one line, exit 1. Here a 2^25-sample channel (256 MiB of doubles) meets
-// an address space of 64 MiB more than the process already uses: synth writes it in chunks
-// (issue 14), so it succeeds; analyze, which reads it in chunks but analyses 2^22 block means
+// an address space of 64 MiB more than the process already uses: synth writes it in chunks,
+// so it succeeds; analyze, which reads it in chunks but analyses 2^22 block means
 // (about 160 MB whatever the record's length), fails in one line.
 TEST(SimCliInputs, AllocationFailureIsOneLineAndExit1) {
   SKIP_IF_EMULATED();  // an RLIMIT_AS limit starves qemu-user itself, not the program
@@ -579,7 +579,7 @@ TEST(SimCliInputs, AllocationFailureIsOneLineAndExit1) {
   EXPECT_EQ(r.err, "imu-sim analyze: out of memory\n");
 }
 
-// Issue 14 item 3: a record longer than 2^22 samples is analysed on block means (read from the
+// A record longer than 2^22 samples is analysed on block means (read from the
 // stream, the file never whole), so analyze's memory stops growing with the record. 4.5e6
 // samples of the synth model (white N + GM + rate random walk K) become 2.25e6 means of 2 at
 // 50 Hz: the report says so, and the model found is still the synthesised one (N within 2 %,
@@ -627,7 +627,7 @@ TEST(SimCliInputs, LongRecordIsAnalysedOnBlockMeans) {
   EXPECT_NEAR(k / k_full, 1.0, 0.10);
 }
 
-// The same for a text file (issue 14: analyze streams text too, never the table): a text
+// The same for a text file (analyze streams text too, never the table): a text
 // record past 2^22 samples is held as block means, found while it streams (the length is not
 // known in advance: B doubles, merging pairs of blocks). 4.2e6 samples give 2.1e6 means of 2,
 // and the analysis of the text is the MAT-file's, number for number (means of 2 are the same

@@ -1,5 +1,5 @@
-// imu-fw as a process against a loopback peer that never comes, falls silent or dies (issue 12,
-// item 5): it must end on its own, promptly, with one line on stderr when the peer is gone.
+// imu-fw as a process against a loopback peer that never comes, falls silent or dies:
+// it must end on its own, promptly, with one line on stderr when the peer is gone.
 // The peer is this test process (hal::CanSocket on the same loopback name).
 #include <gtest/gtest.h>
 #include <fcntl.h>

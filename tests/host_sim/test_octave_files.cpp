@@ -122,7 +122,7 @@ TEST(OctaveFiles, AnalyzeReadsRowVectorsInt16CountsAndMatrixColumns) {
       << r.err;
 }
 
-// run reads the same variables as adev (issue 13: "adev and run accept only the names
+// run reads the same variables as adev ("adev and run accept only the names
 // acc_x..gyro_z"): a row vector, int16 counts x acc_lsb, a matrix column and a struct field
 // each take the acc_z slot, are sent to the node, and its ADEV is Octave's.
 TEST(OctaveFiles, RunReadsAnyVariableStructFieldsAndInt16Counts) {

@@ -1,4 +1,4 @@
-// Text input (issue 13 item 2): CSV, TSV and blank-separated columns with a header, a time
+// Text input: CSV, TSV and blank-separated columns with a header, a time
 // column giving the rate, dropped rows as gaps, and the refusals. The ADEV of a text column is
 // checked against the fully overlapping sum computed here, independently, over the samples.
 #include <gtest/gtest.h>
@@ -138,7 +138,7 @@ TEST(TextInput, BadTextIsRefusedWithTheLine) {
   EXPECT_NE(r.err.find("no column 'acc'; the columns: t, gyro"), std::string::npos) << r.err;
 }
 
-// The stream (adev, issue 14: memory independent of the rows) and the whole table (analyze)
+// The stream (adev: memory independent of the rows) and the whole table (analyze)
 // place a column on the same grid: irregular steps, dropped rows, an empty field, comments and
 // blank lines; read 1, 7 and 4096 samples at a time. Both are checked against the grid built
 // here from the rows written.

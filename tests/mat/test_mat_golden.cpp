@@ -163,7 +163,7 @@ TEST_P(SharedData, MetadataVariables) {
 }
 
 TEST_P(SharedData, AccZLoadTime) {
-  // Whole path API (open + scan + inflate + copy), best of 3. Reported for the issue; the bound
+  // Whole path API (open + scan + inflate + copy), best of 3. Reported; the bound
   // is loose (shared 2-core machine, other builds running) and only catches a gross regression.
   double best_ms = 1e9;
   for (int i = 0; i < 3; ++i) {

@@ -370,7 +370,7 @@ TEST_P(ScipyFile, ChannelStreamMatchesMatFile) {
   EXPECT_EQ(notscalar.error().message, f + ": variable 'd_col': is 5x1, not a scalar");
 }
 
-// Struct fields by dotted name (issue 13): the same values, or the same error, through MatFile
+// Struct fields by dotted name: the same values, or the same error, through MatFile
 // (the struct inflated whole, then descended) and ChannelStream (descended in the stream, the
 // fields before skipped), read 1 or 1000 samples at a time.
 TEST_P(ScipyFile, StructFieldsByDottedName) {

@@ -355,7 +355,7 @@ t_imu_realtime() {
   fi
 }
 
-# Issue 12: a model push over the real kernel's vcan0. imu-sim analyze fits a model to a
+# A model push over the real kernel's vcan0. imu-sim analyze fits a model to a
 # synthetic record; imu-sim run --model sends it to imu-fw (external node) as a ModelRecord over
 # vcan0 and reads the node's echo (0x250) back from the bus: the run's JSON must report the
 # pushed model as the one the node runs (origin "pushed", model_pushed true, none rejected) with

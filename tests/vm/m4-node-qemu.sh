@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The same firmware Node on the Cortex-M4 (issue 12 item 4): builds imu_m4_node.elf with
+# The same firmware Node on the Cortex-M4: builds imu_m4_node.elf with
 # toolchains/arm-none-eabi-m4.cmake, checks that imu::node::Node::on_frame is in its symbol
 # table, runs it on QEMU's mps2-an386 with -icount shift=0 (one virtual-clock step per guest
 # instruction, so the image's SysTick readings count instructions) and compares its telemetry

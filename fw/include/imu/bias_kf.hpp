@@ -1,4 +1,4 @@
-// Bias Kalman filters on target: scalar (first-order GM, the seed's model) and n-state (any
+// Bias Kalman filters on target: scalar (first-order GM, the first-order model) and n-state (any
 // DiscreteModel), templated on the arithmetic type (float on the Cortex-M4F, double on the host).
 //
 // Per sample (step()):
@@ -63,7 +63,7 @@ struct KfStats {
 template <typename T>
 class ScalarBiasKf {
  public:
-  /// From the seed's model (phi, Qw, Qn). p0: initial bias variance (default: Pss, i.e. the bias
+  /// From the first-order model (phi, Qw, Qn). p0: initial bias variance (default: Pss, i.e. the bias
   /// is unknown within its steady-state spread); b0: initial bias.
   [[nodiscard]] KfStatus configure(const FirstOrderGm& m, double known_signal = 0.0) {
     return configure(m.phi, m.qw, m.qn, m.pss_d, 0.0, known_signal);

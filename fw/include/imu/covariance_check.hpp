@@ -1,4 +1,4 @@
-// The seed's covariance check (Fig. 2), with the model's prediction computed exactly.
+// The example's covariance check (Fig. 2), with the model's prediction computed exactly.
 //
 // Check: windows of n_avg + n_int samples. The bias estimate is the mean of the first n_avg
 // samples, A = (1/n_avg) sum_{k<n_avg} z_k; then the error is integrated,
@@ -19,7 +19,7 @@
 // approximation beyond the model itself), starting from cov(s_0) = diag(P0, 1, 0, 0): x_0 from
 // the model's prior (steady state for GM terms; the RRW/ramp prior cancels in z - A for the
 // constant part). var(I_j) includes the error of the averaged bias estimate AND its correlation
-// with the bias during integration: A and x are correlated through the shared x_k. The seed's
+// with the bias during integration: A and x are correlated through the shared x_k. The example's
 // prediction ignores that; CovPrediction::kCorrelationIgnored reproduces the omission by zeroing
 // the cross-covariance of A with every other state at the start of integration (A's own variance
 // kept), to show what the omission costs.
@@ -38,7 +38,7 @@ namespace imu {
 
 enum class CovPrediction : unsigned char {
   kExact = 0,            ///< averaging error and its correlation with the bias included
-  kCorrelationIgnored,   ///< the seed's omission: A independent of the states at the switch
+  kCorrelationIgnored,   ///< the example's omission: A independent of the states at the switch
 };
 
 /// Predicted standard deviation of I_j for j = 1..n_int, written to std_out[0..n_int-1].

@@ -1,4 +1,4 @@
-// On-target detectors of effects the first-order model lacks (issue 6), fixed memory, no heap.
+// On-target detectors of effects the first-order model lacks, fixed memory, no heap.
 // A co-processor runs them next to the bias filter and raises its alarm line on their flags;
 // the host analysis (host_sim/analyze) calls the same code.
 //

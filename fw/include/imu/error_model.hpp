@@ -1,4 +1,4 @@
-// Stochastic error models of one IMU channel: the seed's first-order Gauss-Markov conversion,
+// Stochastic error models of one IMU channel: the first-order Gauss-Markov conversion,
 // general fixed-capacity continuous models built from terms, exact (Van Loan) discretisation and
 // the analytic Allan variance of every term (../shared/docs/MODELS.md).
 //
@@ -9,7 +9,7 @@
 //      sequence): the simulator produces exactly that. The Kalman filters do NOT model the MA(1)
 //      correlation: they treat it as extra white measurement variance 2 Q^2 / Ts^2
 //      (DiscreteModel::r_filter()), a documented approximation that overstates the short-term
-//      noise and is harmless when Q^2/Ts << N^2 (true for the ADIS16405 and the seed).
+//      noise and is harmless when Q^2/Ts << N^2 (true for the ADIS16405 and the example).
 // Terms and their states (appended in call order, kMaxStates in total):
 //   white N (no state), quantization Q (no state),
 //   first-order GM (Sb, Tb): 1 state, b' = -b/Tb + w, PSD(w) = Sb, prior Pss = Sb Tb / 2,
@@ -31,7 +31,7 @@
 // Analytic AVAR: sum of the MODELS.md formulas (model_avar). For the sampled model the white,
 // quantization and ramp formulas are exact at tau = m Ts; the GM, RRW and sinusoid formulas are
 // the continuous-time ones (their sampled values differ by O(Ts/tau), < 1e-3 relative for
-// tau >= 10 Ts on the seed's model).
+// tau >= 10 Ts on the first-order model).
 //
 // Cost: model_avar O(number of terms), a few exp(); discretize() O((2n)^3 log) once per model,
 // never per sample. No heap, re-entrant.
@@ -56,7 +56,7 @@ enum class ModelStatus : std::uint8_t {
 inline constexpr double kGmPeakAdevFactor = 0.4365;
 inline constexpr double kGmPeakTauFactor = 1.89;
 
-/// The seed's first-order model (MODELS.md "From ASD parameters to the first-order model").
+/// The first-order model (MODELS.md "From ASD parameters to the first-order model").
 struct FirstOrderGm {
   // inputs
   double n;      ///< velocity random walk N [unit/sqrt(Hz)]

@@ -48,8 +48,8 @@ enum FitTerm : std::uint32_t {
 inline constexpr std::size_t kMaxFitPoints = 128;
 
 struct FitOptions {
-  std::uint32_t terms = kFitWhite | kFitGm1;  ///< the seed's "before" model
-  double tau_min_s = 0.01;                     ///< the seed's range [Ts, 100 s]
+  std::uint32_t terms = kFitWhite | kFitGm1;  ///< the example's "before" model
+  double tau_min_s = 0.01;                     ///< the example's range [Ts, 100 s]
   double tau_max_s = 100.0;
   double tb_min_s = 0.0;  ///< correlation time search range; 0: tau_min_s
   double tb_max_s = 0.0;  ///< 0: 10 * tau_max_s
@@ -84,7 +84,7 @@ struct FitResult {
   std::size_t n_points = 0;  ///< points inside the range and usable
   std::uint32_t evaluations = 0;  ///< NNLS solves performed
   /// A fitted correlation time lies within 1 % of the search range's end: the data do not
-  /// determine it (e.g. the seed's data over [Ts, 100 s] only see the GM's rising part, where
+  /// determine it (e.g. the example's data over [Ts, 100 s] only see the GM's rising part, where
   /// AVAR ~ Sb tau / 3 depends on Sb alone). The fitted curve is still valid over the range.
   bool tb_at_bound = false;
   FitStatus status = FitStatus::kBadOptions;

@@ -25,7 +25,7 @@
 //   Defaults: ARL0 = 1e8 updates (~11.6 days at 100 Hz; 100x a 1e6-update record, i.e. a ~1 %
 //   false-alarm probability over such a record) and k = 0.025, half the smallest persistent mean
 //   shift worth detecting, delta = 0.05 sd: the innovation mean of a bias estimate that is off by
-//   ~2 of the filter's own standard deviations (sqrt(P/S) = 0.022 for the seed's accelerometer
+//   ~2 of the filter's own standard deviations (sqrt(P/S) = 0.022 for the example's accelerometer
 //   model at 100 Hz). That is the scale of a wrong model: a missing random walk or a too short
 //   Gauss-Markov time pulls the estimate by a few hundredths of an sd for minutes, which a
 //   k = 0.5 CUSUM cannot tell from noise. Then h = 247.4, b = 248.6, and the mean delays are

@@ -258,7 +258,7 @@ void Node::on_config(const hal::ConfigRecord& c) {
       ++stats_.model_rejected;  // cannot happen: model_in_range() checked both rate limits
     }
     if (pushed_[c_i] && !build_pushed(c_i)) {
-      pushed_[c_i] = false;  // valid at the old rate, not at this one: back to the seed's
+      pushed_[c_i] = false;  // valid at the old rate, not at this one: back to the example's
       ++stats_.model_rejected;
     }
   }

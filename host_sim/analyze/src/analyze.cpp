@@ -477,7 +477,7 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
   return out;
 }
 
-// Seed's covariance check (T_avg = 10 s, T_int = 20 s, up to 1000 overlapping windows): robust
+// The example's covariance check (T_avg = 10 s, T_int = 20 s, up to 1000 overlapping windows): robust
 // std of the integral at T_int over the predicted std. 0 when the record is too short.
 double covariance_ratio(const ModelParams& p, double ts, const std::vector<double>& y) {
   const auto n_avg = static_cast<std::size_t>(std::lround(10.0 / ts));
@@ -1769,9 +1769,9 @@ class Analysis {
     return true;
   }
 
-  // The seed's first-order model, its filter and its errors (the "before").
+  // The first-order model, its filter and its errors (the "before").
   bool fit_before() {
-    // ---- before: the seed's first-order model over [Ts, 100 s]
+    // ---- before: the first-order model over [Ts, 100 s]
     const double seed_max = std::min(o.seed_tau_max_s, tau_max);
     const FitResult before0 = fit_terms(raw.by_alpha[2], kFitWhite | kFitGm1, ts, seed_max);
     if (before0.status != FitStatus::kOk) {
@@ -2094,7 +2094,7 @@ class Analysis {
     try_term("quantization", kFitQuantization);
     try_term("rate_random_walk", kFitRrw);
     try_term("ramp", kFitRamp);
-    // A second GM is not one of the effects the issue names; real sensors need it (e.g. the
+    // A second GM is not one of the effects MODELS.md lists; real sensors need it (e.g. the
     // ADIS16405's internal filter correlates the noise below 1 s while the bias wanders over
     // minutes). It competes with the named terms under the same test and, when accepted, is
     // reported in the notes and in model_after, not as an effect.

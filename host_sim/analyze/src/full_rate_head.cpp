@@ -1,4 +1,4 @@
-// A long record's two analyses joined (issue 14): the whole record on block means, its head at
+// A long record's two analyses joined: the whole record on block means, its head at
 // full rate (analyze.hpp merge_full_rate_head).
 #include <algorithm>
 #include <cmath>
@@ -213,7 +213,7 @@ void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, co
              !no_worse(joined_on_head, head.error_before)) {
     record.notes.push_back(
         "full-rate head (" + where + "): the record's model with the head's fast terms would be "
-        "worse than the seed's model (record taus: " + errors_text(on_record) + " vs " +
+        "worse than the first-order model (record taus: " + errors_text(on_record) + " vs " +
         errors_text(record.error_before) + "; head taus: " + errors_text(joined_on_head) +
         " vs " + errors_text(head.error_before) + "): the record's model is kept");
   } else {

@@ -55,7 +55,7 @@ std::string error_json(const ErrorStats& e) {
   std::ostringstream s;
   s << "{\"adev_rms_rel\": " << num(e.adev_rms_rel) << ", \"adev_max_rel\": "
     << num(e.adev_max_rel) << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": "
-    << num(e.tau_max_s) << ", \"n_taus\": " << e.n_taus << ", \"seed_range\": {\"adev_rms_rel\": "
+    << num(e.tau_max_s) << ", \"n_taus\": " << e.n_taus << ", \"example_range\": {\"adev_rms_rel\": "
     << num(e.seed_rms_rel) << ", \"adev_max_rel\": " << num(e.seed_max_rel)
     << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": " << num(e.seed_tau_max_s)
     << "}, \"cost_sum_z2\": " << num(e.cost) << ", \"covariance_ratio\": " << num(e.cov_ratio)

@@ -27,7 +27,7 @@
 #include "run.hpp"
 
 #ifdef IMU_HAVE_ANALYZE
-#include "imu/analyze/analyze.hpp"  // imu::analyze::cli_main (host_sim/analyze, issue 6)
+#include "imu/analyze/analyze.hpp"  // imu::analyze::cli_main (host_sim/analyze)
 #endif
 
 namespace imu::sim {
@@ -38,14 +38,14 @@ using imu::cli::AtomicFileWriter;
 constexpr const char* kUsageSynth =
     "usage: imu-sim synth [--out FILE] [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--K 1.4e-4]\n"
     "                     [--fs 100] [--duration 10000] [--seed 1] [--lsb 1e-6] [--channel acc_z]\n"
-    "  synthetic recording (MAT-file: channel, fs, acc_lsb/gyro_lsb, source) from the seed's\n"
+    "  synthetic recording (MAT-file: channel, fs, acc_lsb/gyro_lsb, source) from the example's\n"
     "  error model plus rate random walk. Ranges: --N --B in [1e-12, 1e3], --K in [0, 1e3],\n"
     "  --Tp in [1e-6, 1e9] s, --fs in [1e-3, 1e6] Hz, --duration x --fs in [16, 2^25] samples,\n"
     "  --seed an integer in [0, 2^53], --lsb in [1e-12, 1e6]; the model's values must fit int32\n"
     "  counts of --lsb.\n";
 constexpr const char* kUsageModel =
     "usage: imu-sim model [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--fs 100]\n"
-    "  the continuous and discrete first-order model in the seed's layout\n";
+    "  the continuous and discrete first-order model in the example's layout\n";
 constexpr const char* kUsageAdev =
     "usage: imu-sim adev FILE [--channel acc_z|all|A,B] [--json OUT] [--csv OUT] [--lsb X]\n"
     "                         [--fs X] [--estimator online|full] [--plots DIR]\n"
@@ -90,7 +90,7 @@ constexpr const char* kExitCodes =
     "processed, bus error, failed write, out of memory), 2 command-line error (unknown option,\n"
     "bad or out-of-range value, an option that does not fit the data); `imu-sim CMD --help`\n";
 
-// The options of synth, range-checked (issue 13: every number before it becomes a size).
+// The options of synth, range-checked (every number before it becomes a size).
 struct SynthOptions {
   double n = 0, b = 0, tp = 0, k = 0, fs = 0, dur = 0, lsb = 0;
   std::uint64_t seed = 0;
@@ -129,7 +129,7 @@ bool parse_synth(const Args& a, SynthOptions& o, std::string& err) {
 
 // Draw the samples (exact LSB multiples). kExitUsage if the model's values do not fit int32
 // counts of the LSB (a saturated sample would be a wrong number in the file).
-// Draw, quantise and write the channel's o.count samples in chunks of 8192 (issue 14: memory
+// Draw, quantise and write the channel's o.count samples in chunks of 8192 (memory
 // independent of the length): `w` holds the header and the small variables, which follow the
 // column. Exit status; err set.
 int synth_write(const SynthOptions& o, ModelSimulator<4>& sim, mat::MatWriter& w,
@@ -213,7 +213,7 @@ int cmd_synth(int argc, char** argv) {
   const double t0 = now_s();
   std::string source;
   appendf(source,
-          "SYNTHETIC data from imu-sim synth (not a recording: the seed's marble-slab data is not "
+          "SYNTHETIC data from imu-sim synth (not a recording: the marble-slab recording of the example is not "
           "public): white N=%.6g, first-order GM B=%.6g Tp=%.6g s, rate random walk K=%.6g, "
           "fs=%.6g Hz, %zu samples, seed %llu, quantized to LSB %.6g",
           o.n, o.b, o.tp, o.k, o.fs, o.count, static_cast<unsigned long long>(o.seed), o.lsb);

@@ -1,6 +1,6 @@
 // Loading a sensor recording from a MAT-file and converting it to counts (host code).
 //
-// What the data may hold, and what is refused (issue 13: no silent wrong answer):
+// What the data may hold, and what is refused (no silent wrong answer):
 //  * non-finite samples (NaN, +-Inf) are gaps, never numbers: counted (non_finite), given count 0
 //    in the counts and skipped by every consumer (ADEV: mark_missing; run: not sent). Samples
 //    before the first / after the last finite one are not part of the series. A channel with no

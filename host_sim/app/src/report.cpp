@@ -237,7 +237,7 @@ bool report_simulation(const ReportOptions& opt, ReportState& rs, std::string& e
 }
 
 // The covariance check: the integrated error's std over windows of the data and of the
-// simulated model, against the model's prediction (exact, and the seed's). False with err.
+// simulated model, against the model's prediction (exact, and the example's). False with err.
 bool report_covariance(const ReportInput& in, const ReportOptions& opt, ReportState& rs,
                        std::string& err) {
   const double ts_s = rs.ts_s;
@@ -312,11 +312,11 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
   appendf(t, "data: %s, channel %s [%s], %zu samples at %.6g Hz (%.6g s), LSB %.6g %s\n",
           in.source.c_str(), in.channel.c_str(), unit, n_samples, in.fs_hz,
           static_cast<double>(n_samples) * ts_s, in.lsb, unit);
-  appendf(t, "\n== Error model in the seed's layout (%s)\n\n", model_origin.c_str());
+  appendf(t, "\n== Error model in the example's layout (%s)\n\n", model_origin.c_str());
   if (have_gm) {
     t += format_seed_model(gm);
   } else {
-    t += "(no first-order Gauss-Markov term: the seed's layout does not apply)\n";
+    t += "(no first-order Gauss-Markov term: the example's layout does not apply)\n";
   }
   if (mp.q > 0.0) {
     appendf(t, "\nBeyond the first-order model: quantization Q = %.4e %s s (AVAR 3 Q^2 / tau^2).\n",
@@ -349,7 +349,7 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
   appendf(t, "\n== Covariance check (T_avg = %.4g s, T_int = %.4g s): std of the integrated error\n\n",
           opt.t_avg_s, opt.t_int_s);
   appendf(t, "%-28s %8s %14s %14s %14s %8s\n", "at t = T_int", "windows", "empirical",
-          "predicted", "pred. (seed)", "ratio");
+          "predicted", "pred. (uncorr.)", "ratio");
   appendf(t, "%-28s %8zu %14.4e %14.4e %14.4e %8.3f\n", "simulated model", cov.sim_windows,
           cov.emp_sim[j_end], cov.pred_exact[j_end], cov.pred_seed[j_end],
           cov.emp_sim[j_end] / cov.pred_exact[j_end]);
@@ -365,8 +365,8 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
     appendf(t, "data: fewer samples than one window (%zu)\n", win);
   }
   appendf(t, "empirical = robust std (1.4826 MAD) over the windows; predicted = exact propagation\n"
-             "of the model (averaging error and its correlation with the bias); pred. (seed) =\n"
-             "the seed's prediction, which ignores that correlation. Integrated error unit: %s s.\n",
+             "of the model (averaging error and its correlation with the bias); pred. (uncorr.) =\n"
+             "the example's prediction, which ignores that correlation. Integrated error unit: %s s.\n",
           unit);
   appendf(t, "\n== Frame statistics\n\n");
   for (const StatGroup& g : in.stats) {
@@ -431,7 +431,7 @@ bool report_csvs(const ReportInput& in, const ReportOptions& opt, ReportState& r
     if (!write_file(d + "/fig1_adev_model.csv", c, err)) {
       return false;
     }
-    c = "t_s,empirical_sim,empirical_data,predicted_exact,predicted_seed\n";
+    c = "t_s,empirical_sim,empirical_data,predicted_exact,predicted_uncorrelated\n";
     for (std::size_t j = 0; j < cov.n_int; ++j) {
       appendf(c, "%.6g,%.10g,%.10g,%.10g,%.10g\n", static_cast<double>(j + 1) * ts_s,
               cov.emp_sim[j], cov.data_windows > 0 ? cov.emp_data[j] : 0.0, cov.pred_exact[j],
@@ -545,7 +545,7 @@ bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& 
             "  '' skip 1 using 1:4 with lines lw 2 lc rgb 'black' title 'predicted std', '' skip 1 "
             "using 1:(-$4) with lines lw 2 lc rgb 'black' notitle, \\\n"
             "  '' skip 1 using 1:5 with lines dt 2 lw 1.5 lc rgb '#d62728' title 'predicted "
-            "(seed)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
+            "(uncorrelated)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
             opt.t_avg_s, unit, nw_sim, cov.sim_windows, nw_sim + 1);
     if (nw_data > 0) {
       appendf(g2,
@@ -558,7 +558,7 @@ bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& 
               "  '' skip 1 using 1:4 with lines lw 2 lc rgb 'black' title 'predicted std', '' "
               "skip 1 using 1:(-$4) with lines lw 2 lc rgb 'black' notitle, \\\n"
               "  '' skip 1 using 1:5 with lines dt 2 lw 1.5 lc rgb '#d62728' title 'predicted "
-              "(seed)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
+              "(uncorrelated)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
               title_chan.c_str(), nw_data, cov.data_windows, nw_data + 1);
     }
     g2 += "unset multiplot\n";
@@ -588,7 +588,7 @@ bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& 
         }
       }
       if (ok) {
-        plot_note = "plots: fig1_adev.svg/.png (seed Fig. 1), fig2_covariance.svg/.png (seed Fig. 2)";
+        plot_note = "plots: fig1_adev.svg/.png (the example's Fig. 1), fig2_covariance.svg/.png (the example's Fig. 2)";
       }
     }
   }
@@ -631,7 +631,7 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
   }
   j += "]";
   if (have_gm) {
-    j += ",\n    \"seed_layout\": {\"mu_per_s\": " + json_num(gm.mu_per_s) +
+    j += ",\n    \"example_layout\": {\"mu_per_s\": " + json_num(gm.mu_per_s) +
          ", \"Sn\": " + json_num(gm.sn) + ", \"Sw\": " + json_num(gm.sb) +
          ", \"Pss_c\": " + json_num(gm.pss) + ", \"phi\": " + json_num(gm.phi) +
          ", \"Qn\": " + json_num(gm.qn) + ", \"Qw\": " + json_num(gm.qw) +
@@ -656,7 +656,7 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
        ", \"empirical_data\": " +
        (cov.data_windows > 0 ? json_num(cov.emp_data[j_end]) : std::string("null")) +
        ", \"predicted\": " + json_num(cov.pred_exact[j_end]) +
-       ", \"predicted_seed\": " + json_num(cov.pred_seed[j_end]) + "}},\n";
+       ", \"predicted_uncorrelated\": " + json_num(cov.pred_seed[j_end]) + "}},\n";
   j += "  \"frame_stats\": {";
   for (std::size_t gi = 0; gi < in.stats.size(); ++gi) {
     j += (gi == 0 ? "\n" : ",\n") + std::string("    ") + json_str(in.stats[gi].key) + ": {";

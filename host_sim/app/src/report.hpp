@@ -1,4 +1,4 @@
-// The report of imu-sim run (what the seed's notebook printed and drew, from our pipeline):
+// The report of imu-sim run (what the example's notebook printed and drew, from our pipeline):
 // text, JSON, CSV data and gnuplot-rendered SVG/PNG plots. Host code.
 #ifndef IMU_SIM_REPORT_HPP
 #define IMU_SIM_REPORT_HPP

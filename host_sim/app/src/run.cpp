@@ -402,7 +402,7 @@ bool parse_run(int argc, char** argv, RunOptions& o, std::string& err) {
 /// protocol has no per-channel validity): inside [lo, hi) it is a gap the node counts missing;
 /// before the first / after the last sendable sample it is not part of the series (the node's
 /// receiver starts at the first sequence number it sees). Which samples inside are skipped is
-/// decided again, chunk by chunk, while sending (issue 14: no per-sample vector).
+/// decided again, chunk by chunk, while sending (no per-sample vector).
 struct SendPlan {
   std::size_t lo = 0;
   std::size_t hi = 0;
@@ -554,7 +554,7 @@ bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& e
 }
 
 // Check every present channel of the file (LSB, finite samples: stream_counts' checks, chunk by chunk)
-// and plan what is sent; nothing of the record is kept (issue 14). Exit status.
+// and plan what is sent; nothing of the record is kept. Exit status.
 int load_run_data(const RunOptions& o, SensorData& sd, SendPlan& plan, std::string& err) {
   bool want[kNumChannels];
   bool required[kNumChannels];
@@ -826,7 +826,7 @@ int send_one(const SensorData& sd, std::uint64_t q, std::uint64_t span,
 }
 
 // Send the planned samples (configuration first and every 100 samples), reading the present
-// channels chunk by chunk and quantising each chunk (issue 14). 0 or the status of the failure,
+// channels chunk by chunk and quantising each chunk. 0 or the status of the failure,
 // already printed.
 int send_samples(const SensorData& sd, const SendPlan& plan, Sender& tx) {
   tx.cfg.cfg_id = 1;
@@ -1022,7 +1022,7 @@ std::string monitor_note(const hal::MonitorRecord& m, const std::string& chan_na
   if ((m.flags & hal::kMonitorAlarmLine) != 0U) {
     what += std::string(what.empty() ? "" : "; ") + "the alarm line is set";
   }
-  return "residual monitors: " + what + ". The node's bias filter is the seed's first-order "
+  return "residual monitors: " + what + ". The node's bias filter is the first-order "
          "model (white + one GM); its innovations drift when the data hold an effect that model "
          "lacks (a rate random walk, a step, a ramp). `imu-sim analyze FILE.mat --channel " +
          chan_name + "` names it.";
@@ -1059,7 +1059,7 @@ std::string node_json(const RunOptions& o, const Telemetry& tel) {
   std::string j = "{\"model\": ";
   if (tel.have_model_echo[o.chan]) {
     const hal::ModelRecord& m = tel.model_echo[o.chan];
-    j += std::string("{\"origin\": ") + ((m.flags & hal::kModelPushed) != 0 ? "\"pushed\"" : "\"seed\"") +
+    j += std::string("{\"origin\": ") + ((m.flags & hal::kModelPushed) != 0 ? "\"pushed\"" : "\"default\"") +
          ", \"n_states\": " + std::to_string(m.n_states) + ", \"n\": " + f(m.n) +
          ", \"q\": " + f(m.q) + ", \"gm\": [";
     bool first = true;

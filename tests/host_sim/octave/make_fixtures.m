@@ -1,4 +1,4 @@
-% Writes the GNU Octave fixtures of tests/host_sim/test_octave_files.cpp (issue 13: real
+% Writes the GNU Octave fixtures of tests/host_sim/test_octave_files.cpp (real
 % clients over our own fixtures). Run once, from this folder, with Debian's octave:
 %   octave-cli --no-gui make_fixtures.m
 % and commit the .mat files and octave_ref.txt it writes (CI does not install Octave).

@@ -1,5 +1,5 @@
 // imu-vm-stepmat: MAT-files for the VM test.
-//  * Synthetic: an acc_z recording from the seed's first-order model (no rate random walk, so
+//  * Synthetic: an acc_z recording from the first-order model (no rate random walk, so
 //    it matches imu-fw's default model exactly) with an optional step added to every sample
 //    from --step-at-s on. Streamed to imu-fw: without a step the residual monitors stay quiet,
 //    with one the alarm GPIO line must go high.

@@ -1,4 +1,4 @@
-// Host twin of the M4 node image (issue 12 item 4): runs the same node workload
+// Host twin of the M4 node image: runs the same node workload
 // (toolchains/m4/src/node_workload.cpp, the same Node and codec built for the host) and
 //   node_check              prints its lines (what the target must print);
 //   node_check --compare LOG  compares every T and END line of a qemu-system-arm log with its

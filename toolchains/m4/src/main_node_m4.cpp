@@ -6,7 +6,7 @@
 // Extra lines (target only):
 //   IMU-NODE COST ticks=<samples phase> cal_ticks=<calibration loop> cal_insns=<its instructions>
 //   IMU-ADEV COST frame_ticks=<ticks> frames=<F> block_ticks=<ticks> samples=<S>
-//     the ADEV kernel alone (issue 14 item 4): F frames of six channels through the node's
+//     the ADEV kernel alone: F frames of six channels through the node's
 //     MultiAdev<6, 8, 22>::push_frame, and S samples of one channel through
 //     OnlineAdev<8, 22>::push_block, each on pseudo-random counts (an LCG)
 //   IMU-M4 STACK used=<bytes> of=<bytes>

@@ -1,4 +1,4 @@
-// The same firmware Node on the Cortex-M4 and on the host (issue 12 item 4). One source, built
+// The same firmware Node on the Cortex-M4 and on the host. One source, built
 // for both: a small synthetic record (samples.hpp's deterministic generator, 6 channels) is
 // encoded with the hal codec into an in-memory frame array (a ConfigRecord, one ModelRecord per
 // channel with the largest model the node runs, kNodeSamples SampleRecords), fed through

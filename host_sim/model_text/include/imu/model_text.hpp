@@ -8,7 +8,7 @@
 
 namespace imu {
 
-/// The continuous and discrete first-order model in the seed's layout (seed document section 4,
+/// The continuous and discrete first-order model in the example's layout (the example's section 4,
 /// the notebook's output): same sentences, same order, %.4e numbers, phi as %.4f. Lines end with
 /// '\n'; a blank line separates the two models.
 [[nodiscard]] std::string format_seed_model(const FirstOrderGm& m);

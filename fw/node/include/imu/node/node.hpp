@@ -2,7 +2,7 @@
 //
 // Frames are pushed in (on_frame); the node reassembles them through hal::Receiver, feeds every
 // sample to the online ADEV of the six channels (imu::MultiAdev) and to one scalar bias Kalman
-// filter per channel (imu::ScalarBiasKf<float>, the seed's first-order model) with its residual
+// filter per channel (imu::ScalarBiasKf<float>, the first-order model) with its residual
 // monitors (imu::ResidualMonitors), drives the alarm output while any monitor fires, and sends
 // telemetry frames (hal codec records) to a FrameSink:
 //   every status_period_samples:  StatsRecord, BiasRecord, MonitorRecord, RejectsRecord (in that
@@ -20,8 +20,8 @@
 // receiver go to MultiAdev::mark_missing (O(levels)) and ScalarBiasKf::predict(n) (O(1)): a
 // forged sequence number 2^31 ahead costs the same as one lost sample (a pushed model: at most
 // kMaxGapSteps predictions).
-// Pushed models (ModelRecord, issue 12): see on_model in node.cpp and host_sim/README.md; a
-// channel runs either the seed model (ScalarBiasKf) or its pushed KalmanFilter<float, 8>.
+// Pushed models (ModelRecord): see on_model in node.cpp and host_sim/README.md; a
+// channel runs either the first-order model (ScalarBiasKf) or its pushed KalmanFilter<float, 8>.
 // Filter: the known signal of each channel (gravity + initial bias) is the mean of its first
 // init_samples samples; the filter then estimates the bias relative to it, updating only while
 // the static input is active (no input: always static). A channel whose counts have all been 0
@@ -57,7 +57,7 @@ using NodeAdev = MultiAdev<kChannels, 8, 22>;
 inline constexpr std::size_t kMaxAdevPoints = NodeAdev::Channel::kMaxPoints;
 static_assert(kMaxAdevPoints <= 255, "AdevRecord::index is 8 bits");
 
-/// The seed's parameters of one channel's first-order model (imu::first_order_gm_from_asd).
+/// The example's parameters of one channel's first-order model (imu::first_order_gm_from_asd).
 struct ChannelModel {
   double n;     ///< white noise N [unit/sqrt(Hz)]
   double b;     ///< bias instability B [unit]
@@ -109,7 +109,7 @@ inline constexpr std::uint64_t kMaxGapSteps = 4096;
 /// True if the rate and every LSB are in the ranges above. O(1).
 [[nodiscard]] bool config_in_range(const hal::ConfigRecord& c);
 
-/// Defaults: accelerometers the seed's model (N = 3.3e-3 m/s/sqrt(s), B = 9e-4 m/s^2,
+/// Defaults: accelerometers the first-order model (N = 3.3e-3 m/s/sqrt(s), B = 9e-4 m/s^2,
 /// Tp = 300 s); gyros the ADIS16405 datasheet's typical angle random walk 2 deg/sqrt(h)
 /// (5.8e-4 rad/s/sqrt(Hz)) and in-run bias stability 0.007 deg/s (1.2e-4 rad/s), Tp = 300 s.
 /// Replace them with a fitted model for real use.
@@ -197,7 +197,7 @@ class Node {
   [[nodiscard]] float bias_var(std::size_t c) const {
     return pushed_[c] ? kfn_[c].bias_variance() : kf_[c].variance();
   }
-  /// What channel c runs: the seed's one-state model (flags 0, n_states 1) or a pushed one.
+  /// What channel c runs: the first-order one-state model (flags 0, n_states 1) or a pushed one.
   [[nodiscard]] hal::ModelRecord model_echo(std::size_t c) const;
   [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
   [[nodiscard]] const ResidualMonitors<4>& monitors(std::size_t c) const { return mon_[c]; }
@@ -230,7 +230,7 @@ class Node {
   hal::Receiver<8> rx_;
   NodeAdev adev_;
   ScalarBiasKf<float> kf_[kChannels];
-  // Pushed models (issue 12): per channel the record, its parameters, and its filter; pushed_
+  // Pushed models: per channel the record, its parameters, and its filter; pushed_
   // selects kfn_ over kf_. RAM per channel: sizeof(KalmanFilter<float, 8>) (printed by the test)
   // + the record and ModelParams.
   KalmanFilter<float, kNodeStates> kfn_[kChannels];

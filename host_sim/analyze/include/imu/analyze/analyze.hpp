@@ -1,8 +1,8 @@
-// imu-sim analyze: close the loop between a recorded channel and its error model (issue 6).
+// imu-sim analyze: close the loop between a recorded channel and its error model.
 //
 // Pipeline (analyze()):
 //  1. counts = round(y / lsb); online ADEV (fw OnlineAdev<8,22>) of the raw record.
-//  2. "before": the seed's first-order model (white + one GM) fitted over [Ts, 100 s]
+//  2. "before": the first-order model (white + one GM) fitted over [Ts, 100 s]
 //     (fw model_fit), its bias filter run over the record (NIS mean) and the covariance check.
 //  3. Time domain, on the bias filter's normalised innovations nu: outliers are |nu| above the
 //     Bonferroni gate (family-wise false-alarm rate `alpha` over the record) after scaling nu by
@@ -58,7 +58,7 @@ struct Options {
   double unexplained_min_rel = 0.05;
   double z_run = 2.0;         ///< |z| above this is outside the 68 % interval by 2 sigma
   std::size_t min_run = 4;    ///< consecutive taus (one octave at 4 taus per octave)
-  double seed_tau_max_s = 100.0;  ///< the seed's fit range [Ts, 100 s]
+  double seed_tau_max_s = 100.0;  ///< the example's fit range [Ts, 100 s]
   double tau_max_fraction = 0.1;  ///< residuals over taus up to this fraction of the record
   int max_steps = 3;
 };
@@ -111,8 +111,8 @@ struct UnexplainedRun {
 
 /// A record longer than the analysis holds (host_sim/analyze/src/cli.cpp: 2^22 samples) is
 /// analysed on block means of `block` samples for the whole record, and at full rate on its
-/// first `samples` samples (the head), for the taus and effects the means cannot resolve
-/// (issue 14). merge_full_rate_head() says how the two are joined.
+/// first `samples` samples (the head), for the taus and effects the means cannot resolve.
+/// merge_full_rate_head() says how the two are joined.
 struct FullRateHead {
   std::uint64_t samples = 0;  ///< 0: none (the record was analysed at full rate)
   double fs_hz = 0.0;
@@ -194,7 +194,7 @@ struct Report {
 ///     oscillation at the alias of one of them is dropped (it was the alias, a wrong name),
 ///   * the record's slow terms (K, R, bias instability) as they are.
 /// It replaces the record's model only if it is no worse (RMS and max relative ADEV error) than
-/// the seed's model on both the record's taus and the head's; then the head's quantization,
+/// the first-order model on both the record's taus and the head's; then the head's quantization,
 /// fast sinusoids and oscillation become effects of the record, the record's quantization and
 /// alias effects are removed, and the head's unexplained runs below the record's first tau are
 /// added. Either way `record.head` holds the head's findings and each decision is a note.

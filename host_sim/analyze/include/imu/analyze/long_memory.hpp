@@ -1,4 +1,4 @@
-// Time-domain likelihood test for a rate random walk (issue 6, "RRW vs a GM peaking near T/10").
+// Time-domain likelihood test for a rate random walk ("RRW vs a GM peaking near T/10").
 //
 // Over taus up to T/10 the ADEV of a Gauss-Markov term whose peak (1.89 Tb) sits near the end of
 // the range is the same curve as a rate random walk, and the few degrees of freedom there cannot

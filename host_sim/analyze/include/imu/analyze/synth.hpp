@@ -1,4 +1,4 @@
-// Synthetic channels for the analysis tests: the seed's first-order model (white N + one GM)
+// Synthetic channels for the analysis tests: the first-order model (white N + one GM)
 // simulated by fw ModelSimulator, plus, on request, each effect the analysis must find.
 // Stochastic terms (quantization Q, rate random walk K) are simulated as model states; the
 // deterministic ones are added to the output: ramp R (t - T/2), A sin(2 pi f t + phase), a bias
