@@ -1,4 +1,4 @@
-// Error model: seed conversion, term AVARs, model building and Van Loan discretisation.
+// Error model: the first-order conversion from ASD parameters, term AVARs, model building and Van Loan discretisation.
 // The templates are defined here and instantiated for kMaxStates = 1, 2, 4, 6, 16 (the sizes the
 // project uses); add a line at the bottom for another size.
 #include "imu/error_model.hpp"

@@ -25,7 +25,7 @@
 // kept), to show what the omission costs.
 //
 // Cost: predict_integral_std O((n_avg + n_int) (n+3)^3) flops, once per model (3000 steps of a
-// 4x4 for the seed: ~0.2 ms on the host). integrate_window O(n_avg + n_int). robust_std O(n)
+// 4x4 for the example's model: ~0.2 ms on the host). integrate_window O(n_avg + n_int). robust_std O(n)
 // expected (quickselect, in place). No heap, re-entrant.
 #ifndef IMU_COVARIANCE_CHECK_HPP
 #define IMU_COVARIANCE_CHECK_HPP

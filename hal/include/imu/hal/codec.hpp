@@ -190,7 +190,7 @@ struct RejectsRecord {
 /// ModelRecord::version this code writes and accepts (others: RxStats::bad_record).
 inline constexpr std::uint8_t kModelVersion = 1;
 /// ModelRecord::flags bits (echo only).
-inline constexpr std::uint8_t kModelPushed = 1U << 0;  ///< the node runs a pushed model (else seed)
+inline constexpr std::uint8_t kModelPushed = 1U << 0;  ///< the node runs a pushed model (else its default first-order)
 /// Stochastic error model of one channel (imu::ModelParams without the deterministic terms:
 /// ramp and sinusoids are not filter states on the node). 48 bytes. Sent by the host as kModel
 /// (n_states and flags 0); echoed by the node as kModelEcho with what it runs. A zero parameter

@@ -17,9 +17,9 @@ namespace imu::analyze {
 struct SynthSpec {
   double fs_hz = 100.0;
   std::size_t samples = 1000000;
-  double n = 3.3e-3;    ///< seed: N [unit/sqrt(Hz)]
-  double b = 9e-4;      ///< seed: B [unit]
-  double tp_s = 300.0;  ///< seed: Tp [s]
+  double n = 3.3e-3;    ///< example: N [unit/sqrt(Hz)]
+  double b = 9e-4;      ///< example: B [unit]
+  double tp_s = 300.0;  ///< example: Tp [s]
   double q = 0.0;       ///< quantization Q [unit s]
   double k = 0.0;       ///< rate random walk K [unit/sqrt(s)]
   double ramp_r = 0.0;  ///< [unit/s]
