@@ -261,8 +261,10 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   // --yaml without both sensors is refused as a usage error before any analysis (exit 2),
   // nothing written.
   std::remove(yaml.c_str());
-  EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x", "--yaml", yaml}), 2);
+  const std::string json_one = json + ".one";
+  EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x", "--json", json_one, "--yaml", yaml}), 2);
   EXPECT_FALSE(std::ifstream(yaml).good());
+  EXPECT_FALSE(std::ifstream(json_one).good()) << "--json was written before --yaml was refused";
   // An unknown name in the list is a usage error: exit 2.
   EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x,acc_q"}), 2);
 }

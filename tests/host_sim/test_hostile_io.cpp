@@ -10,6 +10,7 @@
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/stat.h>
+#include <sys/sysmacros.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -164,12 +165,22 @@ TEST(HostileIo, DevicesFifosAndLinksAreWrittenThroughNotReplaced) {
   TempDir dir;
   const std::string csv = dir.file("in.csv");
   write_csv(csv, {"gyro_x"}, 3000, 100.0, 14);
-  // A character device stays one.
-  auto r = run({"adev", csv, "--channel", "gyro_x", "--json", "/dev/null"});
+  // A character device stays one. As root (the case where a rename would replace it), a private
+  // null device in the test's folder: a writer that replaces devices must not take the
+  // machine's /dev/null with it. Otherwise /dev/null itself (a rename there is refused).
+  std::string null_dev = "/dev/null";
+  if (geteuid() == 0 && mknod(dir.file("null").c_str(), S_IFCHR | 0666, makedev(1, 3)) == 0) {
+    const int fd = ::open(dir.file("null").c_str(), O_WRONLY);  // fails on a nodev mount
+    if (fd >= 0) {
+      ::close(fd);
+      null_dev = dir.file("null");
+    }
+  }
+  auto r = run({"adev", csv, "--channel", "gyro_x", "--json", null_dev});
   EXPECT_EQ(r.status, 0) << r.err;
   struct stat st {};
-  ASSERT_EQ(stat("/dev/null", &st), 0);
-  EXPECT_TRUE(S_ISCHR(st.st_mode)) << "/dev/null was replaced";
+  ASSERT_EQ(stat(null_dev.c_str(), &st), 0);
+  EXPECT_TRUE(S_ISCHR(st.st_mode)) << null_dev << " was replaced";
   // A FIFO gets the document.
   const std::string fifo = dir.file("fifo");
   ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
