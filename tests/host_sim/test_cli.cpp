@@ -360,3 +360,23 @@ TEST(SimCli, RunModelFileErrors) {
     EXPECT_EQ(simtest::count_lines(r.err), 1U) << r.err;
   }
 }
+
+// `--version`, and a near miss named: an option one typo away, a command with two letters
+// swapped; nothing suggested for a word far from every name.
+TEST(SimCli, VersionAndDidYouMean) {
+  auto r = run({"--version"});
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out.rfind("imu-sim ", 0), 0U) << r.out;
+  r = run({"--version"}, true);
+  EXPECT_EQ(r.status, 0);
+  EXPECT_EQ(r.out.rfind("imu-fw ", 0), 0U) << r.out;
+  r = run({"adev", "x.mat", "--chanel", "acc_z"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("did you mean --channel?"), std::string::npos) << r.err;
+  r = run({"adve", "x.mat"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("did you mean adev?"), std::string::npos) << r.err;
+  r = run({"adev", "x.mat", "--frobnicate", "1"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_EQ(r.err.find("did you mean"), std::string::npos) << r.err;
+}

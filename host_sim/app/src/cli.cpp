@@ -798,7 +798,8 @@ int print_help(const std::string& cmd) {
 
 int cli_main(int argc, char** argv) {
   const auto usage = [](std::FILE* to) {
-    std::fputs("usage: imu-sim <command> [options]   (imu-sim <command> --help)\n", to);
+    std::fputs("usage: imu-sim <command> [options]   (imu-sim <command> --help; imu-sim --version)\n",
+               to);
     for (const char* c : {"synth", "model", "adev", "run", "analyze"}) {
       std::fputs(command_usage(c), to);
     }
@@ -813,9 +814,16 @@ int cli_main(int argc, char** argv) {
     usage(stdout);
     return kExitOk;
   }
+  if (sub == "--version" || sub == "version") {
+    std::printf("imu-sim %s\n", IMU_VERSION);
+    return kExitOk;
+  }
   if (command_usage(sub)[0] == '\0') {
-    std::fprintf(stderr, "imu-sim: unknown command '%s' (synth, model, adev, run, analyze; "
-                 "imu-sim --help)\n", sub.c_str());
+    const std::string near =
+        imu::cli::closest(sub, {"synth", "model", "adev", "run", "analyze"});
+    std::fprintf(stderr, "imu-sim: unknown command '%s'%s (synth, model, adev, run, analyze; "
+                 "imu-sim --help)\n", imu::cli::term_safe(sub).c_str(),
+                 near.empty() ? "" : ("; did you mean " + near + "?").c_str());
     return kExitUsage;
   }
   // Sizes are checked before they are allocated; this is the last line of defence (a machine

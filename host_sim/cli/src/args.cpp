@@ -23,7 +23,45 @@ std::string num_text(double v) {
 
 bool is_option_like(const std::string& a) { return a.size() > 1 && a[0] == '-'; }
 
+// Edit distance with adjacent transpositions (optimal string alignment): "adve" is 1 from
+// "adev". Names are short: a full table.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  const std::size_t w = b.size() + 1;
+  std::vector<std::size_t> d((a.size() + 1) * w);
+  for (std::size_t i = 0; i <= a.size(); ++i) {
+    d[i * w] = i;
+  }
+  for (std::size_t j = 0; j <= b.size(); ++j) {
+    d[j] = j;
+  }
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0U : 1U;
+      std::size_t v = std::min({d[(i - 1) * w + j] + 1, d[i * w + j - 1] + 1,
+                                d[(i - 1) * w + j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) {
+        v = std::min(v, d[(i - 2) * w + j - 2] + 1);
+      }
+      d[i * w + j] = v;
+    }
+  }
+  return d[a.size() * w + b.size()];
+}
+
 }  // namespace
+
+std::string closest(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t best_d = std::max<std::size_t>(1, word.size() / 3) + 1;
+  for (const auto& c : candidates) {
+    const std::size_t d = edit_distance(word, c);
+    if (d < best_d) {
+      best_d = d;
+      best = c;
+    }
+  }
+  return best;
+}
 
 bool Args::parse(int argc, char** argv, int first, const std::vector<OptSpec>& specs,
                  std::size_t max_positional, std::string& err) {
@@ -58,7 +96,12 @@ bool Args::parse(int argc, char** argv, int first, const std::vector<OptSpec>& s
       }
     }
     if (spec == nullptr) {
-      err = "unknown option '" + name + "'";
+      std::vector<std::string> names;
+      for (const OptSpec& o : specs) {
+        names.emplace_back(o.name);
+      }
+      const std::string near = closest(name, names);
+      err = "unknown option '" + name + "'" + (near.empty() ? "" : "; did you mean " + near + "?");
       return false;
     }
     if (spec->has_value && !inline_value) {

@@ -131,13 +131,17 @@ int fw_main(int argc, char** argv) {
       {"--idle-ms", true},   {"--exit-idle-s", true},  {"--peer-timeout-s", true},
       {"--status-period", true},
       {"--adev-period", true}, {"--init-samples", true}, {"--quiet", false},
-      {"--help", false}};
+      {"--help", false},     {"--version", false}};
   if (!a.parse(argc, argv, specs, err)) {
     std::fputs(kFwUsage, stderr);
     return fail(kCmd, err, 2);
   }
   if (a.has("--help")) {
     std::fputs(kFwUsage, stdout);
+    return 0;
+  }
+  if (a.has("--version")) {
+    std::printf("imu-fw %s\n", IMU_VERSION);
     return 0;
   }
   if (!a.has("--bus")) {

@@ -22,6 +22,10 @@
 
 namespace imu::cli {
 
+/// The candidate closest to `word` by edit distance, if it is close enough to be a typo (at
+/// most a third of its length, at least 1); "" if none. For "did you mean" in messages.
+[[nodiscard]] std::string closest(const std::string& word, const std::vector<std::string>& candidates);
+
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitRuntime = 1;
 inline constexpr int kExitUsage = 2;
