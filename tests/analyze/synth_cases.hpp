@@ -25,7 +25,7 @@ inline constexpr double kOutlierSize = 0.33;
 // Cases (the first-order model plus one effect; sizes of our own, not the shared data's):
 inline constexpr double kBi = 2e-3;  // bias instability B: flicker floor 0.664 B = 1.33e-3, flat
                                      // from ~20 s (where white N/sqrt(tau) meets it) to T/10
-inline constexpr double kGmSigma = 1.46e-3;      // the seed GM's std sqrt(Pss)
+inline constexpr double kGmSigma = 1.46e-3;      // the example GM's std sqrt(Pss)
 inline constexpr double kStep3Size = 3.0 * kGmSigma;  // a step of 3 GM sigmas,
 inline constexpr double kStep3Time = 16000.0;          // late in a 20,000 s record
 inline constexpr std::size_t kStep3Samples = 2000000;

@@ -88,9 +88,9 @@ TEST(AnalyzeRecorded, AllTwelveChannels) {
       std::printf("| %s %s | %s | %.3f / %.3f | %.3f / %.3f | %.3f / %.3f | %.3f / %.3f | "
                   "%.3f / %.3f | %.3f / %.3f | %.2f |\n",
                   file + 10, ch, found.empty() ? "none" : found.c_str(), b.adev_rms_rel,
-                  b.adev_max_rel, a.adev_rms_rel, a.adev_max_rel, b.seed_rms_rel, b.seed_max_rel,
-                  a.seed_rms_rel, a.seed_max_rel, b.nis_mean, a.nis_mean, b.cov_ratio, a.cov_ratio,
-                  r.cpu_seconds);
+                  b.adev_max_rel, a.adev_rms_rel, a.adev_max_rel, b.example_rms_rel,
+                  b.example_max_rel, a.example_rms_rel, a.example_max_rel, b.nis_mean, a.nis_mean,
+                  b.cov_ratio, a.cov_ratio, r.cpu_seconds);
     }
   }
   std::printf("RMS error after <= 0.5 x before on %d of 12 channels\n", halved);

@@ -16,13 +16,13 @@ namespace {
 
 constexpr double kGravity = 9.80665;  // the known signal of a vertical accelerometer [m/s^2]
 
-imu::FirstOrderGm seed_model() {
+imu::FirstOrderGm example_model() {
   imu::FirstOrderGm m{};
   EXPECT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, m), imu::ModelStatus::kOk);
   return m;
 }
 
-imu::DiscreteModel<1> seed_discrete(const imu::FirstOrderGm& m) {
+imu::DiscreteModel<1> example_discrete(const imu::FirstOrderGm& m) {
   imu::ContinuousModel<1> c;
   EXPECT_EQ(c.add_white(m.n), imu::ModelStatus::kOk);
   EXPECT_EQ(c.add_gauss_markov(m.sb, m.tb_s), imu::ModelStatus::kOk);
@@ -41,8 +41,8 @@ double riccati_posterior(double phi, double q, double r) {
 }
 
 TEST(BiasKf, FloatAgreesWithDoubleOverAMillionSamples) {
-  const imu::FirstOrderGm m = seed_model();
-  const imu::DiscreteModel<1> d = seed_discrete(m);
+  const imu::FirstOrderGm m = example_model();
+  const imu::DiscreteModel<1> d = example_discrete(m);
   imu::ModelSimulator<1> sim;
   ASSERT_EQ(sim.configure(d, 7), imu::ModelStatus::kOk);
   imu::ScalarBiasKf<float> kf_f;
@@ -88,7 +88,7 @@ TEST(BiasKf, FloatAgreesWithDoubleOverAMillionSamples) {
 }
 
 TEST(BiasKf, SteadyStateMatchesTheRiccatiSolution) {
-  const imu::FirstOrderGm m = seed_model();
+  const imu::FirstOrderGm m = example_model();
   imu::ScalarBiasKf<double> kf;
   ASSERT_EQ(kf.configure(m), imu::KfStatus::kOk);
   for (int i = 0; i < 200000; ++i) {  // time constant ~ 1/sqrt(Q/R) = 2000 samples
@@ -100,7 +100,7 @@ TEST(BiasKf, SteadyStateMatchesTheRiccatiSolution) {
 }
 
 TEST(BiasKf, PredictsOnlyWhileNotStaticAndTracksAKnownSignal) {
-  const imu::FirstOrderGm m = seed_model();
+  const imu::FirstOrderGm m = example_model();
   imu::ScalarBiasKf<double> kf;
   ASSERT_EQ(kf.configure(m, kGravity), imu::KfStatus::kOk);
   // Constant true bias 2e-3 on top of gravity, no noise: the estimate converges to it.
@@ -129,7 +129,7 @@ TEST(BiasKf, PredictsOnlyWhileNotStaticAndTracksAKnownSignal) {
 // double, which is what the closed form must reproduce; tolerance 1e-9 relative (pow and the
 // geometric sum in double against k roundings of the loop, k <= 1e5: ~1e5 ulp = 2e-11).
 TEST(BiasKf, PredictOfKStepsEqualsKPredictionsAndIsConstantTime) {
-  const imu::FirstOrderGm m = seed_model();
+  const imu::FirstOrderGm m = example_model();
   for (std::uint64_t k : {std::uint64_t{1}, std::uint64_t{64}, std::uint64_t{65},
                           std::uint64_t{1000}, std::uint64_t{100000}}) {
     imu::ScalarBiasKf<double> a;
@@ -175,8 +175,8 @@ TEST(BiasKf, RejectsBadModels) {
 }
 
 TEST(BiasKf, NStateFilterWithOneStateEqualsTheScalarFilter) {
-  const imu::FirstOrderGm m = seed_model();
-  const imu::DiscreteModel<1> d = seed_discrete(m);
+  const imu::FirstOrderGm m = example_model();
+  const imu::DiscreteModel<1> d = example_discrete(m);
   imu::ScalarBiasKf<double> s;
   imu::KalmanFilter<double, 1> n;
   ASSERT_EQ(s.configure(d, kGravity), imu::KfStatus::kOk);

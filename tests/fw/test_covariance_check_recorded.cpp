@@ -101,7 +101,7 @@ void check_channel(const char* file, const char* var, const imu::FitOptions& o, 
 // 10 s that white + one GM cannot both follow; the EDF ~1e6 points at tau < 0.1 s then decide
 // the fit, the plateau is underestimated and the model underpredicts the 20 s integral by ~20 %.
 // Measured: 1.21 (imu1), 1.18 (imu2). Bound 35 %: a regression bound on a reported figure.
-imu::FitOptions seed_before_model() { return imu::FitOptions{}; }
+imu::FitOptions first_order_before_model() { return imu::FitOptions{}; }
 
 // White + two GMs with the EDF capped at 1000 in the weights: follows the plateau (RMS ~5 %).
 // Measured: ratio 0.87 at 20 s on both IMUs (the model over-predicts by 13 %: a GM with
@@ -116,11 +116,11 @@ imu::FitOptions two_gm_capped() {
 }
 
 TEST(CovarianceCheckRecorded, Imu1AccZ) {
-  check_channel("adis16405_imu1.mat", "acc_z", seed_before_model(), "white+GM", 0.35);
+  check_channel("adis16405_imu1.mat", "acc_z", first_order_before_model(), "white+GM", 0.35);
   check_channel("adis16405_imu1.mat", "acc_z", two_gm_capped(), "white+2GM, edf cap", 0.15);
 }
 TEST(CovarianceCheckRecorded, Imu2AccZ) {
-  check_channel("adis16405_imu2.mat", "acc_z", seed_before_model(), "white+GM", 0.35);
+  check_channel("adis16405_imu2.mat", "acc_z", first_order_before_model(), "white+GM", 0.35);
   check_channel("adis16405_imu2.mat", "acc_z", two_gm_capped(), "white+2GM, edf cap", 0.15);
 }
 

@@ -28,7 +28,7 @@ void expect_printed(double value, double printed) {
 TEST(ErrorModel, SeedFirstOrderNumbersMatchThePrintedSeed) {
   imu::FirstOrderGm m{};
   ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, m), imu::ModelStatus::kOk);
-  // Values typed from ../shared/seed/000_*.txt section 4 and MODELS.md.
+  // Values typed from Farrell's ASD-to-state-space example (its printed output) and MODELS.md.
   expect_printed(m.mu_per_s, 6.3000e-03);
   expect_printed(m.sn, 1.0890e-05);
   expect_printed(m.sb, 2.6783e-08);

@@ -119,17 +119,17 @@ TEST(ModelFit, RejectsBadOptionsAndTooFewPoints) {
 // over [0.01, 100] s.
 TEST(ModelFit, SeedModelSimulatedTenThousandSecondsIsRecovered) {
   const auto t0 = std::chrono::steady_clock::now();
-  imu::FirstOrderGm seed{};
-  ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, seed), imu::ModelStatus::kOk);
+  imu::FirstOrderGm ex{};
+  ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, ex), imu::ModelStatus::kOk);
   imu::ContinuousModel<1> c;
-  ASSERT_EQ(c.add_white(seed.n), imu::ModelStatus::kOk);
-  ASSERT_EQ(c.add_gauss_markov(seed.sb, seed.tb_s), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_white(ex.n), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_gauss_markov(ex.sb, ex.tb_s), imu::ModelStatus::kOk);
   imu::DiscreteModel<1> d;
-  ASSERT_EQ(imu::discretize(c, seed.ts_s, d), imu::ModelStatus::kOk);
+  ASSERT_EQ(imu::discretize(c, ex.ts_s, d), imu::ModelStatus::kOk);
   imu::ModelSimulator<1> sim;
   ASSERT_EQ(sim.configure(d, 20251121), imu::ModelStatus::kOk);
   constexpr double kLsb = 1e-5;
-  imu::OnlineAdev<8, 22> adev(seed.ts_s, kLsb);
+  imu::OnlineAdev<8, 22> adev(ex.ts_s, kLsb);
   for (int i = 0; i < 1000000; ++i) {
     const imu::QuantizeResult q = imu::quantize(sim.next(), kLsb);
     ASSERT_FALSE(q.saturated);
@@ -161,10 +161,10 @@ TEST(ModelFit, SeedModelSimulatedTenThousandSecondsIsRecovered) {
   const double frac = static_cast<double>(inside) / static_cast<double>(total);
   const double secs =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("seed fit: N = %.4e (true 3.3000e-03), Sb = %.4e (seed 2.6783e-08), Tb = %.1f s "
-              "(seed %.1f s), B = %.3e; %zu/%zu taus inside the 95%% interval (%.1f %%), RMS rel "
+  std::printf("example fit: N = %.4e (true 3.3000e-03), Sb = %.4e (true 2.6783e-08), Tb = %.1f s "
+              "(true %.1f s), B = %.3e; %zu/%zu taus inside the 95%% interval (%.1f %%), RMS rel "
               "%.2f %%, %u NNLS solves, Tb at the search bound: %s, %.2f s\n",
-              r.params.n, r.params.gm[0].sb, r.params.gm[0].tb_s, seed.tb_s,
+              r.params.n, r.params.gm[0].sb, r.params.gm[0].tb_s, ex.tb_s,
               imu::kGmPeakAdevFactor * std::sqrt(r.params.gm[0].sb * r.params.gm[0].tb_s), inside,
               total, 100.0 * frac, 100.0 * rms, r.evaluations, r.tb_at_bound ? "yes" : "no",
               secs);

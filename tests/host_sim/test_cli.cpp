@@ -86,7 +86,8 @@ TEST(SimCli, FwParseErrors) {
 TEST(SimCli, ModelPrintsTheExamplesNumbers) {
   const auto r = run({"model", "--N", "3.3e-3", "--B", "9e-4", "--Tp", "300", "--fs", "100"});
   ASSERT_EQ(r.status, 0) << r.err;
-  // Typed from the seed document, section 4 (the notebook's output), not produced by the code.
+  // Typed from Farrell's ASD-to-state-space example (its printed output), not produced by the
+  // code.
   const char* expected[] = {
       "db(t)/dt = -6.3000e-03 * b(t) + w(t)",
       "PSD S_n = 1.0890e-05",
@@ -259,7 +260,8 @@ TEST(SimCli, PlotsAreRenderedOrReportedMissing) {
 /// is sized for an in-control ARL of 1e8 updates (imu/residual_monitor.hpp), so a correct model
 /// has a ~1 % chance of a false alarm over this record; the first-order model is not one.
 namespace {
-void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::string& push_json) {
+void run_first_order_and_pushed(simtest::TempDir& dir, std::string& first_json,
+                                std::string& push_json) {
   const std::string mat = dir.file("synth.mat");
   auto r = run({"synth", "--out", mat});
   ASSERT_EQ(r.status, 0) << r.err;
@@ -269,11 +271,11 @@ void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::str
   const std::vector<std::string> common = {"--bus", "loopback", "--rate", "max", "--no-plots",
                                            "--quiet", "--sim-windows", "10", "--N", "3.3e-3",
                                            "--B", "9e-4", "--Tp", "300"};
-  std::vector<std::string> seed_args = {"run", mat, "--out", dir.file("seed")};
-  seed_args.insert(seed_args.end(), common.begin(), common.end());
-  r = run(seed_args);
+  std::vector<std::string> first_args = {"run", mat, "--out", dir.file("first")};
+  first_args.insert(first_args.end(), common.begin(), common.end());
+  r = run(first_args);
   ASSERT_EQ(r.status, 0) << r.err;
-  seed_json = simtest::read_text(dir.file("seed") + "/report.json");
+  first_json = simtest::read_text(dir.file("first") + "/report.json");
   std::vector<std::string> push_args = {"run", mat, "--out", dir.file("push"), "--model",
                                         analysis};
   push_args.insert(push_args.end(), common.begin(), common.end());
@@ -286,19 +288,19 @@ void run_seed_and_pushed(simtest::TempDir& dir, std::string& seed_json, std::str
 TEST(SimCli, FirstOrderModelAlarmsAndPushedAnalysisModelIsQuietOnTheDemoData) {
   SKIP_IF_EMULATED();
   simtest::TempDir dir;
-  std::string seed_json;
+  std::string first_json;
   std::string push_json;
-  run_seed_and_pushed(dir, seed_json, push_json);
-  EXPECT_NE(seed_json.find("\"origin\": \"default\""), std::string::npos) << seed_json;
-  EXPECT_NE(seed_json.find("\"cusum_alarm\": true"), std::string::npos)
+  run_first_order_and_pushed(dir, first_json, push_json);
+  EXPECT_NE(first_json.find("\"origin\": \"default\""), std::string::npos) << first_json;
+  EXPECT_NE(first_json.find("\"cusum_alarm\": true"), std::string::npos)
       << "the first-order model raises the CUSUM alarm on the demo data";
   EXPECT_NE(push_json.find("\"origin\": \"pushed\""), std::string::npos) << push_json;
   EXPECT_NE(push_json.find("\"model_pushed\": true"), std::string::npos);
   EXPECT_NE(push_json.find("\"cusum_alarm\": false"), std::string::npos)
       << "the pushed analysis model gives no CUSUM alarm";
   const double nis = simtest::json_number_in(push_json, "node", "nis_mean");
-  std::printf("seed: cusum_alarm %s; pushed: cusum_alarm %s, nis_mean %.4f\n",
-              seed_json.find("\"cusum_alarm\": true") != std::string::npos ? "true" : "false",
+  std::printf("first-order: cusum_alarm %s; pushed: cusum_alarm %s, nis_mean %.4f\n",
+              first_json.find("\"cusum_alarm\": true") != std::string::npos ? "true" : "false",
               push_json.find("\"cusum_alarm\": true") != std::string::npos ? "true" : "false",
               nis);
   EXPECT_GE(nis, 0.8);
@@ -322,8 +324,8 @@ TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
       "\"bias_instability\": {\"b\": 0, \"tau_lo_s\": 0, \"tau_hi_s\": 0}, "
       "\"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, \"beta_per_s\": 1.57}}";
   // A 100 Hz record's report, and a long record's (analysed on means of 4 at 25 Hz, its head at
-  // the recording's 100 Hz): the node samples at 100 Hz in both (the long one used to be folded
-  // in at the means' rate, 4 x the variance).
+  // the recording's 100 Hz): the node samples at 100 Hz in both (not the long one at the
+  // means' rate, which would fold in 4 x the variance).
   for (const std::string& head : {std::string(), std::string(", \"full_rate_head\": "
                                                               "{\"n_samples\": 4194304, "
                                                               "\"fs_hz\": 100, \"block\": 4}")}) {

@@ -77,8 +77,9 @@ struct FirstOrderGm {
   double pss_d;  ///< Qw / (1 - phi^2)
 };
 
-/// Seed conversion N, B, Tp, Fs -> continuous and discrete first-order model. Qw is computed by
-/// Van Loan (expm), not by the closed form, so the test of the closed form is independent.
+/// Conversion N, B, Tp, Fs -> continuous and discrete first-order model (Farrell's
+/// ASD-to-state-space example). Qw is computed by Van Loan (expm), not by the closed form, so the
+/// test of the closed form is independent.
 /// Returns kBadParameter unless every input is finite and > 0 and every derived quantity is
 /// usable by a filter: phi in [0, 1), Qw, Qn, Sb, Pss and Pss_d finite and > 0 (e.g. Tp = 1e300
 /// gives phi = 1, N = 1e300 an infinite Qn: both refused).

@@ -1073,7 +1073,7 @@ void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip
 void fill_errors(const Points& pts, const ModelParams& m, const Options& o, double ts,
                  double tau_max, ErrorStats& e) {
   const Residual all = residual(pts, m, o, ts, tau_max);
-  const Residual seed = residual(pts, m, o, ts, std::min(o.seed_tau_max_s, tau_max));
+  const Residual ex = residual(pts, m, o, ts, std::min(o.example_tau_max_s, tau_max));
   e.adev_rms_rel = all.check.rms_rel;
   e.adev_max_rel = all.check.max_rel;
   e.n_taus = all.check.n_checked;
@@ -1085,9 +1085,9 @@ void fill_errors(const Points& pts, const ModelParams& m, const Options& o, doub
       e.tau_max_s = std::max(e.tau_max_s, p.tau_s);
     }
   }
-  e.seed_rms_rel = seed.check.rms_rel;
-  e.seed_max_rel = seed.check.max_rel;
-  e.seed_tau_max_s = std::min(o.seed_tau_max_s, e.tau_max_s);
+  e.example_rms_rel = ex.check.rms_rel;
+  e.example_max_rel = ex.check.max_rel;
+  e.example_tau_max_s = std::min(o.example_tau_max_s, e.tau_max_s);
 }
 
 // ---------------------------------------------------------------- the after-model
@@ -1163,7 +1163,7 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
   // The GM bounded (peak and an octave inside [Ts, T/10], as in the search) or as free as the
   // before-model's (10 x its 100 s range): a before-model whose GM sits at its bound can follow
   // a long-tau rise that the bounded GM leaves to K alone.
-  const double wide = std::max(c.tb_max, 10.0 * std::min(c.o.seed_tau_max_s, c.tau_max));
+  const double wide = std::max(c.tb_max, 10.0 * std::min(c.o.example_tau_max_s, c.tau_max));
   // First the variants that keep every term; only if none does, those where the joint fit
   // zeroed a term (the term then leaves the set: its effect is not reported).
   for (const bool allow_zeroed : {false, true}) {
@@ -1772,15 +1772,15 @@ class Analysis {
   // The first-order model, its filter and its errors (the "before").
   bool fit_before() {
     // ---- before: the first-order model over [Ts, 100 s]
-    const double seed_max = std::min(o.seed_tau_max_s, tau_max);
-    const FitResult before0 = fit_terms(raw.by_alpha[2], kFitWhite | kFitGm1, ts, seed_max);
+    const double example_max = std::min(o.example_tau_max_s, tau_max);
+    const FitResult before0 = fit_terms(raw.by_alpha[2], kFitWhite | kFitGm1, ts, example_max);
     if (before0.status != FitStatus::kOk) {
       error = "analyze: the first-order fit over [Ts, 100 s] failed (status " +
               std::to_string(static_cast<int>(before0.status)) + ")";
       return false;
     }
     const Points raw_pts_b = points_for_model(raw, before0.params);
-    const FitResult before = fit_terms(raw_pts_b, kFitWhite | kFitGm1, ts, seed_max);
+    const FitResult before = fit_terms(raw_pts_b, kFitWhite | kFitGm1, ts, example_max);
     out.model_before = before.status == FitStatus::kOk ? before.params : before0.params;
     if (before0.tb_at_bound || before.tb_at_bound) {
       out.notes.emplace_back("before: the GM correlation time is at its search bound (the range "

@@ -56,8 +56,8 @@ std::string error_json(const ErrorStats& e) {
   s << "{\"adev_rms_rel\": " << num(e.adev_rms_rel) << ", \"adev_max_rel\": "
     << num(e.adev_max_rel) << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": "
     << num(e.tau_max_s) << ", \"n_taus\": " << e.n_taus << ", \"example_range\": {\"adev_rms_rel\": "
-    << num(e.seed_rms_rel) << ", \"adev_max_rel\": " << num(e.seed_max_rel)
-    << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": " << num(e.seed_tau_max_s)
+    << num(e.example_rms_rel) << ", \"adev_max_rel\": " << num(e.example_max_rel)
+    << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": " << num(e.example_tau_max_s)
     << "}, \"cost_sum_z2\": " << num(e.cost) << ", \"covariance_ratio\": " << num(e.cov_ratio)
     << ", \"nis_mean\": " << num(e.nis_mean) << ", \"nis_flagged_fraction\": "
     << num(e.nis_flagged_fraction) << ", \"whiteness_flagged_fraction\": "
@@ -262,8 +262,8 @@ std::string to_text(const Report& r) {
                   " RMS %.3f max %.3f over [%.3g, %.4g] s; covariance ratio %.3f; NIS mean %.3f "
                   "(%zu-state filter; innovation blocks flagged: NIS %.0f %%, whiteness %.0f %%)\n",
                   name, e.adev_rms_rel, e.adev_max_rel, e.n_taus, e.tau_min_s, e.tau_max_s,
-                  e.seed_rms_rel, e.seed_max_rel, e.tau_min_s, e.seed_tau_max_s, e.cov_ratio,
-                  e.nis_mean, e.filter_states, 100.0 * e.nis_flagged_fraction,
+                  e.example_rms_rel, e.example_max_rel, e.tau_min_s, e.example_tau_max_s,
+                  e.cov_ratio, e.nis_mean, e.filter_states, 100.0 * e.nis_flagged_fraction,
                   100.0 * e.whiteness_flagged_fraction);
     s << buf;
   };

@@ -259,7 +259,7 @@ int cmd_model(int argc, char** argv) {
   if (first_order_gm_from_asd(n, b, tp, fs, gm) != ModelStatus::kOk) {
     return fail(cmd, "--N, --B, --Tp, --fs must be finite and > 0", kExitUsage);
   }
-  std::fputs(format_seed_model(gm).c_str(), stdout);
+  std::fputs(format_first_order_model(gm).c_str(), stdout);
   return kExitOk;
 }
 

@@ -68,7 +68,7 @@ std::vector<AdevPoint> points_from_rows(const std::vector<AdevRow>& rows, double
 struct CovResult {
   std::size_t n_avg = 0, n_int = 0;
   std::size_t data_windows = 0, sim_windows = 0;
-  std::vector<double> pred_exact, pred_seed, emp_sim, emp_data;
+  std::vector<double> pred_exact, pred_uncorr, emp_sim, emp_data;
   std::vector<double> traj_sim, traj_data;  // windows x n_int, row-major
 };
 
@@ -254,10 +254,10 @@ bool report_covariance(const ReportInput& in, const ReportOptions& opt, ReportSt
   }
   const std::size_t win = cov.n_avg + cov.n_int;
   cov.pred_exact.assign(cov.n_int, 0.0);
-  cov.pred_seed.assign(cov.n_int, 0.0);
+  cov.pred_uncorr.assign(cov.n_int, 0.0);
   if (predict_integral_std(dm, cov.n_avg, cov.n_int, cov.pred_exact.data(),
                            CovPrediction::kExact) != ModelStatus::kOk ||
-      predict_integral_std(dm, cov.n_avg, cov.n_int, cov.pred_seed.data(),
+      predict_integral_std(dm, cov.n_avg, cov.n_int, cov.pred_uncorr.data(),
                            CovPrediction::kCorrelationIgnored) != ModelStatus::kOk) {
     err = "covariance prediction failed";
     return false;
@@ -314,7 +314,7 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
           static_cast<double>(n_samples) * ts_s, in.lsb, unit);
   appendf(t, "\n== Error model in the example's layout (%s)\n\n", model_origin.c_str());
   if (have_gm) {
-    t += format_seed_model(gm);
+    t += format_first_order_model(gm);
   } else {
     t += "(no first-order Gauss-Markov term: the example's layout does not apply)\n";
   }
@@ -351,11 +351,11 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
   appendf(t, "%-28s %8s %14s %14s %14s %8s\n", "at t = T_int", "windows", "empirical",
           "predicted", "pred. (uncorr.)", "ratio");
   appendf(t, "%-28s %8zu %14.4e %14.4e %14.4e %8.3f\n", "simulated model", cov.sim_windows,
-          cov.emp_sim[j_end], cov.pred_exact[j_end], cov.pred_seed[j_end],
+          cov.emp_sim[j_end], cov.pred_exact[j_end], cov.pred_uncorr[j_end],
           cov.emp_sim[j_end] / cov.pred_exact[j_end]);
   if (cov.data_windows > 0) {
     appendf(t, "%-28s %8zu %14.4e %14.4e %14.4e %8.3f\n", "data", cov.data_windows,
-            cov.emp_data[j_end], cov.pred_exact[j_end], cov.pred_seed[j_end],
+            cov.emp_data[j_end], cov.pred_exact[j_end], cov.pred_uncorr[j_end],
             cov.emp_data[j_end] / cov.pred_exact[j_end]);
     if (data.size() < n_samples) {
       appendf(t, "(data windows from the first %zu of the %zu samples: a bounded prefix)\n",
@@ -435,7 +435,7 @@ bool report_csvs(const ReportInput& in, const ReportOptions& opt, ReportState& r
     for (std::size_t j = 0; j < cov.n_int; ++j) {
       appendf(c, "%.6g,%.10g,%.10g,%.10g,%.10g\n", static_cast<double>(j + 1) * ts_s,
               cov.emp_sim[j], cov.data_windows > 0 ? cov.emp_data[j] : 0.0, cov.pred_exact[j],
-              cov.pred_seed[j]);
+              cov.pred_uncorr[j]);
     }
     if (!write_file(d + "/fig2_std.csv", c, err)) {
       return false;
@@ -656,7 +656,7 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
        ", \"empirical_data\": " +
        (cov.data_windows > 0 ? json_num(cov.emp_data[j_end]) : std::string("null")) +
        ", \"predicted\": " + json_num(cov.pred_exact[j_end]) +
-       ", \"predicted_uncorrelated\": " + json_num(cov.pred_seed[j_end]) + "}},\n";
+       ", \"predicted_uncorrelated\": " + json_num(cov.pred_uncorr[j_end]) + "}},\n";
   j += "  \"frame_stats\": {";
   for (std::size_t gi = 0; gi < in.stats.size(); ++gi) {
     j += (gi == 0 ? "\n" : ",\n") + std::string("    ") + json_str(in.stats[gi].key) + ": {";

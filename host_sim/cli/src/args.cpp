@@ -97,6 +97,7 @@ bool Args::parse(int argc, char** argv, int first, const std::vector<OptSpec>& s
     }
     if (spec == nullptr) {
       std::vector<std::string> names;
+      names.reserve(specs.size());
       for (const OptSpec& o : specs) {
         names.emplace_back(o.name);
       }

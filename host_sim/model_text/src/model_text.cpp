@@ -24,7 +24,7 @@ __attribute__((format(printf, 2, 3))) void appendf(std::string& out, const char*
 
 }  // namespace
 
-std::string format_seed_model(const FirstOrderGm& m) {
+std::string format_first_order_model(const FirstOrderGm& m) {
   std::string s;
   appendf(s, "Continuous-time model is (units depend on context):\n");
   appendf(s, "    z(t) = b(t) + n(t),\n");

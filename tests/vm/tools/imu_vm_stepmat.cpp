@@ -145,9 +145,9 @@ int main(int argc, char** argv) {
     st = w.add_scalar("acc_lsb", kLsb);
   }
   if (st.ok()) {
-    st = w.add_string("source", "SYNTHETIC imu-vm-stepmat: seed first-order model, step " +
-                                    std::to_string(step) + " m/s^2 at " +
-                                    std::to_string(step_at_s) + " s");
+    st = w.add_string("source",
+                      "SYNTHETIC imu-vm-stepmat: the example's first-order model, step " +
+                          std::to_string(step) + " m/s^2 at " + std::to_string(step_at_s) + " s");
   }
   if (st.ok()) {
     st = w.save(out);

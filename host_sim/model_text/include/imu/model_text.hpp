@@ -8,10 +8,10 @@
 
 namespace imu {
 
-/// The continuous and discrete first-order model in the example's layout (the example's section 4,
-/// the notebook's output): same sentences, same order, %.4e numbers, phi as %.4f. Lines end with
-/// '\n'; a blank line separates the two models.
-[[nodiscard]] std::string format_seed_model(const FirstOrderGm& m);
+/// The continuous and discrete first-order model in the layout of Farrell's ASD-to-state-space
+/// example (its printed output): same sentences, same order, %.4e numbers, phi as %.4f. Lines
+/// end with '\n'; a blank line separates the two models.
+[[nodiscard]] std::string format_first_order_model(const FirstOrderGm& m);
 
 /// One line per term present in p (e.g. a fit result): N, Q, each GM (Sb, Tb and its ADEV peak
 /// B = 0.4365 sqrt(Sb Tb)), K, R, sinusoid; %.4e numbers; "u" stands for the channel's

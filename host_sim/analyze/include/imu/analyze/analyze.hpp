@@ -58,7 +58,7 @@ struct Options {
   double unexplained_min_rel = 0.05;
   double z_run = 2.0;         ///< |z| above this is outside the 68 % interval by 2 sigma
   std::size_t min_run = 4;    ///< consecutive taus (one octave at 4 taus per octave)
-  double seed_tau_max_s = 100.0;  ///< the example's fit range [Ts, 100 s]
+  double example_tau_max_s = 100.0;  ///< the example's fit range [Ts, 100 s]
   double tau_max_fraction = 0.1;  ///< residuals over taus up to this fraction of the record
   int max_steps = 3;
 };
@@ -69,9 +69,9 @@ struct ErrorStats {
   double tau_min_s = 0.0;
   double tau_max_s = 0.0;
   std::size_t n_taus = 0;
-  double seed_rms_rel = 0.0;  ///< over [Ts, 100 s]
-  double seed_max_rel = 0.0;
-  double seed_tau_max_s = 0.0;
+  double example_rms_rel = 0.0;  ///< over [Ts, 100 s]
+  double example_max_rel = 0.0;
+  double example_tau_max_s = 0.0;
   double cost = 0.0;           ///< sum of z^2 over [tau_min_s, tau_max_s]
   double cov_ratio = 0.0;      ///< robust std / predicted std of the integral at T_int (0: n/a)
   double nis_mean = 0.0;       ///< mean NIS of the bias filter
