@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "fw_process.hpp"
+#include "imu/hal/receiver.hpp"
 #include "sim_test_util.hpp"
 
 namespace {
@@ -407,6 +408,61 @@ TEST(HostileIo, ARefusedModelIsAnErrorExit) {
   r = run({"run", mat, "--model", model, "--no-plots", "--quiet", "--out", dir.file("o")});
   EXPECT_EQ(r.status, 1) << r.out;
   EXPECT_NE(r.err.find("refused the pushed model"), std::string::npos) << r.err;
+}
+
+// A node that sends impossible ADEV points (a negative ADEV, ci_lo above ci_hi) beside a
+// complete final set: run accepted them and exited 0. The node here is this test: it listens on
+// the loopback name, takes run's samples, then answers with its own telemetry.
+TEST(HostileIo, ImpossibleTelemetryIsAnErrorExit) {
+  SKIP_IF_EMULATED();
+  TempDir dir;
+  const std::string mat = dir.file("s.mat");
+  ASSERT_EQ(run({"synth", "--out", mat, "--duration", "20"}).status, 0);  // 2000 samples
+  const std::string bus = fwtest::unique_bus("badtel");
+  imu::hal::CanSocket node;
+  ASSERT_EQ(node.open(bus.c_str()), imu::hal::IoStatus::kOk);  // first on the name: it listens
+  fwtest::FwProcess p({"run", mat, "--bus", bus, "--node", "external", "--window", "0",
+                       "--no-plots", "--quiet", "--out", dir.file("o")},
+                      IMU_SIM_PATH);
+  imu::hal::Receiver<8> rx;
+  std::uint64_t samples = 0;
+  imu::hal::RxFrame in[64];
+  const double t0 = fwtest::now_s();
+  while (samples < 2000 && fwtest::now_s() - t0 < 20.0) {
+    std::size_t n = 0;
+    if (node.receive(in, 64, n, 100) != imu::hal::IoStatus::kOk) {
+      continue;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      (void)rx.push_drain(in[i].frame, in[i].nbytes, in[i].rx_time_ns,
+                          [&](const imu::hal::RxEvent& e) {
+                            samples += e.type == imu::hal::RxEvent::Type::kSample ? 1U : 0U;
+                          });
+    }
+  }
+  ASSERT_EQ(samples, 2000U);
+  imu::hal::EncodedFrames fr{};
+  const auto send_all = [&]() {
+    for (std::size_t i = 0; i < fr.count; ++i) {
+      ASSERT_EQ(node.send(fr.frame[i], 2000), imu::hal::IoStatus::kOk);
+    }
+  };
+  imu::hal::StatsRecord st{};
+  st.frames = 2001;
+  st.samples = 2000;
+  imu::hal::encode(st, imu::hal::Layout::kFd, 1, fr);
+  send_all();
+  for (std::uint8_t c = 0; c < 6; ++c) {
+    imu::hal::AdevRecord a{c, 0, 1, 0.01F, 1e-3F, 9e-4F, 1.1e-3F, 1999};
+    imu::hal::encode(a, imu::hal::Layout::kFd, 2, fr);
+    send_all();
+  }
+  imu::hal::AdevRecord bad{0, 0, 1, 0.01F, -1e-3F, 2e-3F, 1e-3F, 1999};
+  imu::hal::encode(bad, imu::hal::Layout::kFd, 3, fr);
+  send_all();
+  ASSERT_TRUE(p.wait(40.0)) << "run still waiting";
+  EXPECT_EQ(p.status(), 1) << p.out() << p.err();
+  EXPECT_NE(p.err().find("impossible ADEV records"), std::string::npos) << p.err();
 }
 
 // SIGTERM during a long synth left a 230 MB *.tmp-XXXXXX behind.

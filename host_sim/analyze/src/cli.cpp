@@ -562,6 +562,7 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const st
     // File names from channel names (a CSV header is user data): one safe component each,
     // distinct, inside DIR.
     std::vector<std::string> names;
+    names.reserve(reports.size());
     for (const Report& r : reports) {
       names.push_back(r.channel);
     }

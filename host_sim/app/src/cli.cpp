@@ -628,6 +628,7 @@ bool adev_plots(const std::string& dir, const std::vector<AdevResult>& rs, std::
   const bool have = imu::cli::gnuplot_available();
   // File names from channel names (user data): one safe component each, distinct.
   std::vector<std::string> names;
+  names.reserve(rs.size());
   for (const AdevResult& r : rs) {
     names.push_back(r.name);
   }
