@@ -43,10 +43,16 @@ void list_tree(const std::string& dir, const std::string& rel, std::vector<std::
     if (n == "." || n == "..") {
       continue;
     }
-    out.push_back(rel + n);
+    std::string rel_n = rel;
+    rel_n += n;
+    out.push_back(rel_n);
+    std::string path = dir;
+    path += '/';
+    path += n;
     struct stat st {};
-    if (lstat((dir + "/" + n).c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
-      list_tree(dir + "/" + n, rel + n + "/", out);
+    if (lstat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode)) {
+      rel_n += '/';
+      list_tree(path, rel_n, out);
     }
   }
   closedir(d);

@@ -365,7 +365,9 @@ int read_text_columns(const AdevOptions& o, const std::vector<std::string>& name
   for (;;) {
     std::size_t got = 0;
     if (!st.read(buf.data(), kChunk, got, err)) {
-      err = err.rfind(o.path, 0) == 0 ? err : o.path + ": " + err;
+      if (err.rfind(o.path, 0) != 0) {
+        err.insert(0, o.path + ": ");
+      }
       return kExitRuntime;
     }
     if (got == 0) {
