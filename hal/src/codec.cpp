@@ -192,6 +192,7 @@ std::size_t record_len(RecordKind k) {
     case RecordKind::kRejects: return kRejectsLen;
     case RecordKind::kModel:
     case RecordKind::kModelEcho: return kModelLen;
+    case RecordKind::kChannelMonitor: return kChannelMonitorLen;
   }
   return 0;
 }
@@ -207,6 +208,7 @@ std::uint32_t fd_id(RecordKind k) {
     case RecordKind::kRejects: return kIdRejectsFd;
     case RecordKind::kModel: return kIdModelFd;
     case RecordKind::kModelEcho: return kIdModelEchoFd;
+    case RecordKind::kChannelMonitor: return kIdChannelMonitorFd;
   }
   return 0;
 }
@@ -218,7 +220,7 @@ bool kind_of_id(std::uint32_t can_id, RecordKind& kind, Layout& layout) {
   constexpr RecordKind kAll[] = {RecordKind::kConfig, RecordKind::kSample, RecordKind::kAdev,
                                  RecordKind::kBias,   RecordKind::kMonitor, RecordKind::kStats,
                                  RecordKind::kRejects, RecordKind::kModel,
-                                 RecordKind::kModelEcho};
+                                 RecordKind::kModelEcho, RecordKind::kChannelMonitor};
   for (const RecordKind k : kAll) {
     const std::uint32_t id = fd_id(k);
     if (can_id == id || can_id == id + 1) {
@@ -349,6 +351,24 @@ void serialize(const ModelRecord& r, std::uint8_t* buf) {
   w.crc();
 }
 
+void serialize(const ChannelMonitorRecord& r, std::uint8_t* buf) {
+  Writer w(buf);
+  w.u8(r.channel);
+  w.u8(r.n_states);
+  w.u8(r.flags);
+  w.u8(0);
+  w.u32(r.seq);
+  w.u32(r.updates);
+  w.f32(r.nis_mean);
+  w.f32(r.nis_last_block);
+  w.f32(r.whiteness);
+  w.u32(r.blocks);
+  w.u32(r.nis_flagged);
+  w.u32(r.white_flagged);
+  w.u32(r.cusum_step_update);
+  w.crc();
+}
+
 // ---- parse -----------------------------------------------------------------------------------
 
 void parse(const std::uint8_t* buf, ConfigRecord& r) {
@@ -457,6 +477,23 @@ void parse(const std::uint8_t* buf, ModelRecord& r) {
   r.bi_tau_hi_s = rd.f32();
 }
 
+void parse(const std::uint8_t* buf, ChannelMonitorRecord& r) {
+  Reader rd(buf);
+  r.channel = rd.u8();
+  r.n_states = rd.u8();
+  r.flags = rd.u8();
+  (void)rd.u8();
+  r.seq = rd.u32();
+  r.updates = rd.u32();
+  r.nis_mean = rd.f32();
+  r.nis_last_block = rd.f32();
+  r.whiteness = rd.f32();
+  r.blocks = rd.u32();
+  r.nis_flagged = rd.u32();
+  r.white_flagged = rd.u32();
+  r.cusum_step_update = rd.u32();
+}
+
 // ---- encode ----------------------------------------------------------------------------------
 
 void encode(const ConfigRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out) {
@@ -510,6 +547,13 @@ void encode(const ModelRecord& r, bool echo, Layout layout, std::uint8_t transfe
   serialize(r, buf);
   frame_record(buf, kModelLen, echo ? RecordKind::kModelEcho : RecordKind::kModel, layout,
                transfer_id, out);
+}
+
+void encode(const ChannelMonitorRecord& r, Layout layout, std::uint8_t transfer_id,
+            EncodedFrames& out) {
+  std::uint8_t buf[kChannelMonitorLen];
+  serialize(r, buf);
+  frame_record(buf, kChannelMonitorLen, RecordKind::kChannelMonitor, layout, transfer_id, out);
 }
 
 }  // namespace imu::hal

@@ -241,6 +241,51 @@ TEST_F(NodeTest, StepRaisesAlarmLineOnlyOnActiveChannels) {
   EXPECT_TRUE(line);
 }
 
+// Each active channel's monitors travel on their own: the summary MonitorRecord gives the worst
+// channel, which a report then showed as the selected channel's. Channel 2 steps, channel 3 is
+// white noise of its model's size, the others are absent (no record).
+TEST_F(NodeTest, EachActiveChannelSendsItsOwnMonitors) {
+  send_config(100.0, 1e-5);
+  imu::GaussianRng rng(41);
+  for (std::uint32_t k = 0; k < 4000; ++k) {
+    const double acc = 0.033 * rng.normal() + (k >= 2000 ? 0.5 : 0.0);
+    const double gyro = 5.8e-3 * rng.normal();  // N = 5.8e-4 at 100 Hz: the default gyro model
+    const std::int32_t c[6] = {0, 0, static_cast<std::int32_t>(std::lround(acc / 1e-5)),
+                               static_cast<std::int32_t>(std::lround(gyro / 1e-5)), 0, 0};
+    send_sample(k, c);
+  }
+  const auto ev = sink_.events();
+  imu::hal::ChannelMonitorRecord last[6] = {};
+  std::size_t seen[6] = {};
+  for (const auto& e : ev) {
+    if (e.type == imu::hal::RxEvent::Type::kChannelMonitor) {
+      ASSERT_LT(e.rec.channel_monitor.channel, 6U);
+      last[e.rec.channel_monitor.channel] = e.rec.channel_monitor;
+      ++seen[e.rec.channel_monitor.channel];
+    }
+  }
+  EXPECT_EQ(seen[0] + seen[1] + seen[4] + seen[5], 0U) << "records for absent channels";
+  EXPECT_EQ(seen[2], count_type(ev, imu::hal::RxEvent::Type::kMonitor));
+  EXPECT_EQ(seen[3], seen[2]);
+  const imu::hal::ChannelMonitorRecord& step = last[2];
+  const imu::hal::ChannelMonitorRecord& clean = last[3];
+  EXPECT_NE(step.flags & imu::hal::kChanMonCusum, 0U);
+  EXPECT_EQ(step.flags & imu::hal::kChanMonCusumDown, 0U) << "the step is upward";
+  // The step is at update 1900 (after the 100 init samples); with the small slack (0.025) the
+  // alarming sum may have left zero some hundreds of updates before it.
+  EXPECT_GT(step.cusum_step_update, 1000U);
+  EXPECT_LT(step.cusum_step_update, 2100U);
+  EXPECT_EQ(clean.flags & imu::hal::kChanMonCusum, 0U);
+  EXPECT_EQ(clean.n_states, 1U);
+  EXPECT_EQ(clean.flags & imu::hal::kChanMonPushed, 0U);
+  EXPECT_EQ(clean.blocks, 39U);  // 3900 updates in blocks of 100
+  EXPECT_EQ(clean.updates, 3900U);
+  // The whole-run NIS mean of white noise under its own model: 1 within a few sd of the
+  // chi-square mean (sd sqrt(2 / 3900) = 0.023), and the record says so for this channel only.
+  EXPECT_NEAR(clean.nis_mean, 1.0F, 0.12F);
+  EXPECT_GT(step.nis_mean, 2.0F) << "a 15-sigma step must show in the stepped channel's NIS";
+}
+
 TEST_F(NodeTest, NotStaticMeansNoFilterUpdate) {
   static_line_.set(false);
   send_config(100.0, 1e-4);
@@ -262,8 +307,8 @@ TEST_F(NodeTest, RefusedTelemetryIsCounted) {
   for (std::uint32_t k = 0; k < 100; ++k) {
     send_sample(k, c);
   }
-  // stats, bias, monitor, rejects: one frame each
-  EXPECT_EQ(node_->stats().telemetry_failures, 4U);
+  // stats, bias, monitor, one channel monitor per active channel (6), rejects: one frame each
+  EXPECT_EQ(node_->stats().telemetry_failures, 10U);
   EXPECT_EQ(node_->stats().last_send_status, imu::hal::IoStatus::kLinkDown);
 }
 
@@ -432,8 +477,8 @@ TEST_F(NodeTest, TelemetryIsNotRetriedPerFrameWhileTheLinkIsDown) {
   for (std::uint32_t k = 100; k < 200; ++k) {
     send_sample(k, c);
   }
-  EXPECT_EQ(sink_.tries, 5U);  // the next status set (4 records) went out
-  EXPECT_EQ(node_->stats().telemetry_frames, 4U);
+  EXPECT_EQ(sink_.tries, 11U);  // the next status set (10 records: 6 channels active) went out
+  EXPECT_EQ(node_->stats().telemetry_frames, 10U);
 }
 
 }  // namespace

@@ -378,3 +378,52 @@ TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {
     EXPECT_EQ(rx.stats().crc_errors, 0U);
   }
 }
+
+TEST(Codec, ChannelMonitorRecordRoundTripsAndRefusesABadChannel) {
+  imu::hal::ChannelMonitorRecord r{};
+  r.channel = 4;
+  r.n_states = 6;
+  r.flags = imu::hal::kChanMonCusum | imu::hal::kChanMonPushed;
+  r.seq = 0xFEDCBA98U;
+  r.updates = 1234567U;
+  r.nis_mean = 1.0625F;
+  r.nis_last_block = 0.96875F;
+  r.whiteness = 3.5F;
+  r.blocks = 1234U;
+  r.nis_flagged = 17U;
+  r.white_flagged = 99U;
+  r.cusum_step_update = 765432U;
+  for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+    EncodedFrames out{};
+    imu::hal::encode(r, layout, 9, out);
+    ASSERT_EQ(out.count, layout == Layout::kFd ? 1U : 7U);  // 44 bytes
+    EXPECT_EQ(out.frame[0].can_id, layout == Layout::kFd ? 0x260U : 0x261U);
+    imu::hal::Receiver<8> rx;
+    std::size_t got = 0;
+    for (std::size_t i = 0; i < out.count; ++i) {
+      (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
+                          [&](const imu::hal::RxEvent& e) {
+                            ASSERT_EQ(e.type, imu::hal::RxEvent::Type::kChannelMonitor);
+                            std::uint8_t a[imu::hal::kChannelMonitorLen];
+                            std::uint8_t b[imu::hal::kChannelMonitorLen];
+                            imu::hal::serialize(e.rec.channel_monitor, a);
+                            imu::hal::serialize(r, b);
+                            EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
+                            EXPECT_EQ(e.rec.channel_monitor.cusum_step_update, 765432U);
+                            EXPECT_EQ(e.rec.channel_monitor.white_flagged, 99U);
+                            ++got;
+                          });
+    }
+    EXPECT_EQ(got, 1U);
+  }
+  imu::hal::ChannelMonitorRecord b = r;
+  b.channel = 6;  // no such channel: CRC-valid but refused, never an index out of range
+  EncodedFrames out{};
+  imu::hal::encode(b, Layout::kFd, 0, out);
+  imu::hal::Receiver<8> rx;
+  std::size_t got = 0;
+  (void)rx.push_drain(out.frame[0], imu::hal::wire_size(out.frame[0]), 0,
+                      [&](const imu::hal::RxEvent&) { ++got; });
+  EXPECT_EQ(got, 0U);
+  EXPECT_EQ(rx.stats().bad_record, 1U);
+}

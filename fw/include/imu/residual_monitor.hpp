@@ -68,6 +68,7 @@ class NisMonitor {
     sum_ = 0.0F;
     count_ = 0;
     last_mean_ = 0.0F;
+    block_mean_sum_ = 0.0F;
     blocks_ = 0;
     flagged_blocks_ = 0;
     flag_ = false;
@@ -78,6 +79,7 @@ class NisMonitor {
     ++count_;
     if (count_ >= window_) {
       last_mean_ = sum_ / static_cast<float>(count_);
+      block_mean_sum_ += last_mean_;
       flag_ = last_mean_ < lo_ || last_mean_ > hi_;
       ++blocks_;
       flagged_blocks_ += flag_ ? 1U : 0U;
@@ -89,6 +91,13 @@ class NisMonitor {
     return count_ > 0 ? sum_ / static_cast<float>(count_) : 0.0F;
   }
   [[nodiscard]] float last_block_mean() const { return last_mean_; }
+  /// Mean over every update since reset() (complete blocks and the current one); 0 before the
+  /// first. Kept as a sum of block means (float, one add per block), not of 10^8 squares.
+  [[nodiscard]] float overall_mean() const {
+    const float w = static_cast<float>(window_);
+    const float n = static_cast<float>(blocks_) * w + static_cast<float>(count_);
+    return n > 0.0F ? (block_mean_sum_ * w + sum_) / n : 0.0F;
+  }
   [[nodiscard]] float bound_lo() const { return lo_; }
   [[nodiscard]] float bound_hi() const { return hi_; }
   /// The last complete block was outside the bounds.
@@ -103,6 +112,7 @@ class NisMonitor {
   float sum_ = 0.0F;
   std::uint32_t count_ = 0;
   float last_mean_ = 0.0F;
+  float block_mean_sum_ = 0.0F;
   std::uint32_t blocks_ = 0;
   std::uint32_t flagged_blocks_ = 0;
   bool flag_ = false;

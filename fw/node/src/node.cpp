@@ -216,6 +216,7 @@ void Node::on_event(const hal::RxEvent& e) {
     case hal::RxEvent::Type::kAdev:
     case hal::RxEvent::Type::kBias:
     case hal::RxEvent::Type::kMonitor:
+    case hal::RxEvent::Type::kChannelMonitor:
     case hal::RxEvent::Type::kStats:
     case hal::RxEvent::Type::kRejects:
       break;  // another node's telemetry on a shared bus: not ours to process
@@ -543,6 +544,7 @@ void Node::send_status() {
                                        (alarm_ ? hal::kMonitorAlarmLine : 0U));
   hal::encode(m, cfg_node_.layout, transfer_id_++, fr);
   send_frames(fr);
+  send_channel_monitors();
 
   hal::RejectsRecord rj{};
   rj.bad_config = sat_u32(stats_.bad_config);
@@ -563,6 +565,35 @@ void Node::send_status() {
   hal::encode(rj, cfg_node_.layout, transfer_id_++, fr);
   send_frames(fr);
   ++stats_.status_sets;
+}
+
+void Node::send_channel_monitors() {
+  hal::EncodedFrames fr{};
+  for (std::size_t c = 0; c < kChannels; ++c) {
+    if (!active_[c]) {
+      continue;
+    }
+    const ResidualMonitors<4>& mc = mon_[c];
+    hal::ChannelMonitorRecord r{};
+    r.channel = static_cast<std::uint8_t>(c);
+    r.n_states = static_cast<std::uint8_t>(pushed_[c] ? model_states_[c] : 1U);
+    const bool down = mc.cusum.alarm() && mc.cusum.direction() < 0;
+    r.flags = static_cast<std::uint8_t>((mc.cusum.alarm() ? hal::kChanMonCusum : 0U) |
+                                        (down ? hal::kChanMonCusumDown : 0U) |
+                                        (mc.whiteness.flag() ? hal::kChanMonWhiteness : 0U) |
+                                        (pushed_[c] ? hal::kChanMonPushed : 0U));
+    r.seq = last_seq_;
+    r.updates = sat_u32(mc.cusum.updates());
+    r.nis_mean = mc.nis.overall_mean();
+    r.nis_last_block = mc.nis.last_block_mean();
+    r.whiteness = mc.whiteness.box_pierce() / mc.whiteness.box_pierce_bound();
+    r.blocks = mc.nis.blocks();
+    r.nis_flagged = mc.nis.flagged_blocks();
+    r.white_flagged = mc.whiteness.flagged_blocks();
+    r.cusum_step_update = mc.cusum.alarm() ? sat_u32(mc.cusum.step_index()) : 0U;
+    hal::encode(r, cfg_node_.layout, transfer_id_++, fr);
+    send_frames(fr);
+  }
 }
 
 void Node::send_adev() {

@@ -124,6 +124,18 @@ bool get_number(const std::string& s, std::size_t obj, const std::string& key, d
 
 }  // namespace
 
+bool analysis_holds_channel(const std::string& json, const std::string& channel_name) {
+  const std::size_t root = skip_ws(json, 0);
+  const std::size_t chans = member(json, root, "channels");
+  if (chans != std::string::npos && json[chans] == '{') {
+    return member(json, chans, channel_name) != std::string::npos;
+  }
+  const std::size_t ch = member(json, root, "channel");
+  const std::size_t ch_end = skip_value(json, ch);
+  return ch != std::string::npos && ch_end != std::string::npos && json[ch] == '"' &&
+         ch_end - ch >= 2 && json.substr(ch + 1, ch_end - ch - 2) == channel_name;
+}
+
 bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
                               std::size_t channel_index, hal::ModelRecord& out,
                               std::string& dropped, std::string& err) {

@@ -16,6 +16,10 @@ namespace imu::sim {
                                             std::size_t channel_index, hal::ModelRecord& out,
                                             std::string& dropped, std::string& err);
 
+/// True if the analysis JSON text holds a model of channel_name: a key of its "channels" (a
+/// whole-IMU analysis) or its top-level "channel". O(text length).
+[[nodiscard]] bool analysis_holds_channel(const std::string& json, const std::string& channel_name);
+
 }  // namespace imu::sim
 
 #endif  // IMU_SIM_MODEL_JSON_HPP

@@ -368,6 +368,10 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
              "of the model (averaging error and its correlation with the bias); pred. (uncorr.) =\n"
              "the example's prediction, which ignores that correlation. Integrated error unit: %s s.\n",
           unit);
+  if (!in.node_text.empty()) {
+    appendf(t, "\n== Firmware node: the model each channel runs and its residual monitors\n\n");
+    t += in.node_text;
+  }
   appendf(t, "\n== Frame statistics\n\n");
   for (const StatGroup& g : in.stats) {
     appendf(t, "%s:\n", g.name.c_str());

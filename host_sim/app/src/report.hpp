@@ -73,6 +73,7 @@ struct ReportInput {
   std::vector<std::pair<std::string, double>> timing_s;
   std::vector<std::string> notes;  ///< printed at the end
   std::string node_json;           ///< the run JSON's "node" object (empty: left out)
+  std::string node_text;           ///< the node's per-channel monitors, a text table
 };
 
 /// Compute model, fit, simulation and covariance check; write out_dir/report.txt, the JSON,

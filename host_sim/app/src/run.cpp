@@ -55,6 +55,8 @@ struct Telemetry {
   hal::RejectsRecord rejects{};
   hal::ModelRecord model_echo[hal::kChannels] = {};  // what the node runs, per channel
   bool have_model_echo[hal::kChannels] = {};
+  hal::ChannelMonitorRecord chan_mon[hal::kChannels] = {};  // each channel's monitors
+  bool have_chan_mon[hal::kChannels] = {};
   hal::AdevRecord curve[kNumChannels][node::kMaxAdevPoints] = {};
   std::uint8_t n_points[kNumChannels] = {};
   std::bitset<node::kMaxAdevPoints> got[kNumChannels];
@@ -123,6 +125,10 @@ struct Telemetry {
       case hal::RxEvent::Type::kModelEcho:
         model_echo[e.rec.model.channel] = e.rec.model;  // channel < 6: checked by the receiver
         have_model_echo[e.rec.model.channel] = true;
+        break;
+      case hal::RxEvent::Type::kChannelMonitor:
+        chan_mon[e.rec.channel_monitor.channel] = e.rec.channel_monitor;  // < 6: checked
+        have_chan_mon[e.rec.channel_monitor.channel] = true;
         break;
       case hal::RxEvent::Type::kModel:
       case hal::RxEvent::Type::kSample:
@@ -298,7 +304,8 @@ struct RunOptions {
   bool only_channel = false;
   bool renamed = false;  // `vars` is used
   std::string model_path;       ///< --model: analysis JSON whose model_after is pushed
-  hal::ModelRecord model{};     ///< read from model_path
+  hal::ModelRecord model[kNumChannels] = {};  ///< read from model_path, per channel slot
+  bool pushed[kNumChannels] = {};             ///< model[c] is sent
   bool push_model = false;
 };
 
@@ -785,9 +792,11 @@ int send_one(const SensorData& sd, std::uint64_t q, std::uint64_t span,
   if (q % 100 == 0) {  // configuration at start and once per 100 samples (1 s at 100 Hz)
     hal::encode(tx.cfg, tx.s.layout, tx.cfg_tid++, tx.fr);
     int st = tx.send_frames(q == 0, q == 0 && tx.o.node_mode != "inproc");
-    if (st == kExitOk && q == 0 && tx.o.push_model) {
-      hal::encode(tx.o.model, false, tx.s.layout, tx.cfg_tid++, tx.fr);  // after the config
-      st = tx.send_frames(false, false);
+    for (std::size_t c = 0; st == kExitOk && q == 0 && c < kNumChannels; ++c) {
+      if (tx.o.pushed[c]) {  // after the config
+        hal::encode(tx.o.model[c], false, tx.s.layout, tx.cfg_tid++, tx.fr);
+        st = tx.send_frames(false, false);
+      }
     }
     if (st != kExitOk) {
       return st;
@@ -1004,37 +1013,9 @@ std::vector<StatGroup> chain_stats(const RunOptions& o, const SensorData& sd,
   return g;
 }
 
-// Say what the raw monitor flags mean: a user reading "flags 5" should not have to open codec.hpp.
-std::string monitor_note(const hal::MonitorRecord& m, const std::string& chan_name) {
-  std::string chans;
-  for (std::size_t c = 0; c < kNumChannels; ++c) {
-    if ((m.cusum_mask & (1U << c)) != 0U) {
-      chans += (chans.empty() ? "" : ", ") + std::string(kChannelNames[c]);
-    }
-  }
-  std::string what;
-  if ((m.flags & hal::kMonitorCusum) != 0U) {
-    what += "the innovation CUSUM alarm (" + (chans.empty() ? std::string("-") : chans) + ")";
-  }
-  if ((m.flags & hal::kMonitorWhiteness) != 0U) {
-    what += std::string(what.empty() ? "" : ", ") + "a failed whiteness check";
-  }
-  if ((m.flags & hal::kMonitorAlarmLine) != 0U) {
-    what += std::string(what.empty() ? "" : "; ") + "the alarm line is set";
-  }
-  return "residual monitors: " + what + ". The node's bias filter is the first-order "
-         "model (white + one GM); its innovations drift when the data hold an effect that model "
-         "lacks (a rate random walk, a step, a ramp). `imu-sim analyze FILE.mat --channel " +
-         chan_name + "` names it.";
-}
-
 std::vector<std::string> report_notes(const RunOptions& o, const SensorData& sd,
-                                      const SendPlan& plan, const Session& s,
-                                      const Telemetry& tel) {
+                                      const SendPlan& plan, const Session& s) {
   std::vector<std::string> notes;
-  if (tel.have_monitor && tel.monitor.flags != 0) {
-    notes.push_back(monitor_note(tel.monitor, o.chan_name));
-  }
   if (sd.ch[o.chan].off_grid > 0) {
     notes.push_back(std::to_string(sd.ch[o.chan].off_grid) +
                     " samples are not integer multiples of the LSB (quantised to it)");
@@ -1050,6 +1031,177 @@ std::vector<std::string> report_notes(const RunOptions& o, const SensorData& sd,
                     "/imu-fw.log (exit status " + std::to_string(st) + ")");
   }
   return notes;
+}
+
+// The name of channel slot c in this run (the selected channel may be a renamed variable).
+std::string slot_name(const RunOptions& o, std::size_t c) {
+  return c == o.chan ? o.chan_name : std::string(kChannelNames[c]);
+}
+
+// The models of an analysis JSON, one per channel slot it holds (a whole-IMU analysis holds
+// all six; a one-channel analysis one). With --only-channel only the selected channel's. Notes
+// on what the node cannot run go to `notes`, prefixed with the channel.
+bool load_models(const std::string& json, RunOptions& o, std::string& notes, std::string& err) {
+  notes.clear();
+  std::string names;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const std::string name = slot_name(o, c);
+    names += (c == 0 ? "" : ", ") + name;
+    if ((o.only_channel && c != o.chan) || !analysis_holds_channel(json, name)) {
+      continue;
+    }
+    std::string dropped;
+    if (!model_from_analysis_json(json, name, c, o.model[c], dropped, err)) {
+      err = name + ": " + err;
+      return false;
+    }
+    o.pushed[c] = true;
+    if (!dropped.empty()) {
+      notes += (notes.empty() ? "" : "; ") + name + ": " + dropped;
+    }
+  }
+  bool any = false;
+  for (const bool p : o.pushed) {
+    any = any || p;
+  }
+  if (!any) {
+    err = o.only_channel ? "holds no model of " + o.chan_name + " (--only-channel)"
+                         : "holds no model of any channel sent (" + names + ")";
+    return false;
+  }
+  return true;
+}
+
+// A whiteness or NIS test that flags a block with probability p_flag under a correct model,
+// run on `blocks` blocks: the most flagged blocks that are still consistent with a correct
+// model at the 1 % level (the smallest m with P(Bin(blocks, p_flag) > m) <= 0.01). O(blocks).
+std::uint32_t max_flagged_blocks(std::uint32_t blocks, double p_flag) {
+  // pmf by the recurrence P(k+1) = P(k) (n-k)/(k+1) p/(1-p), in logs from P(0) = (1-p)^n.
+  const double n = static_cast<double>(blocks);
+  double log_pk = n * std::log1p(-p_flag);
+  double cdf = 0.0;
+  for (std::uint32_t k = 0; k < blocks; ++k) {
+    cdf += std::exp(log_pk);
+    if (1.0 - cdf <= 0.01) {
+      return k;
+    }
+    const double kd = static_cast<double>(k);
+    log_pk += std::log((n - kd) / (kd + 1.0)) + std::log(p_flag / (1.0 - p_flag));
+  }
+  return blocks;
+}
+
+// The per-channel judgement of the node's monitors: what a navigation engineer asks of a model
+// (NIS mean near 1, whiteness failures at the test's own rate, no CUSUM alarm).
+struct ChannelVerdict {
+  bool have = false;
+  bool pushed = false;
+  unsigned n_states = 0;
+  double nis_mean = 0.0;
+  double whiteness_ratio = 0.0;
+  std::uint32_t blocks = 0;
+  std::uint32_t white_flagged = 0;
+  std::uint32_t white_allowed = 0;
+  bool whiteness_passed = false;
+  bool cusum_alarm = false;
+  std::uint32_t updates = 0;
+};
+
+// The node's whiteness test flags a block at 5 % (Box-Pierce at 95 %: residual_monitor.hpp).
+constexpr double kWhitenessFlagRate = 0.05;
+
+ChannelVerdict channel_verdict(const Telemetry& tel, std::size_t c) {
+  ChannelVerdict v;
+  if (!tel.have_chan_mon[c]) {
+    return v;
+  }
+  const hal::ChannelMonitorRecord& m = tel.chan_mon[c];
+  v.have = true;
+  v.pushed = (m.flags & hal::kChanMonPushed) != 0;
+  v.n_states = m.n_states;
+  v.nis_mean = static_cast<double>(m.nis_mean);
+  v.whiteness_ratio = static_cast<double>(m.whiteness);
+  v.blocks = m.blocks;
+  v.white_flagged = m.white_flagged;
+  v.white_allowed = max_flagged_blocks(m.blocks, kWhitenessFlagRate);
+  v.whiteness_passed = m.blocks > 0 && m.white_flagged <= v.white_allowed;
+  v.cusum_alarm = (m.flags & hal::kChanMonCusum) != 0;
+  v.updates = m.updates;
+  return v;
+}
+
+// The report's per-channel table of the node.
+std::string node_channels_text(const RunOptions& o, const Telemetry& tel) {
+  std::string t;
+  char line[200];
+  std::snprintf(line, sizeof line, "%-10s %-8s %6s %9s %10s %14s %6s\n", "channel", "model",
+                "states", "NIS mean", "whiteness", "white. fails", "CUSUM");
+  t += line;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const ChannelVerdict v = channel_verdict(tel, c);
+    if (!v.have) {
+      continue;
+    }
+    char fails[40];
+    std::snprintf(fails, sizeof fails, "%u/%u %s", v.white_flagged, v.blocks,
+                  v.whiteness_passed ? "ok" : "FAIL");
+    std::snprintf(line, sizeof line, "%-10.10s %-8s %6u %9.3f %10.3f %14s %6s\n",
+                  slot_name(o, c).c_str(), v.pushed ? "pushed" : "default", v.n_states,
+                  v.nis_mean, v.whiteness_ratio, fails, v.cusum_alarm ? "ALARM" : "quiet");
+    t += line;
+  }
+  t += "model: pushed (from --model) or default (the first-order model); NIS mean over every\n"
+       "filter update (1 for a model that fits); whiteness: the last block's Box-Pierce\n"
+       "statistic over its 95 % bound; white. fails: blocks that failed it, ok while their count\n"
+       "is within the test's own 5 % false-alarm rate (binomial, 1 % level); CUSUM: the latched\n"
+       "innovation-mean alarm.\n";
+  return t;
+}
+
+// Say what the monitors found, channel by channel, and what to do about it: a user reading
+// "flags 5" should not have to open codec.hpp.
+std::string monitor_note(const RunOptions& o, const Telemetry& tel) {
+  std::string alarm_default;
+  std::string alarm_pushed;
+  std::string white_failed;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const ChannelVerdict v = channel_verdict(tel, c);
+    if (!v.have) {
+      continue;
+    }
+    std::string& list = v.pushed ? alarm_pushed : alarm_default;
+    if (v.cusum_alarm) {
+      list += (list.empty() ? "" : ", ") + slot_name(o, c);
+    }
+    if (!v.whiteness_passed) {
+      white_failed += (white_failed.empty() ? "" : ", ") + slot_name(o, c);
+    }
+  }
+  if (alarm_default.empty() && alarm_pushed.empty() && white_failed.empty()) {
+    return "";
+  }
+  std::string t = "residual monitors:";
+  if (!alarm_default.empty()) {
+    t += " the innovation CUSUM alarms on " + alarm_default +
+         ", which run the first-order model (white + one GM): their innovations drift when the "
+         "data hold an effect that model lacks (a rate random walk, a step, a ramp). `imu-sim "
+         "analyze " + o.path + " --channel all --json M.json` names it and `--model M.json` "
+         "pushes the fitted models.";
+  }
+  if (!alarm_pushed.empty()) {
+    t += " The CUSUM alarms on " + alarm_pushed +
+         " with the pushed model: the data hold what the node does not run (a ramp or "
+         "sinusoids are not filter states) or what the analysis did not name.";
+  }
+  if (!white_failed.empty()) {
+    t += " Whiteness fails on " + white_failed +
+         " (more failed blocks than the test's 5 % false-alarm rate explains): the innovations "
+         "are coloured, the model misses correlated noise.";
+  }
+  if ((tel.monitor.flags & hal::kMonitorAlarmLine) != 0U) {
+    t += " The alarm line is set.";
+  }
+  return t;
 }
 
 // The run JSON's "node" object: the model the node reports it runs for the channel, its
@@ -1076,12 +1228,32 @@ std::string node_json(const RunOptions& o, const Telemetry& tel) {
     j += "null";
   }
   j += ", \"model_pushed\": " + std::string(o.push_model ? "true" : "false");
-  j += ", \"nis_mean\": " + (tel.have_monitor ? f(tel.monitor.nis_mean) : std::string("null"));
-  j += ", \"whiteness_ratio\": " +
-       (tel.have_monitor ? f(tel.monitor.whiteness) : std::string("null"));
-  j += ", \"cusum_alarm\": " +
-       std::string(tel.have_monitor && (tel.monitor.cusum_mask & (1U << o.chan)) != 0 ? "true"
-                                                                                      : "false");
+  // The selected channel's own monitors (the summary record's are the worst over channels).
+  const ChannelVerdict sel = channel_verdict(tel, o.chan);
+  j += ", \"nis_mean\": " + (sel.have ? json_num(sel.nis_mean) : std::string("null"));
+  j += ", \"whiteness_ratio\": " + (sel.have ? json_num(sel.whiteness_ratio) : std::string("null"));
+  j += ", \"cusum_alarm\": " + std::string(sel.have && sel.cusum_alarm ? "true" : "false");
+  j += ", \"channels\": [";
+  bool first_c = true;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const ChannelVerdict v = channel_verdict(tel, c);
+    if (!v.have) {
+      continue;
+    }
+    j += std::string(first_c ? "" : ", ") + "{\"channel\": " + json_str(slot_name(o, c)) +
+         ", \"origin\": " + (v.pushed ? "\"pushed\"" : "\"default\"") +
+         ", \"n_states\": " + std::to_string(v.n_states) +
+         ", \"updates\": " + std::to_string(v.updates) +
+         ", \"nis_mean\": " + json_num(v.nis_mean) +
+         ", \"whiteness_ratio\": " + json_num(v.whiteness_ratio) +
+         ", \"blocks\": " + std::to_string(v.blocks) +
+         ", \"whiteness_failed_blocks\": " + std::to_string(v.white_flagged) +
+         ", \"whiteness_failed_allowed\": " + std::to_string(v.white_allowed) +
+         ", \"whiteness_passed\": " + (v.whiteness_passed ? "true" : "false") +
+         ", \"cusum_alarm\": " + (v.cusum_alarm ? "true" : "false") + "}";
+    first_c = false;
+  }
+  j += "]";
   const hal::RejectsRecord& r = tel.rejects;
   j += ", \"faults\": {\"model_rejected\": " + std::to_string(r.model_rejected) +
        ", \"bad_config\": " + std::to_string(r.bad_config) +
@@ -1119,7 +1291,7 @@ int cmd_run(int argc, char** argv) {
     if (!in) {
       return fail(kCmd, o.model_path + ": cannot read");
     }
-    if (!model_from_analysis_json(buf.str(), o.chan_name, o.chan, o.model, model_note, err)) {
+    if (!load_models(buf.str(), o, model_note, err)) {
       return fail(kCmd, o.model_path + ": " + err);
     }
   }
@@ -1201,11 +1373,16 @@ int cmd_run(int argc, char** argv) {
   ri.timing_s = {{"check MAT-file channels + plan", t_load},
                  {"send all samples (" + o.rate + ")", t_sent},
                  {"until final telemetry", t_total}};
-  ri.notes = report_notes(o, sd, plan, s, tel);
+  ri.notes = report_notes(o, sd, plan, s);
+  const std::string mon_note = monitor_note(o, tel);
+  if (!mon_note.empty()) {
+    ri.notes.insert(ri.notes.begin(), mon_note);
+  }
   if (!model_note.empty()) {
     ri.notes.push_back(model_note);
   }
   ri.node_json = node_json(o, tel);
+  ri.node_text = node_channels_text(o, tel);
   std::string text;
   if (!write_report(ri, o.ro, text, err)) {
     return fail(kCmd, err);

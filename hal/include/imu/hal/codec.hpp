@@ -69,11 +69,12 @@ enum class Layout : std::uint8_t { kFd, kClassic };
 /// a lower identifier wins arbitration, so configuration beats samples beats telemetry.
 /// kRejects was added after the first version: a receiver that predates it counts its frames as
 /// unknown_id and loses nothing else (no existing layout or identifier changed).
-/// kModel (host -> node) and kModelEcho (node -> host) came later in the same way.
+/// kModel (host -> node), kModelEcho and kChannelMonitor (node -> host) came later in the same
+/// way.
 enum class RecordKind : std::uint8_t {
-  kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho
+  kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho, kChannelMonitor
 };
-inline constexpr std::size_t kRecordKinds = 9;
+inline constexpr std::size_t kRecordKinds = 10;
 
 inline constexpr std::uint32_t kIdConfigFd = 0x080;
 inline constexpr std::uint32_t kIdSampleFd = 0x100;
@@ -84,6 +85,7 @@ inline constexpr std::uint32_t kIdStatsFd = 0x230;
 inline constexpr std::uint32_t kIdRejectsFd = 0x240;
 inline constexpr std::uint32_t kIdModelFd = 0x090;      ///< after config, before samples
 inline constexpr std::uint32_t kIdModelEchoFd = 0x250;
+inline constexpr std::uint32_t kIdChannelMonitorFd = 0x260;
 
 inline constexpr std::size_t kChannels = 6;  ///< ax, ay, az (accelerometer), gx, gy, gz (gyro)
 
@@ -153,6 +155,31 @@ struct MonitorRecord {
   std::uint8_t cusum_mask;       ///< bit c: CUSUM alarm on channel c
 };
 
+/// ChannelMonitorRecord::flags bits.
+inline constexpr std::uint8_t kChanMonCusum = 1U << 0;       ///< this channel's CUSUM in alarm
+inline constexpr std::uint8_t kChanMonCusumDown = 1U << 1;   ///< ... on a downward step
+inline constexpr std::uint8_t kChanMonWhiteness = 1U << 2;   ///< the last block failed whiteness
+inline constexpr std::uint8_t kChanMonPushed = 1U << 3;      ///< the channel runs a pushed model
+
+/// One channel's residual monitors as of sample `seq` (MonitorRecord is the summary over the
+/// channels). Sent for every active channel after each MonitorRecord. 44 bytes. Counters
+/// saturate. A consumer tells a model that fits (NIS mean near 1, whiteness failures near the
+/// test's false-alarm rate, no CUSUM alarm) from one that does not, channel by channel.
+struct ChannelMonitorRecord {
+  std::uint8_t channel;          ///< 0..5
+  std::uint8_t n_states;         ///< filter states the channel runs
+  std::uint8_t flags;            ///< kChanMonCusum | kChanMonCusumDown | kChanMonWhiteness | kChanMonPushed
+  std::uint32_t seq;
+  std::uint32_t updates;         ///< filter updates since the stream started
+  float nis_mean;                ///< mean NIS over all those updates
+  float nis_last_block;          ///< mean NIS of the last complete block
+  float whiteness;               ///< last block's Box-Pierce statistic / its bound
+  std::uint32_t blocks;          ///< complete monitor blocks
+  std::uint32_t nis_flagged;     ///< blocks whose NIS mean left its chi-square interval
+  std::uint32_t white_flagged;   ///< blocks that failed the whiteness test
+  std::uint32_t cusum_step_update; ///< in alarm: the update after which the step began
+};
+
 /// Frame statistics of the sender's own receiver (see RxStats). 44 bytes. Counters saturate.
 struct StatsRecord {
   std::uint32_t frames;
@@ -219,6 +246,7 @@ inline constexpr std::size_t kMonitorLen = 20;
 inline constexpr std::size_t kStatsLen = 44;
 inline constexpr std::size_t kRejectsLen = 64;
 inline constexpr std::size_t kModelLen = 48;
+inline constexpr std::size_t kChannelMonitorLen = 44;
 
 /// Wire length of a record kind; FD identifier of a kind. Constant time.
 [[nodiscard]] std::size_t record_len(RecordKind k);
@@ -247,6 +275,8 @@ void encode(const RejectsRecord& r, Layout layout, std::uint8_t transfer_id, Enc
 /// echo = true: kModelEcho (node telemetry), else kModel (host -> node).
 void encode(const ModelRecord& r, bool echo, Layout layout, std::uint8_t transfer_id,
             EncodedFrames& out);
+void encode(const ChannelMonitorRecord& r, Layout layout, std::uint8_t transfer_id,
+            EncodedFrames& out);
 
 // ---- Record serialisation (used by the encoders and by Receiver) ------------------------------
 
@@ -259,6 +289,7 @@ void serialize(const MonitorRecord& r, std::uint8_t* buf);
 void serialize(const StatsRecord& r, std::uint8_t* buf);
 void serialize(const RejectsRecord& r, std::uint8_t* buf);
 void serialize(const ModelRecord& r, std::uint8_t* buf);
+void serialize(const ChannelMonitorRecord& r, std::uint8_t* buf);
 
 /// True if the last 4 bytes of buf[0, len) are the CRC-32C of the bytes before them.
 [[nodiscard]] bool crc_ok(const std::uint8_t* buf, std::size_t len);
@@ -272,6 +303,7 @@ void parse(const std::uint8_t* buf, MonitorRecord& r);
 void parse(const std::uint8_t* buf, StatsRecord& r);
 void parse(const std::uint8_t* buf, RejectsRecord& r);
 void parse(const std::uint8_t* buf, ModelRecord& r);
+void parse(const std::uint8_t* buf, ChannelMonitorRecord& r);
 
 }  // namespace imu::hal
 

@@ -69,7 +69,8 @@ enum class FrameVerdict : std::uint8_t {
 /// One output event. `rec` holds the member named by `type` (kMissing uses no member).
 struct RxEvent {
   enum class Type : std::uint8_t {
-    kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho
+    kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho,
+    kChannelMonitor
   };
   Type type;
   std::uint64_t rx_time_ns;           ///< receive time of the frame that completed the record
@@ -86,6 +87,7 @@ struct RxEvent {
     StatsRecord stats;
     RejectsRecord rejects;
     ModelRecord model;                ///< kModel and kModelEcho
+    ChannelMonitorRecord channel_monitor;
   } rec;
 };
 
@@ -369,6 +371,10 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
     ++stats_.bad_record;
     return FrameVerdict::kBadRecord;
   }
+  if (k == RecordKind::kChannelMonitor && buf[0] >= kChannels) {  // byte 0: the channel
+    ++stats_.bad_record;
+    return FrameVerdict::kBadRecord;
+  }
   ++stats_.records[static_cast<std::size_t>(k)];
   switch (k) {
     case RecordKind::kSample: {
@@ -402,6 +408,9 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
       break;
     case RecordKind::kModelEcho:
       parse(buf, enqueue(RxEvent::Type::kModelEcho, rx_time_ns).rec.model);
+      break;
+    case RecordKind::kChannelMonitor:
+      parse(buf, enqueue(RxEvent::Type::kChannelMonitor, rx_time_ns).rec.channel_monitor);
       break;
   }
   return FrameVerdict::kRecord;

@@ -5,8 +5,9 @@
 // filter per channel (imu::ScalarBiasKf<float>, the first-order model) with its residual
 // monitors (imu::ResidualMonitors), drives the alarm output while any monitor fires, and sends
 // telemetry frames (hal codec records) to a FrameSink:
-//   every status_period_samples:  StatsRecord, BiasRecord, MonitorRecord, RejectsRecord (in that
-//                                 order);
+//   every status_period_samples:  StatsRecord, BiasRecord, MonitorRecord (the summary), one
+//                                 ChannelMonitorRecord per active channel, RejectsRecord (in
+//                                 that order);
 //   every adev_period_samples:    the same, then the full ADEV curve of every channel;
 //   at on_idle() / finish():      the same full set if samples arrived since the last one.
 // A consumer that knows how many samples it sent recognises the final curves as the first
@@ -214,6 +215,7 @@ class Node {
   void on_missing(std::uint32_t n);
   void on_model(const hal::ModelRecord& r);
   void send_models();
+  void send_channel_monitors();
   bool build_pushed(std::size_t c);
   void apply_missing();
   void after_sample();
