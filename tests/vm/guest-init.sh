@@ -387,6 +387,34 @@ t_imu_model_push() {
   fi
 }
 
+# The whole IMU over the real kernel's vcan0: imu-sim analyze --channel all fits a model to
+# each channel of the recorded excerpt; imu-sim run --model pushes the six to imu-fw (external
+# node) and reads back each channel's monitors (ChannelMonitorRecord, 0x260): the run's JSON
+# must list six channels, each running its pushed model, none refused.
+t_imu_model_push_all() {
+  have imu-sim && have imu-fw ||
+    { result imu_model_push_all SKIP "imu-sim/imu-fw not built"; return; }
+  [ -n "$MAT" ] || { result imu_model_push_all SKIP "no MAT-file in /data"; return; }
+  imu-sim analyze "$MAT" --channel all --json /tmp/all_a.json >/tmp/all_a.txt 2>&1 ||
+    { dump /tmp/all_a.txt; result imu_model_push_all FAIL "analyze exit $?"; return; }
+  start_fw /tmp/fw_all.txt
+  sim_run "$MAT" /tmp/run_all --rate max --channel acc_x --model /tmp/all_a.json
+  local sim_rc=$?
+  wait $FW_PID
+  local fw_rc=$?
+  local j=/tmp/run_all/report.json rows pushed
+  # The node's per-channel rows: from "channels": [ to the closing ].
+  rows=$(sed -n 's/.*"channels": \[\([^]]*\)\].*/\1/p' "$j" | grep -o '"channel": "[a-z_]*"' | wc -l)
+  pushed=$(sed -n 's/.*"channels": \[\([^]]*\)\].*/\1/p' "$j" | grep -o '"origin": "pushed"' | wc -l)
+  if [ $sim_rc = 0 ] && [ $fw_rc = 0 ] && [ "$rows" = 6 ] && [ "$pushed" = 6 ] &&
+     grep -q '"model_rejected": 0' "$j"; then
+    result imu_model_push_all PASS "six models pushed over vcan0; imu-fw reports six channels' monitors, all running the pushed model: $(grep -A8 '^channel ' /tmp/run_all/report.txt | grep -E '^(acc|gyro)' | awk '{printf "%s %s states NIS %s CUSUM %s; ", $1, $3, $4, $8}')"
+  else
+    dump /tmp/fw_all.txt /tmp/run_all.txt
+    result imu_model_push_all FAIL "imu-sim exit $sim_rc imu-fw exit $fw_rc, channel rows '$rows', pushed '$pushed'"
+  fi
+}
+
 # canplayer replays candump's log into a fresh imu-fw: same ADEV, same bias estimate.
 t_imu_replay() {
   have imu-fw || { result imu_replay SKIP "imu-fw not built"; return; }
@@ -488,7 +516,8 @@ t_imu_gpio() {
 
 TESTS="can_vcan_fd can_roundtrip can_replay gpio_sim gpio_static_input gpio_alarm_output
        gpio_missing_line hal_can_stream hal_can_replay hal_can_flood hal_can_gap hal_gpio
-       imu_stream imu_realtime imu_replay imu_flood imu_gpio imu_model_push"
+       imu_stream imu_realtime imu_replay imu_flood imu_gpio imu_model_push
+       imu_model_push_all"
 # Kernel command line "imu_tests=a,b" (vm-run.sh: IMU_VM_TESTS="a b") runs only those checks
 # after the two set-up ones (vcan0, gpio-sim): for quick iterations on one check.
 only=$(sed -n 's/.*imu_tests=\([^ ]*\).*/\1/p' /proc/cmdline | tr ',' ' ')

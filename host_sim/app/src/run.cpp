@@ -1052,12 +1052,13 @@ bool load_models(const std::string& json, RunOptions& o, std::string& notes, std
     }
     std::string dropped;
     if (!model_from_analysis_json(json, name, c, o.model[c], dropped, err)) {
-      err = name + ": " + err;
+      err.insert(0, ": ");
+      err.insert(0, name);
       return false;
     }
     o.pushed[c] = true;
     if (!dropped.empty()) {
-      notes += (notes.empty() ? "" : "; ") + name + ": " + dropped;
+      notes.append(notes.empty() ? "" : "; ").append(name).append(": ").append(dropped);
     }
   }
   bool any = false;
