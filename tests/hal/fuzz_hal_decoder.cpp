@@ -117,11 +117,14 @@ void run_structured(const std::uint8_t* data, std::size_t size) {
         break;
       }
       case 3: {  // telemetry and configuration
-        switch (a % 5U) {
+        imu::hal::ChannelMonitorRecord cm{};
+        cm.channel = static_cast<std::uint8_t>(b % 8U);  // 6 and 7: refused (bad_record)
+        switch (a % 6U) {
           case 0: imu::hal::encode(imu::hal::ConfigRecord{}, layout, b, out); break;
           case 1: imu::hal::encode(imu::hal::AdevRecord{}, layout, b, out); break;
           case 2: imu::hal::encode(imu::hal::BiasRecord{}, layout, b, out); break;
           case 3: imu::hal::encode(imu::hal::MonitorRecord{}, layout, b, out); break;
+          case 4: imu::hal::encode(cm, layout, b, out); break;
           default: imu::hal::encode(imu::hal::StatsRecord{}, layout, b, out); break;
         }
         for (std::size_t k = 0; k < out.count; ++k) {
