@@ -173,6 +173,8 @@ class WhitenessMonitor {
   }
   [[nodiscard]] float box_pierce() const { return q_; }
   [[nodiscard]] float box_pierce_bound() const { return q_bound_; }
+  /// box_pierce() / box_pierce_bound(): above 1 when the last block failed (telemetry's figure).
+  [[nodiscard]] float box_pierce_ratio() const { return q_ / q_bound_; }
   /// Box-Pierce statistic of the last complete block above its bound.
   [[nodiscard]] bool flag() const { return flag_; }
   [[nodiscard]] std::uint32_t blocks() const { return blocks_; }

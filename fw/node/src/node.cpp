@@ -530,7 +530,7 @@ void Node::send_status() {
       nis_max_dev = dev;
       m.nis_mean = mean;  // the channel whose NIS mean is furthest from 1
     }
-    const float ratio = mc.whiteness.box_pierce() / mc.whiteness.box_pierce_bound();
+    const float ratio = mc.whiteness.box_pierce_ratio();
     white_ratio = ratio > white_ratio ? ratio : white_ratio;
     white_any = white_any || mc.whiteness.flag();
     if (mc.cusum.alarm()) {
@@ -586,7 +586,7 @@ void Node::send_channel_monitors() {
     r.updates = sat_u32(mc.cusum.updates());
     r.nis_mean = mc.nis.overall_mean();
     r.nis_last_block = mc.nis.last_block_mean();
-    r.whiteness = mc.whiteness.box_pierce() / mc.whiteness.box_pierce_bound();
+    r.whiteness = mc.whiteness.box_pierce_ratio();
     r.blocks = mc.nis.blocks();
     r.nis_flagged = mc.nis.flagged_blocks();
     r.white_flagged = mc.whiteness.flagged_blocks();
