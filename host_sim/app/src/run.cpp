@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <bitset>
 #include <cmath>
@@ -1044,6 +1045,7 @@ std::string slot_name(const RunOptions& o, std::size_t c) {
 bool load_models(const std::string& json, RunOptions& o, std::string& notes, std::string& err) {
   notes.clear();
   std::string names;
+  std::size_t n_pushed = 0;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     const std::string name = slot_name(o, c);
     names += (c == 0 ? "" : ", ") + name;
@@ -1057,15 +1059,12 @@ bool load_models(const std::string& json, RunOptions& o, std::string& notes, std
       return false;
     }
     o.pushed[c] = true;
+    ++n_pushed;
     if (!dropped.empty()) {
       notes.append(notes.empty() ? "" : "; ").append(name).append(": ").append(dropped);
     }
   }
-  bool any = false;
-  for (const bool p : o.pushed) {
-    any = any || p;
-  }
-  if (!any) {
+  if (n_pushed == 0) {
     err = o.only_channel ? "holds no model of " + o.chan_name + " (--only-channel)"
                          : "holds no model of any channel sent (" + names + ")";
     return false;
@@ -1093,62 +1092,53 @@ std::uint32_t max_flagged_blocks(std::uint32_t blocks, double p_flag) {
 }
 
 // The per-channel judgement of the node's monitors: what a navigation engineer asks of a model
-// (NIS mean near 1, whiteness failures at the test's own rate, no CUSUM alarm).
+// (NIS mean near 1, whiteness failures at the test's own rate, no CUSUM alarm). The record as
+// received plus what is derived from it.
 struct ChannelVerdict {
-  bool have = false;
-  bool pushed = false;
-  unsigned n_states = 0;
-  double nis_mean = 0.0;
-  double whiteness_ratio = 0.0;
-  std::uint32_t blocks = 0;
-  std::uint32_t white_flagged = 0;
-  std::uint32_t white_allowed = 0;
+  bool have = false;  // a ChannelMonitorRecord of the channel arrived
+  hal::ChannelMonitorRecord m{};
+  std::uint32_t white_allowed = 0;  // max_flagged_blocks at the whiteness test's rate
   bool whiteness_passed = false;
-  bool cusum_alarm = false;
-  std::uint32_t updates = 0;
+  [[nodiscard]] bool pushed() const { return (m.flags & hal::kChanMonPushed) != 0; }
+  [[nodiscard]] bool cusum_alarm() const { return (m.flags & hal::kChanMonCusum) != 0; }
 };
+using Verdicts = std::array<ChannelVerdict, kNumChannels>;
 
 // The node's whiteness test flags a block at 5 % (Box-Pierce at 95 %: residual_monitor.hpp).
 constexpr double kWhitenessFlagRate = 0.05;
 
-ChannelVerdict channel_verdict(const Telemetry& tel, std::size_t c) {
-  ChannelVerdict v;
-  if (!tel.have_chan_mon[c]) {
-    return v;
+// Every channel's verdict, once per run (the report's table, note and JSON read them).
+Verdicts channel_verdicts(const Telemetry& tel) {
+  Verdicts vs{};
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    ChannelVerdict& v = vs[c];
+    v.have = tel.have_chan_mon[c];
+    v.m = tel.chan_mon[c];
+    v.white_allowed = max_flagged_blocks(v.m.blocks, kWhitenessFlagRate);
+    v.whiteness_passed = v.have && v.m.blocks > 0 && v.m.white_flagged <= v.white_allowed;
   }
-  const hal::ChannelMonitorRecord& m = tel.chan_mon[c];
-  v.have = true;
-  v.pushed = (m.flags & hal::kChanMonPushed) != 0;
-  v.n_states = m.n_states;
-  v.nis_mean = static_cast<double>(m.nis_mean);
-  v.whiteness_ratio = static_cast<double>(m.whiteness);
-  v.blocks = m.blocks;
-  v.white_flagged = m.white_flagged;
-  v.white_allowed = max_flagged_blocks(m.blocks, kWhitenessFlagRate);
-  v.whiteness_passed = m.blocks > 0 && m.white_flagged <= v.white_allowed;
-  v.cusum_alarm = (m.flags & hal::kChanMonCusum) != 0;
-  v.updates = m.updates;
-  return v;
+  return vs;
 }
 
 // The report's per-channel table of the node.
-std::string node_channels_text(const RunOptions& o, const Telemetry& tel) {
+std::string node_channels_text(const RunOptions& o, const Verdicts& vs) {
   std::string t;
   char line[200];
   std::snprintf(line, sizeof line, "%-10s %-8s %6s %9s %10s %14s %6s\n", "channel", "model",
                 "states", "NIS mean", "whiteness", "white. fails", "CUSUM");
   t += line;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    const ChannelVerdict v = channel_verdict(tel, c);
+    const ChannelVerdict& v = vs[c];
     if (!v.have) {
       continue;
     }
     char fails[40];
-    std::snprintf(fails, sizeof fails, "%u/%u %s", v.white_flagged, v.blocks,
+    std::snprintf(fails, sizeof fails, "%u/%u %s", v.m.white_flagged, v.m.blocks,
                   v.whiteness_passed ? "ok" : "FAIL");
     std::snprintf(line, sizeof line, "%-10.10s %-8s %6u %9.3f %10.3f %14s %6s\n",
-                  slot_name(o, c).c_str(), v.pushed ? "pushed" : "default", v.n_states,
-                  v.nis_mean, v.whiteness_ratio, fails, v.cusum_alarm ? "ALARM" : "quiet");
+                  slot_name(o, c).c_str(), v.pushed() ? "pushed" : "default",
+                  static_cast<unsigned>(v.m.n_states), static_cast<double>(v.m.nis_mean),
+                  static_cast<double>(v.m.whiteness), fails, v.cusum_alarm() ? "ALARM" : "quiet");
     t += line;
   }
   t += "model: pushed (from --model) or default (the first-order model); NIS mean over every\n"
@@ -1161,17 +1151,17 @@ std::string node_channels_text(const RunOptions& o, const Telemetry& tel) {
 
 // Say what the monitors found, channel by channel, and what to do about it: a user reading
 // "flags 5" should not have to open codec.hpp.
-std::string monitor_note(const RunOptions& o, const Telemetry& tel) {
+std::string monitor_note(const RunOptions& o, const Telemetry& tel, const Verdicts& vs) {
   std::string alarm_default;
   std::string alarm_pushed;
   std::string white_failed;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    const ChannelVerdict v = channel_verdict(tel, c);
+    const ChannelVerdict& v = vs[c];
     if (!v.have) {
       continue;
     }
-    std::string& list = v.pushed ? alarm_pushed : alarm_default;
-    if (v.cusum_alarm) {
+    std::string& list = v.pushed() ? alarm_pushed : alarm_default;
+    if (v.cusum_alarm()) {
       list += (list.empty() ? "" : ", ") + slot_name(o, c);
     }
     if (!v.whiteness_passed) {
@@ -1207,7 +1197,7 @@ std::string monitor_note(const RunOptions& o, const Telemetry& tel) {
 
 // The run JSON's "node" object: the model the node reports it runs for the channel, its
 // residual monitors and its fault counters.
-std::string node_json(const RunOptions& o, const Telemetry& tel) {
+std::string node_json(const RunOptions& o, const Telemetry& tel, const Verdicts& vs) {
   const auto f = [](float v) { return json_num(static_cast<double>(v)); };
   std::string j = "{\"model\": ";
   if (tel.have_model_echo[o.chan]) {
@@ -1230,28 +1220,28 @@ std::string node_json(const RunOptions& o, const Telemetry& tel) {
   }
   j += ", \"model_pushed\": " + std::string(o.push_model ? "true" : "false");
   // The selected channel's own monitors (the summary record's are the worst over channels).
-  const ChannelVerdict sel = channel_verdict(tel, o.chan);
-  j += ", \"nis_mean\": " + (sel.have ? json_num(sel.nis_mean) : std::string("null"));
-  j += ", \"whiteness_ratio\": " + (sel.have ? json_num(sel.whiteness_ratio) : std::string("null"));
-  j += ", \"cusum_alarm\": " + std::string(sel.have && sel.cusum_alarm ? "true" : "false");
+  const ChannelVerdict& sel = vs[o.chan];
+  j += ", \"nis_mean\": " + (sel.have ? f(sel.m.nis_mean) : std::string("null"));
+  j += ", \"whiteness_ratio\": " + (sel.have ? f(sel.m.whiteness) : std::string("null"));
+  j += ", \"cusum_alarm\": " + std::string(sel.have && sel.cusum_alarm() ? "true" : "false");
   j += ", \"channels\": [";
   bool first_c = true;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    const ChannelVerdict v = channel_verdict(tel, c);
+    const ChannelVerdict& v = vs[c];
     if (!v.have) {
       continue;
     }
     j += std::string(first_c ? "" : ", ") + "{\"channel\": " + json_str(slot_name(o, c)) +
-         ", \"origin\": " + (v.pushed ? "\"pushed\"" : "\"default\"") +
-         ", \"n_states\": " + std::to_string(v.n_states) +
-         ", \"updates\": " + std::to_string(v.updates) +
-         ", \"nis_mean\": " + json_num(v.nis_mean) +
-         ", \"whiteness_ratio\": " + json_num(v.whiteness_ratio) +
-         ", \"blocks\": " + std::to_string(v.blocks) +
-         ", \"whiteness_failed_blocks\": " + std::to_string(v.white_flagged) +
+         ", \"origin\": " + (v.pushed() ? "\"pushed\"" : "\"default\"") +
+         ", \"n_states\": " + std::to_string(v.m.n_states) +
+         ", \"updates\": " + std::to_string(v.m.updates) +
+         ", \"nis_mean\": " + f(v.m.nis_mean) +
+         ", \"whiteness_ratio\": " + f(v.m.whiteness) +
+         ", \"blocks\": " + std::to_string(v.m.blocks) +
+         ", \"whiteness_failed_blocks\": " + std::to_string(v.m.white_flagged) +
          ", \"whiteness_failed_allowed\": " + std::to_string(v.white_allowed) +
          ", \"whiteness_passed\": " + (v.whiteness_passed ? "true" : "false") +
-         ", \"cusum_alarm\": " + (v.cusum_alarm ? "true" : "false") + "}";
+         ", \"cusum_alarm\": " + (v.cusum_alarm() ? "true" : "false") + "}";
     first_c = false;
   }
   j += "]";
@@ -1266,6 +1256,63 @@ std::string node_json(const RunOptions& o, const Telemetry& tel) {
        ", \"missing\": " + std::to_string(tel.stats.missing) +
        ", \"crc_errors\": " + std::to_string(tel.stats.crc_errors) + "}}";
   return j;
+}
+
+// The analysis JSON of --model, read and turned into the channels' model records.
+bool read_models(RunOptions& o, std::string& model_note, std::string& err) {
+  std::ifstream in(o.model_path, std::ios::binary);
+  std::stringstream buf;
+  buf << in.rdbuf();
+  if (!in) {
+    err = o.model_path + ": cannot read";
+    return false;
+  }
+  if (!load_models(buf.str(), o, model_note, err)) {
+    err.insert(0, o.model_path + ": ");
+    return false;
+  }
+  return true;
+}
+
+// Wall-clock seconds of the run's steps, for the report.
+struct RunTimes {
+  double load_s;
+  double send_s;
+  double total_s;
+};
+
+// What the report is made of: the node's ADEV of the channel, the chain's counters, the node's
+// per-channel monitors and the notes.
+ReportInput report_input(const RunOptions& o, const SensorData& sd, const SendPlan& plan,
+                         const Session& s, const Link& link, const Telemetry& tel,
+                         const std::vector<double>& cov_prefix, const RunTimes& times,
+                         const std::string& model_note) {
+  ReportInput ri;
+  ri.source = o.path;
+  ri.channel = o.chan_name;
+  ri.channel_index = o.chan;
+  ri.fs_hz = sd.fs_hz;
+  ri.lsb = sd.ch[o.chan].lsb;
+  ri.data = &cov_prefix;
+  ri.n_samples = sd.n_samples;
+  ri.adev_origin = "online ADEV of the firmware node, received as telemetry over " + s.bus_used;
+  ri.adev = received_adev(tel, o.chan, sd.fs_hz);
+  ri.stats = chain_stats(o, sd, plan, s, link, tel);
+  ri.timing_s = {{"check MAT-file channels + plan", times.load_s},
+                 {"send all samples (" + o.rate + ")", times.send_s},
+                 {"until final telemetry", times.total_s}};
+  ri.notes = report_notes(o, sd, plan, s);
+  const Verdicts vs = channel_verdicts(tel);
+  const std::string mon_note = monitor_note(o, tel, vs);
+  if (!mon_note.empty()) {
+    ri.notes.insert(ri.notes.begin(), mon_note);
+  }
+  if (!model_note.empty()) {
+    ri.notes.push_back(model_note);
+  }
+  ri.node_json = node_json(o, tel, vs);
+  ri.node_text = node_channels_text(o, vs);
+  return ri;
 }
 
 }  // namespace
@@ -1285,16 +1332,8 @@ int cmd_run(int argc, char** argv) {
     return fail(kCmd, err, kExitUsage);
   }
   std::string model_note;
-  if (o.push_model) {
-    std::ifstream in(o.model_path, std::ios::binary);
-    std::stringstream buf;
-    buf << in.rdbuf();
-    if (!in) {
-      return fail(kCmd, o.model_path + ": cannot read");
-    }
-    if (!load_models(buf.str(), o, model_note, err)) {
-      return fail(kCmd, o.model_path + ": " + err);
-    }
+  if (o.push_model && !read_models(o, model_note, err)) {
+    return fail(kCmd, err);
   }
   const double t0 = now_s();
   SensorData sd;
@@ -1360,30 +1399,8 @@ int cmd_run(int argc, char** argv) {
                           "parameter, or more states than the node holds); it ran its default "
                           "model instead");
   }
-  ReportInput ri;
-  ri.source = o.path;
-  ri.channel = o.chan_name;
-  ri.channel_index = o.chan;
-  ri.fs_hz = sd.fs_hz;
-  ri.lsb = sd.ch[o.chan].lsb;
-  ri.data = &cov_prefix;
-  ri.n_samples = sd.n_samples;
-  ri.adev_origin = "online ADEV of the firmware node, received as telemetry over " + s.bus_used;
-  ri.adev = received_adev(tel, o.chan, sd.fs_hz);
-  ri.stats = chain_stats(o, sd, plan, s, link, tel);
-  ri.timing_s = {{"check MAT-file channels + plan", t_load},
-                 {"send all samples (" + o.rate + ")", t_sent},
-                 {"until final telemetry", t_total}};
-  ri.notes = report_notes(o, sd, plan, s);
-  const std::string mon_note = monitor_note(o, tel);
-  if (!mon_note.empty()) {
-    ri.notes.insert(ri.notes.begin(), mon_note);
-  }
-  if (!model_note.empty()) {
-    ri.notes.push_back(model_note);
-  }
-  ri.node_json = node_json(o, tel);
-  ri.node_text = node_channels_text(o, tel);
+  const RunTimes times{t_load, t_sent, t_total};
+  const ReportInput ri = report_input(o, sd, plan, s, link, tel, cov_prefix, times, model_note);
   std::string text;
   if (!write_report(ri, o.ro, text, err)) {
     return fail(kCmd, err);
