@@ -122,6 +122,15 @@ bool get_number(const std::string& s, std::size_t obj, const std::string& key, d
   return true;
 }
 
+// The member `key` of the object at obj is the string `value` (no escapes compared).
+bool string_member_is(const std::string& s, std::size_t obj, const std::string& key,
+                      const std::string& value) {
+  const std::size_t v = member(s, obj, key);
+  const std::size_t v_end = skip_value(s, v);
+  return v != std::string::npos && v_end != std::string::npos && s[v] == '"' && v_end - v >= 2 &&
+         s.compare(v + 1, v_end - v - 2, value) == 0;
+}
+
 }  // namespace
 
 bool analysis_holds_channel(const std::string& json, const std::string& channel_name) {
@@ -130,10 +139,7 @@ bool analysis_holds_channel(const std::string& json, const std::string& channel_
   if (chans != std::string::npos && json[chans] == '{') {
     return member(json, chans, channel_name) != std::string::npos;
   }
-  const std::size_t ch = member(json, root, "channel");
-  const std::size_t ch_end = skip_value(json, ch);
-  return ch != std::string::npos && ch_end != std::string::npos && json[ch] == '"' &&
-         ch_end - ch >= 2 && json.substr(ch + 1, ch_end - ch - 2) == channel_name;
+  return string_member_is(json, root, "channel", channel_name);
 }
 
 bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
@@ -153,10 +159,7 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
       return false;
     }
   }
-  const std::size_t ch = member(json, root, "channel");
-  const std::size_t ch_end = skip_value(json, ch);
-  if (ch == std::string::npos || ch_end == std::string::npos || json[ch] != '"' ||
-      json.substr(ch + 1, ch_end - ch - 2) != channel_name) {
+  if (!string_member_is(json, root, "channel", channel_name)) {
     err = "its \"channel\" is not " + channel_name + " (the analysis of another channel?)";
     return false;
   }
