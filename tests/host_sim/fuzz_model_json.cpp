@@ -13,6 +13,7 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string json(reinterpret_cast<const char*>(data), size);
   for (const char* channel : {"acc_z", "gyro_x"}) {
+    (void)imu::sim::analysis_holds_channel(json, channel);  // run's slot lookup: must not crash
     imu::hal::ModelRecord rec{};
     std::string dropped;
     std::string err;
