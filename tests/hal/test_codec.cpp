@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstring>
 #include <random>
+#include <vector>
 
 #include "imu/hal/receiver.hpp"
 #include "imu/online_adev.hpp"
@@ -46,6 +47,29 @@ imu::hal::SampleRecord make_sample() {
   s.cfg_id = 7;
   s.sat_mask = 0x30;
   return s;
+}
+
+// Every event a fresh receiver gives for the frames of one encoded record.
+std::vector<imu::hal::RxEvent> decode(const EncodedFrames& out) {
+  imu::hal::Receiver<8> rx;
+  std::vector<imu::hal::RxEvent> ev;
+  for (std::size_t i = 0; i < out.count; ++i) {
+    (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
+                        [&ev](const imu::hal::RxEvent& e) { ev.push_back(e); });
+  }
+  return ev;
+}
+
+// The first frame of a CRC-valid record the receiver must refuse: no event, one bad_record, no
+// CRC error.
+void expect_refused(const EncodedFrames& out) {
+  imu::hal::Receiver<8> rx;
+  std::size_t got = 0;
+  (void)rx.push_drain(out.frame[0], imu::hal::wire_size(out.frame[0]), 0,
+                      [&got](const imu::hal::RxEvent&) { ++got; });
+  EXPECT_EQ(got, 0U);
+  EXPECT_EQ(rx.stats().bad_record, 1U);
+  EXPECT_EQ(rx.stats().crc_errors, 0U);
 }
 
 TEST(Crc32c, CheckValueOfTheCatalogue) {
@@ -339,25 +363,18 @@ TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {
       const std::uint32_t id = (echo ? 0x250U : 0x090U) + (layout == Layout::kFd ? 0U : 1U);
       ASSERT_EQ(out.count, layout == Layout::kFd ? 1U : 7U);
       EXPECT_EQ(out.frame[0].can_id, id);
-      imu::hal::Receiver<8> rx;
-      std::size_t got = 0;
-      for (std::size_t i = 0; i < out.count; ++i) {
-        (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
-                            [&](const imu::hal::RxEvent& e) {
-                              ASSERT_EQ(e.type, echo ? imu::hal::RxEvent::Type::kModelEcho
-                                                     : imu::hal::RxEvent::Type::kModel);
-                              // Bit-exact: the wire bytes of what came back equal those sent.
-                              std::uint8_t a[imu::hal::kModelLen];
-                              std::uint8_t b[imu::hal::kModelLen];
-                              imu::hal::serialize(e.rec.model, a);
-                              imu::hal::serialize(r, b);
-                              EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
-                              EXPECT_EQ(e.rec.model.channel, 5U);
-                              EXPECT_EQ(e.rec.model.n_states, 7U);
-                              ++got;
-                            });
-      }
-      EXPECT_EQ(got, 1U);
+      const auto ev = decode(out);
+      ASSERT_EQ(ev.size(), 1U);
+      const imu::hal::RxEvent& e = ev[0];
+      ASSERT_EQ(e.type, echo ? imu::hal::RxEvent::Type::kModelEcho : imu::hal::RxEvent::Type::kModel);
+      // Bit-exact: the wire bytes of what came back equal those sent.
+      std::uint8_t a[imu::hal::kModelLen];
+      std::uint8_t b[imu::hal::kModelLen];
+      imu::hal::serialize(e.rec.model, a);
+      imu::hal::serialize(r, b);
+      EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
+      EXPECT_EQ(e.rec.model.channel, 5U);
+      EXPECT_EQ(e.rec.model.n_states, 7U);
     }
   }
   for (const int bad : {0, 1}) {
@@ -369,13 +386,7 @@ TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {
     }
     EncodedFrames out{};
     imu::hal::encode(b, false, Layout::kFd, 0, out);
-    imu::hal::Receiver<8> rx;
-    std::size_t got = 0;
-    (void)rx.push_drain(out.frame[0], imu::hal::wire_size(out.frame[0]), 0,
-                        [&](const imu::hal::RxEvent&) { ++got; });
-    EXPECT_EQ(got, 0U);
-    EXPECT_EQ(rx.stats().bad_record, 1U);
-    EXPECT_EQ(rx.stats().crc_errors, 0U);
+    expect_refused(out);
   }
 }
 
@@ -398,32 +409,20 @@ TEST(Codec, ChannelMonitorRecordRoundTripsAndRefusesABadChannel) {
     imu::hal::encode(r, layout, 9, out);
     ASSERT_EQ(out.count, layout == Layout::kFd ? 1U : 7U);  // 44 bytes
     EXPECT_EQ(out.frame[0].can_id, layout == Layout::kFd ? 0x260U : 0x261U);
-    imu::hal::Receiver<8> rx;
-    std::size_t got = 0;
-    for (std::size_t i = 0; i < out.count; ++i) {
-      (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
-                          [&](const imu::hal::RxEvent& e) {
-                            ASSERT_EQ(e.type, imu::hal::RxEvent::Type::kChannelMonitor);
-                            std::uint8_t a[imu::hal::kChannelMonitorLen];
-                            std::uint8_t b[imu::hal::kChannelMonitorLen];
-                            imu::hal::serialize(e.rec.channel_monitor, a);
-                            imu::hal::serialize(r, b);
-                            EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
-                            EXPECT_EQ(e.rec.channel_monitor.cusum_step_update, 765432U);
-                            EXPECT_EQ(e.rec.channel_monitor.white_flagged, 99U);
-                            ++got;
-                          });
-    }
-    EXPECT_EQ(got, 1U);
+    const auto ev = decode(out);
+    ASSERT_EQ(ev.size(), 1U);
+    ASSERT_EQ(ev[0].type, imu::hal::RxEvent::Type::kChannelMonitor);
+    std::uint8_t a[imu::hal::kChannelMonitorLen];
+    std::uint8_t b[imu::hal::kChannelMonitorLen];
+    imu::hal::serialize(ev[0].rec.channel_monitor, a);
+    imu::hal::serialize(r, b);
+    EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
+    EXPECT_EQ(ev[0].rec.channel_monitor.cusum_step_update, 765432U);
+    EXPECT_EQ(ev[0].rec.channel_monitor.white_flagged, 99U);
   }
   imu::hal::ChannelMonitorRecord b = r;
   b.channel = 6;  // no such channel: CRC-valid but refused, never an index out of range
   EncodedFrames out{};
   imu::hal::encode(b, Layout::kFd, 0, out);
-  imu::hal::Receiver<8> rx;
-  std::size_t got = 0;
-  (void)rx.push_drain(out.frame[0], imu::hal::wire_size(out.frame[0]), 0,
-                      [&](const imu::hal::RxEvent&) { ++got; });
-  EXPECT_EQ(got, 0U);
-  EXPECT_EQ(rx.stats().bad_record, 1U);
+  expect_refused(out);
 }
