@@ -56,7 +56,7 @@ for ((e = 6; e <= max_exp; ++e)); do
   measure synth "$imu_sim" synth --out "$mat" --duration $((n / 100))
   synth_rss=$rss_mb synth_wall=$wall_s
   file_mb=$(awk -v b="$(stat -c %s "$mat")" 'BEGIN { printf "%.0f", b / 1e6 }')
-  measure adev "$imu_sim" adev "$mat" --channel acc_z
+  measure adev "$imu_sim" adev "$mat" --channel acc_z --estimator online
   adev_rss=$rss_mb adev_wall=$wall_s
   adev_mbs=$(awk -v m="$file_mb" -v t="$wall_s" 'BEGIN { printf "%.0f", (t > 0) ? m / t : 0 }')
   run_rss="-" run_wall="-"
@@ -83,7 +83,7 @@ for ((e = 6; e <= text_max_exp; ++e)); do
   awk -v n="$n" 'BEGIN { srand(5); print "t,acc_z"
     for (i = 0; i < n; i++) printf "%.2f,%.4f\n", i * 0.01, 9.81 + 0.01 * (rand() - 0.5) }' > "$csv"
   file_mb=$(awk -v b="$(stat -c %s "$csv")" 'BEGIN { printf "%.0f", b / 1e6 }')
-  measure adev_text "$imu_sim" adev "$csv" --channel acc_z --lsb 1e-4
+  measure adev_text "$imu_sim" adev "$csv" --channel acc_z --lsb 1e-4 --estimator online
   mbs=$(awk -v m="$file_mb" -v t="$wall_s" 'BEGIN { printf "%.0f", (t > 0) ? m / t : 0 }')
   adev_rss=$rss_mb adev_wall=$wall_s
   measure analyze_text "$imu_sim" analyze "$csv" --channel acc_z --lsb 1e-4

@@ -74,7 +74,7 @@ fi
 echo "load average at start: $(cut -d' ' -f1-3 /proc/loadavg)"
 for ((i = 0; i < runs; ++i)); do
   t0=${EPOCHREALTIME/,/.}
-  "$imu_sim" adev "$file" --channel "$chan" > /tmp/bench_vs_at.ours.$$ 2>&1
+  "$imu_sim" adev "$file" --channel "$chan" --estimator online > /tmp/bench_vs_at.ours.$$ 2>&1
   t1=${EPOCHREALTIME/,/.}
   ours+=("$(awk -v a="$t0" -v b="$t1" 'BEGIN { print b - a }')")
   if [ "$have_at" = 1 ]; then

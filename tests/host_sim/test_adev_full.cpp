@@ -173,7 +173,7 @@ TEST(AdevFull, OctaveFixtureGridsAndCsv) {
   EXPECT_EQ(std::vector<std::uint64_t>(q.begin(), q.begin() + 12),
             (std::vector<std::uint64_t>{1, 2, 3, 4, 5, 6, 7, 8, 10, 11, 13, 16}));
   // The online estimator on the octave grid keeps its powers of two only.
-  r = simtest::run({"adev", mat, "--taus", "octave", "--json", json});
+  r = simtest::run({"adev", mat, "--estimator", "online", "--taus", "octave", "--json", json});
   ASSERT_EQ(r.status, 0) << r.err;
   for (const std::uint64_t af : json_af(simtest::read_text(json))) {
     EXPECT_EQ(af & (af - 1), 0U) << af;
@@ -182,7 +182,7 @@ TEST(AdevFull, OctaveFixtureGridsAndCsv) {
   for (const std::vector<std::string>& bad :
        {std::vector<std::string>{"adev", mat, "--taus", "weekly"},
         std::vector<std::string>{"adev", mat, "--estimator", "fast"},
-        std::vector<std::string>{"adev", mat, "--taus", "all"}}) {
+        std::vector<std::string>{"adev", mat, "--taus", "all", "--estimator", "online"}}) {
     r = simtest::run(bad);
     EXPECT_EQ(r.status, 2) << bad[2] << " " << bad[3];
   }

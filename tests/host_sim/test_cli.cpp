@@ -184,7 +184,7 @@ TEST(SimCli, RunOverLoopbackLosesNothingAndMatchesAdev) {
   }
 
   const std::string adev_json = dir.file("adev.json");
-  r = run({"adev", mat, "--channel", "acc_z", "--json", adev_json});
+  r = run({"adev", mat, "--channel", "acc_z", "--estimator", "online", "--json", adev_json});
   ASSERT_EQ(r.status, 0) << r.err;
   EXPECT_NE(r.out.find("online ADEV"), std::string::npos);
   const auto a = simtest::json_adev(simtest::read_text(adev_json));

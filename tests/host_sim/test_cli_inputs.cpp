@@ -160,7 +160,7 @@ TEST(SimCliInputs, RunSendsNonFiniteSamplesAsGaps) {
   EXPECT_EQ(simtest::json_number_in(json, node, "missing"), 2.0);
   EXPECT_EQ(simtest::json_number_in(json, node, "lost"), 0.0);
   EXPECT_EQ(simtest::json_number_in(json, "sender", "non_finite"), 4.0);
-  r = run({"adev", mat, "--json", dir.file("adev.json")});
+  r = run({"adev", mat, "--estimator", "online", "--json", dir.file("adev.json")});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto a = simtest::json_adev(simtest::read_text(dir.file("adev.json")));
   const auto b = simtest::json_adev(json);

@@ -94,6 +94,87 @@ TEST(TextInput, CsvTsvAndBlanksGiveTheColumnsAdevAtTheTimeColumnsRate) {
   }
 }
 
+// The logs of the field, read without options: a ROS-style CSV with nanosecond epoch stamps, a
+// EuRoC file (names in a '#' line, units in brackets), a logger's milliseconds, a PX4-style log
+// in microseconds (indexed names, a column of text that is not read). Each gives its rate and
+// the same ADEV as the samples (the exact estimator's sum computed here); a unit read from the
+// steps is said in a note, a stated one is not.
+TEST(TextInput, FieldLogsGiveTheirRateAndAdevWithoutOptions) {
+  simtest::TempDir dir;
+  const std::vector<double> v = samples();
+  struct Log {
+    const char* file;
+    std::string header;
+    const char* column;
+    long long step;    // in the log's time unit
+    long long origin;  // its first time
+    const char* extra;  // fields between the time and the value
+    double fs_hz;
+    const char* note;  // "" : none expected
+  };
+  const std::vector<Log> logs = {
+      {"ros.csv", "timestamp,gyro_z\n", "gyro_z", 5000000, 1700000000000000001, "", 200.0, "read in ns"},
+      {"euroc.csv",
+       "#timestamp [ns],w_RS_S_x [rad s^-1],w_RS_S_y [rad s^-1],w_RS_S_z [rad s^-1]\n",
+       "w_RS_S_z", 5000000, 1403636579758555392, "0.1,0.2,", 200.0, ""},
+      {"logger.csv", "time,acc_z\n", "acc_z", 5, 1000, "", 200.0, "read in ms"},
+      {"px4.csv", "timestamp,frame,gyro_rad[0]\n", "gyro_rad[0]", 4000, 123456789,
+       "imu_link,", 250.0, "read in us"},
+      {"echo.csv", "%time,field.header.frame_id,field.angular_velocity.x\n",
+       "field.angular_velocity.x", 10000000, 1600000000123456789, "base_imu,", 100.0, "read in ns"}};
+  for (const Log& log : logs) {
+    std::string text = log.header;
+    char buf[128];
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      std::snprintf(buf, sizeof buf, "%lld,%s%.4f\n",
+                    log.origin + static_cast<long long>(i) * log.step, log.extra, v[i]);
+      text += buf;
+    }
+    const std::string f = dir.file(log.file);
+    std::ofstream(f) << text;
+    const std::string json = dir.file("a.json");
+    const auto r = simtest::run({"adev", f, "--channel", log.column, "--lsb", "1e-4", "--json",
+                                 json});
+    ASSERT_EQ(r.status, 0) << log.file << ": " << r.err;
+    const std::string j = simtest::read_text(json);
+    const double fs = simtest::json_number_in(j, "fs_hz", "fs_hz");
+    EXPECT_NEAR(fs, log.fs_hz, 1e-9 * log.fs_hz) << log.file;
+    for (const std::size_t m : {1U, 2U, 8U, 64U}) {
+      const double want = oadev(v, m);
+      EXPECT_NEAR(json_adev_at(j, static_cast<double>(m) / log.fs_hz), want, 1e-8 * want)
+          << log.file << " m " << m;
+    }
+    if (*log.note != '\0') {
+      EXPECT_NE(r.out.find(log.note), std::string::npos) << log.file << ": " << r.out;
+    } else {
+      EXPECT_EQ(r.out.find("read in"), std::string::npos) << log.file << ": " << r.out;
+    }
+  }
+  // analyze says the same of the same file.
+  auto r = simtest::run({"analyze", dir.file("ros.csv"), "--channel", "gyro_z"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  EXPECT_NE(r.out.find("rate 200 Hz from the time column 'timestamp'; the time column "
+                       "'timestamp' read in ns"),
+            std::string::npos)
+      << r.out;
+  // A unit given overrides the steps: seconds on nanosecond stamps is a rate out of range.
+  r = simtest::run({"adev", dir.file("ros.csv"), "--channel", "gyro_z", "--time-unit", "s"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("outside [1e-3, 1e6] Hz"), std::string::npos) << r.err;
+  r = simtest::run({"adev", dir.file("logger.csv"), "--channel", "acc_z", "--time-unit", "ms",
+                    "--lsb", "1e-4"});
+  EXPECT_EQ(r.status, 0) << r.err;
+  EXPECT_EQ(r.out.find("read in"), std::string::npos) << r.out;
+  r = simtest::run({"adev", dir.file("logger.csv"), "--channel", "acc_z", "--time-unit", "min"});
+  EXPECT_EQ(r.status, 2);
+  EXPECT_NE(r.err.find("--time-unit min: s, ms, us or ns"), std::string::npos) << r.err;
+  // A '#' line that does not name every column is not a header.
+  std::ofstream(dir.file("short.csv")) << "# t,gyro_z\n0,1,2\n1,2,3\n";
+  r = simtest::run({"adev", dir.file("short.csv"), "--channel", "gyro_z"});
+  EXPECT_EQ(r.status, 1);
+  EXPECT_NE(r.err.find("the first row must name the columns"), std::string::npos) << r.err;
+}
+
 TEST(TextInput, DroppedRowsAreGapsThatAreCountedAndSkipped) {
   simtest::TempDir dir;
   const std::vector<double> v = samples();
@@ -302,9 +383,11 @@ TEST(TextInput, LongTextGivesTheMatFilesAdev) {
   ASSERT_TRUE(w.save(mat).ok());
   const std::string ja = dir.file("csv.json");
   const std::string jb = dir.file("mat.json");
-  auto r = simtest::run({"adev", csv, "--channel", "acc_z", "--lsb", "1e-3", "--json", ja});
+  auto r = simtest::run({"adev", csv, "--channel", "acc_z", "--lsb", "1e-3", "--estimator", "online",
+                         "--json", ja});
   ASSERT_EQ(r.status, 0) << r.err;
-  r = simtest::run({"adev", mat, "--channel", "acc_z", "--lsb", "1e-3", "--json", jb});
+  r = simtest::run({"adev", mat, "--channel", "acc_z", "--lsb", "1e-3", "--estimator", "online",
+                    "--json", jb});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto a = simtest::json_adev(simtest::read_text(ja));
   const auto b = simtest::json_adev(simtest::read_text(jb));

@@ -305,7 +305,7 @@ t_imu_stream() {
   local sim_rc=$?
   wait $FW_PID
   t1=$(cut -d' ' -f1 /proc/uptime)
-  imu-sim adev "$MAT" --channel acc_z >/tmp/adev_inproc.txt 2>&1
+  imu-sim adev "$MAT" --channel acc_z --estimator online >/tmp/adev_inproc.txt 2>&1
   fw_table /tmp/fw_stream.txt >/tmp/t_fw
   adev_table /tmp/adev_inproc.txt >/tmp/t_in
   local rows samples missing drops
@@ -337,7 +337,7 @@ t_imu_realtime() {
   wait $FW_PID
   kill -INT $dump
   wait $dump
-  imu-sim adev /tmp/clean.mat --channel acc_z >/tmp/adev_clean.txt 2>&1
+  imu-sim adev /tmp/clean.mat --channel acc_z --estimator online >/tmp/adev_clean.txt 2>&1
   fw_table /tmp/fw_rt.txt >/tmp/t_fw
   adev_table /tmp/adev_clean.txt >/tmp/t_in
   local samples missing drops logged configs

@@ -34,7 +34,7 @@ using imu::cli::kExitUsage;
 
 constexpr const char* kUsage =
     "usage: imu-sim analyze FILE --channel NAME|NAME:K|A,B,..|all [--fs HZ] [--lsb UNITS]\n"
-    "                         [--json OUT]\n"
+    "                         [--time-unit s|ms|us|ns] [--json OUT]\n"
     "                         [--plots DIR] [--yaml IMU.yaml]\n"
     "  NAME:K is column K (1-based) of a matrix NAME; a matrix without :K is refused.\n"
     "  (also imu-analyze) residual of the first-order model against the measured ADEV and the\n"
@@ -42,7 +42,8 @@ constexpr const char* kUsage =
     "  acc_x..gyro_z the file holds (a comma list: those), analysed in parallel on the machine's\n"
     "  cores; one report, one JSON ({\"file\", \"channels\": {NAME: ...}}; one channel: its\n"
     "  object as before). --yaml: Kalibr's imu.yaml (needs acc* and gyro* channels). --fs (else\n"
-    "  the file's fs or Fs) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
+    "  the file's fs or Fs, else a text file's time column, in the unit it states or\n"
+    "  --time-unit's, else the one its steps show) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
     "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
     "  the report's `gaps`). --plots DIR is created if missing. A channel longer than 2^22\n"
     "  samples is analysed on block means of 2^k samples, and its first 2^22 samples at full\n"
@@ -342,12 +343,12 @@ bool read_head_mat(const std::string& path, const std::string& spec, double scal
 
 // A text file's column's head (its rows again: the same grid and gaps as the first pass).
 bool read_head_text(const std::string& file, const std::string& name, double fs,
-                    std::vector<double>& out, std::string& err) {
+                    double time_unit_s, std::vector<double>& out, std::string& err) {
   imu::cli::TextColumnStream st;
   const auto read = [&st](double* dst, std::size_t max, std::size_t& got, std::string& e) {
     return st.read(dst, std::min<std::size_t>(4096, max), got, e);
   };
-  return st.open(file, {name}, fs, err) && read_head(read, out, err);
+  return st.open(file, {name}, fs, err, time_unit_s) && read_head(read, out, err);
 }
 
 // NAME or NAME:K (column K, 1-based as in Octave, of a matrix NAME). A matrix named without a
@@ -609,8 +610,8 @@ void on_block_means(Job& j, double fs_hz, std::uint64_t block, std::uint64_t dro
 // every column but the time column). The rate: --fs, else the time column's. One pass over the
 // rows for every channel (imu::cli::TextColumnStream), each into its BlockMeans: a channel is
 // held as its samples, or as block means once it passes kMaxAnalysedSamples, never the table.
-bool text_jobs(const std::string& file, const std::string& spec, double fs, double lsb,
-               std::vector<Job>& jobs, std::string& err) {
+bool text_jobs(const std::string& file, const std::string& spec, double fs, double time_unit_s,
+               double lsb, std::vector<Job>& jobs, std::string& err) {
   std::vector<std::string> names;
   {
     imu::cli::TextRows header;
@@ -631,7 +632,7 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     }
   };
   imu::cli::TextColumnStream st;
-  if (!st.open(file, names, fs, err)) {
+  if (!st.open(file, names, fs, err, time_unit_s)) {
     with_file(err);
     return false;
   }
@@ -664,6 +665,9 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     if (!st.time_name().empty()) {
       j.text_note = "text input: rate " + imu::cli::num_text(st.fs_hz()) + " Hz" +
                     (fs > 0.0 ? " (--fs)" : " from the time column '" + st.time_name() + "'");
+      if (!st.time_note().empty()) {
+        j.text_note += "; " + st.time_note();
+      }
       if (st.time_gap_samples() > 0) {
         j.text_note += "; its steps left " + std::to_string(st.time_gap_samples()) +
                        " samples missing (gaps)";
@@ -671,8 +675,9 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     }
     on_block_means(j, st.fs_hz(), means[c].block(), dropped);
     if (j.block > 1) {
-      j.read_head = [file, name = names[c], fs](std::vector<double>& out, std::string& e) {
-        return read_head_text(file, name, fs, out, e);
+      j.read_head = [file, name = names[c], fs, time_unit_s](std::vector<double>& out,
+                                                            std::string& e) {
+        return read_head_text(file, name, fs, time_unit_s, out, e);
       };
     }
     jobs.push_back(std::move(j));
@@ -681,12 +686,13 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
 }
 
 // The run-time part: read, analyse (in parallel), print, write. Exit status.
-int analyze_file(const std::string& file, const std::string& channel_spec, double fs, double lsb,
+int analyze_file(const std::string& file, const std::string& channel_spec, double fs,
+                 double time_unit_s, double lsb,
                  const std::string& json, const std::string& plots, const std::string& yaml) {
   std::string err;
   if (imu::cli::looks_like_text(file)) {
     std::vector<Job> jobs;
-    if (!text_jobs(file, channel_spec, fs, lsb, jobs, err)) {
+    if (!text_jobs(file, channel_spec, fs, time_unit_s, lsb, jobs, err)) {
       return fail(err, read_status(err));
     }
     return finish(file, jobs, lsb, json, plots, yaml);
@@ -754,7 +760,7 @@ int cli_main(int argc, char** argv) {
   std::string err;
   const std::vector<imu::cli::OptSpec> specs = {
       {"--channel", true}, {"--json", true}, {"--plots", true}, {"--fs", true}, {"--lsb", true},
-      {"--yaml", true}};
+      {"--yaml", true},    {"--time-unit", true}};
   if (!a.parse(argc, argv, 1, specs, 1, err)) {
     return fail(err + " (imu-sim analyze --help)", kExitUsage);
   }
@@ -767,6 +773,13 @@ int cli_main(int argc, char** argv) {
   if ((a.has("--fs") && !a.number("--fs", 0.0, 1e-3, 1e6, fs, err)) ||
       (a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, lsb, err))) {
     return fail(err, kExitUsage);
+  }
+  double time_unit_s = 0.0;
+  if (a.has("--time-unit")) {
+    time_unit_s = imu::cli::time_unit_s(a.get("--time-unit"));
+    if (!(time_unit_s > 0.0)) {
+      return fail("--time-unit " + a.get("--time-unit") + ": s, ms, us or ns", kExitUsage);
+    }
   }
   if (a.positional().empty() || !a.has("--channel")) {
     return fail("FILE and --channel NAME are required (imu-sim analyze --help)", kExitUsage);
@@ -794,7 +807,7 @@ int cli_main(int argc, char** argv) {
   // Sizes are bounded by the MAT reader's budget; this is the last line of defence (a machine
   // short of memory): one line, exit 1, no exception escapes.
   try {
-    return analyze_file(a.positional()[0], a.get("--channel"), fs, lsb, a.get("--json"),
+    return analyze_file(a.positional()[0], a.get("--channel"), fs, time_unit_s, lsb, a.get("--json"),
                         a.get("--plots"), a.get("--yaml"));
   } catch (const std::bad_alloc&) {
     return fail("out of memory", kExitRuntime);

@@ -48,7 +48,8 @@ constexpr const char* kUsageModel =
     "  the continuous and discrete first-order model in the example's layout\n";
 constexpr const char* kUsageAdev =
     "usage: imu-sim adev FILE [--channel acc_z|all|A,B] [--json OUT] [--csv OUT] [--lsb X]\n"
-    "                         [--fs X] [--estimator online|full] [--plots DIR]\n"
+    "                         [--fs X] [--time-unit s|ms|us|ns] [--estimator online|full]\n"
+    "                         [--plots DIR]\n"
     "                         [--taus octave|decade|quarter|all]\n"
     "  ADEV of a channel, with the time it took. --channel: a variable (NAME, NAME:K column K\n"
     "  of a matrix, imu.acc_z a struct field), a comma list, or all (the channels acc_x..gyro_z\n"
@@ -56,18 +57,20 @@ constexpr const char* kUsageAdev =
     "  parallel on the machine's cores, one table each, one JSON ({\"source\", \"estimator\",\n"
     "  \"channels\": {NAME: ...}}), one CSV with a channel column, --plots DIR: a plot per\n"
     "  channel (DIR/adev_NAME.svg/.png, its .csv and a .gp that runs from any directory; DIR\n"
-    "  is created). --estimator online\n"
-    "  (default): the firmware's fixed-memory estimator (fw OnlineAdev<8,22>, partially\n"
-    "  overlapping, constant memory);\n"
-    "  full: the fully overlapping estimator on the whole record (allantools oadev, Stable32;\n"
-    "  12 bytes per sample of memory). --taus as allantools' keywords (default: online, its own\n"
-    "  grid; full, octave): octave 1, 2, 4, ..; decade 1, 2, 4, 10, 20, 40, ..; quarter\n"
+    "  is created). --estimator full\n"
+    "  (default): the fully overlapping estimator on the whole record (allantools oadev,\n"
+    "  Stable32; 12 bytes per sample of memory); online: the firmware's fixed-memory estimator\n"
+    "  (fw OnlineAdev<8,22>, partially overlapping, constant memory; the node's figures).\n"
+    "  --taus as allantools' keywords (default: full, octave; online, its own grid): octave 1, 2, 4, ..; decade 1, 2, 4, 10, 20, 40, ..; quarter\n"
     "  quarter octaves; all every m (full only; refused when it would sum more than 2e9\n"
     "  terms). The table, JSON and CSV carry the averaging factor af = tau / Ts. NaN/Inf samples\n"
     "  are gaps (counted: \"gaps\" in the JSON). The LSB (--lsb, else the file's acc_lsb/gyro_lsb,\n"
     "  else 1e-6 / 1e-7) must fit the data in int32 counts and must not collapse it (refused:\n"
     "  more than 99 % of the samples in one count while the quantised std is under half the\n"
-    "  data's). --fs (else the file's fs or Fs) in [1e-3, 1e6] Hz.\n";
+    "  data's). --fs (else the file's fs or Fs, else a text file's time column) in [1e-3, 1e6]\n"
+    "  Hz. A text file's time column (t, time, timestamp, %time, timestamp_ns ..) is in the\n"
+    "  unit its name or header states ([ns]), else --time-unit's, else the one its steps show\n"
+    "  (integer times: the first of s, ms, us, ns giving 1 Hz or more; said in a note).\n";
 constexpr const char* kUsageRun =
     "usage: imu-sim run FILE [--channel acc_z] [--bus loopback|vcan0|can0] [--rate max|realtime]\n"
     "      [--node inproc|spawn|external] [--out DIR] [--json FILE] [--N --B --Tp [--K]]\n"
@@ -298,10 +301,25 @@ struct AdevOptions {
   bool full = false;
   double lsb = 0.0;  // 0: the file's or the default
   double fs = 0.0;   // 0: the file's
+  double time_unit_s = 0.0;  // --time-unit; 0: the time column's own
 };
 
+// --time-unit s|ms|us|ns: seconds per unit of a text file's time column (0 if not given).
+bool parse_time_unit(const Args& a, double& unit_s, std::string& err) {
+  unit_s = 0.0;
+  if (!a.has("--time-unit")) {
+    return true;
+  }
+  unit_s = imu::cli::time_unit_s(a.get("--time-unit"));
+  if (!(unit_s > 0.0)) {
+    err = "--time-unit " + a.get("--time-unit") + ": s, ms, us or ns";
+    return false;
+  }
+  return true;
+}
+
 bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
-  o.estimator = a.get("--estimator", "online");
+  o.estimator = a.get("--estimator", "full");
   o.full = o.estimator == "full";
   if (!o.full && o.estimator != "online") {
     err = "--estimator " + o.estimator + ": online or full";
@@ -324,7 +342,8 @@ bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
   o.path = a.positional()[0];
   o.spec = a.get("--channel", "acc_z");
   return (!a.has("--lsb") || a.number("--lsb", 0.0, 1e-12, 1e6, o.lsb, err)) &&
-         (!a.has("--fs") || a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, o.fs, err));
+         (!a.has("--fs") || a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, o.fs, err)) &&
+         parse_time_unit(a, o.time_unit_s, err);
 }
 
 // One channel's ADEV: what it was read as, its rows, the time each step took, or its error.
@@ -341,6 +360,7 @@ struct AdevResult {
   // (nullptr: the channel streams the file on its own).
   const std::vector<double>* read_samples = nullptr;
   double read_fs_hz = 0.0;
+  std::string time_note;  // how a text time column's unit was found, if from its steps
 };
 
 // Several text columns read in one pass over the file (imu::cli::TextColumnStream), each on
@@ -349,15 +369,17 @@ struct AdevResult {
 constexpr std::size_t kOnePassSamples = std::size_t{1} << 26U;  // 512 MiB of doubles
 constexpr std::size_t kMaxStreamedColumns = 16;
 int read_text_columns(const AdevOptions& o, const std::vector<std::string>& names,
-                      std::vector<std::vector<double>>& cols, double& fs_hz, std::string& err) {
+                      std::vector<std::vector<double>>& cols, double& fs_hz, std::string& note,
+                      std::string& err) {
   cols.assign(names.size(), {});
   imu::cli::TextColumnStream st;
-  if (!st.open(o.path, names, o.fs, err)) {
+  if (!st.open(o.path, names, o.fs, err, o.time_unit_s)) {
     const bool usage = err.rfind("no column", 0) == 0;
     err = err.rfind(o.path, 0) == 0 ? err : o.path + ": " + err;
     return usage ? kExitUsage : kExitRuntime;
   }
   fs_hz = st.fs_hz();
+  note = st.time_note();
   const std::size_t k = names.size();
   constexpr std::size_t kChunk = 4096;
   std::vector<double> buf(kChunk * k);
@@ -407,12 +429,13 @@ int adev_load(const AdevOptions& o, bool text, AdevResult& r) {
       r.sd.fs_hz = r.read_fs_hz;
     } else {
       imu::cli::TextColumnStream probe;
-      if (!probe.open(o.path, r.name, o.fs, r.err)) {
+      if (!probe.open(o.path, r.name, o.fs, r.err, o.time_unit_s)) {
         const bool usage = r.err.rfind("no column", 0) == 0;  // like a MAT variable not found
         r.err = r.err.rfind(o.path, 0) == 0 ? r.err : o.path + ": " + r.err;
         return usage ? kExitUsage : kExitRuntime;
       }
       r.sd.fs_hz = probe.fs_hz();
+      r.time_note = probe.time_note();
     }
     r.sd.path = o.path;
     ChannelData& ch = r.sd.ch[r.chan];
@@ -462,7 +485,7 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     return kExitUsage;
   }
   StreamTiming tm;
-  TextChannelSource text_src(o.path, r.name, o.fs, r.read_samples);
+  TextChannelSource text_src(o.path, r.name, o.fs, o.time_unit_s, r.read_samples);
   const auto feed = [&](CountSink& sink) {
     int st = text ? stream_counts(text_src, o.path + ": column '" + r.name + "': ", ch, sink, tm,
                                   r.err)
@@ -529,6 +552,9 @@ void print_adev(FILE* out, const std::string& path, const AdevResult& r) {
   if (ch.off_grid > 0) {
     std::fprintf(out, "note: %llu samples off the LSB grid (quantised to it)\n",
                 static_cast<unsigned long long>(ch.off_grid));
+  }
+  if (!r.time_note.empty()) {
+    std::fprintf(out, "note: %s\n", imu::cli::term_safe(r.time_note).c_str());
   }
 }
 
@@ -674,7 +700,8 @@ int cmd_adev(int argc, char** argv) {
   std::string err;
   const std::vector<OptSpec> specs = {{"--channel", true},   {"--json", true}, {"--lsb", true},
                                       {"--fs", true},        {"--csv", true},  {"--taus", true},
-                                      {"--estimator", true}, {"--plots", true}};
+                                      {"--estimator", true}, {"--plots", true},
+                                      {"--time-unit", true}};
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
     return fail(cmd, err, kExitUsage);
   }
@@ -721,13 +748,15 @@ int cmd_adev(int argc, char** argv) {
   std::vector<std::vector<double>> text_cols;
   if (text && names.size() > 1) {
     double fs_hz = 0.0;
-    const int st = read_text_columns(o, names, text_cols, fs_hz, err);
+    std::string note;
+    const int st = read_text_columns(o, names, text_cols, fs_hz, note, err);
     if (st != kExitOk) {
       return fail(cmd, err, st);
     }
     for (std::size_t i = 0; i < text_cols.size(); ++i) {
       rs[i].read_samples = &text_cols[i];
       rs[i].read_fs_hz = fs_hz;
+      rs[i].time_note = note;
     }
   }
   imu::cli::parallel_for(rs.size(), [&](std::size_t i) {

@@ -143,10 +143,10 @@ class MatChannelSource final : public ChunkSource {
 /// several columns), the passes are over those samples instead of the file.
 class TextChannelSource final : public ChunkSource {
  public:
-  TextChannelSource(std::string path, std::string column, double fs_hz,
+  TextChannelSource(std::string path, std::string column, double fs_hz, double time_unit_s,
                     const std::vector<double>* read_samples = nullptr)
       : path_(std::move(path)), column_(std::move(column)), fs_hz_(fs_hz),
-        read_samples_(read_samples) {}
+        time_unit_s_(time_unit_s), read_samples_(read_samples) {}
   [[nodiscard]] bool open(std::string& err) override;
   [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err) override;
   [[nodiscard]] double fs_hz() const { return stream_.fs_hz(); }
@@ -156,6 +156,7 @@ class TextChannelSource final : public ChunkSource {
   std::string path_;
   std::string column_;
   double fs_hz_;
+  double time_unit_s_;  // 0: the time column's own
   const std::vector<double>* read_samples_;
   imu::cli::TextColumnStream stream_;
   std::uint64_t samples_ = 0;

@@ -57,6 +57,36 @@ bool blank_or_comment(const std::string& line) {
   return i == std::string::npos || line[0] == '#';
 }
 
+// A header field's name and unit: "w_RS_S_x [rad s^-1]" is w_RS_S_x in rad s^-1 (EuRoC's
+// layout); a bracket or parenthesis after a blank, at the end, is the unit. "gyro_rad[0]" (an
+// index, no blank) stays the name.
+std::pair<std::string, std::string> name_and_unit(const std::string& field) {
+  const std::size_t n = field.size();
+  if (n >= 3 && (field[n - 1] == ']' || field[n - 1] == ')')) {
+    const char open = field[n - 1] == ']' ? '[' : '(';
+    const std::size_t at = field.rfind(open);
+    if (at != std::string::npos && at > 0 && (field[at - 1] == ' ' || field[at - 1] == '\t')) {
+      const std::size_t end = field.find_last_not_of(" \t", at - 1);
+      if (end != std::string::npos) {
+        return {field.substr(0, end + 1), field.substr(at + 1, n - at - 2)};
+      }
+    }
+  }
+  return {field, std::string()};
+}
+
+// An integer field ("1403636579758555392"): its exact value. Epoch nanoseconds need all 19
+// digits; as a double their steps would be off by up to 256 ns.
+bool parse_integer(const std::string& f, long long& v) {
+  if (f.empty() || f.size() > 19 || f.find_first_not_of("+-0123456789") != std::string::npos) {
+    return false;
+  }
+  char* end = nullptr;
+  errno = 0;
+  v = std::strtoll(f.c_str(), &end, 10);
+  return end != f.c_str() && *end == '\0' && errno != ERANGE;
+}
+
 bool parse_field(const std::string& f, double& v) {
   if (f.empty() || f == "nan" || f == "NaN" || f == "NAN") {
     v = std::nan("");
@@ -68,7 +98,51 @@ bool parse_field(const std::string& f, double& v) {
   return end != f.c_str() && *end == '\0' && errno != ERANGE;
 }
 
+// A row of names: every field present and not a number.
+bool names_row(const std::vector<std::string>& fields) {
+  double probe = 0.0;
+  for (const auto& n : fields) {
+    if (n.empty() || parse_field(n, probe)) {
+      return false;
+    }
+  }
+  return !fields.empty();
+}
+
 }  // namespace
+
+double time_unit_s(const std::string& unit) {
+  static const std::pair<const char*, double> kUnits[] = {
+      {"s", 1.0},     {"sec", 1.0},    {"seconds", 1.0}, {"ms", 1e-3},   {"msec", 1e-3},
+      {"us", 1e-6},   {"usec", 1e-6},  {"\xc2\xb5s", 1e-6}, {"ns", 1e-9},   {"nsec", 1e-9}};
+  for (const auto& [name, s] : kUnits) {
+    if (unit == name) {
+      return s;
+    }
+  }
+  return 0.0;
+}
+
+bool is_time_name(const std::string& name, double* unit_s) {
+  double u = 0.0;
+  if (name == "t" || name == "time" || name == "timestamp" || name == "%time") {
+    u = 0.0;  // the unit from the header or the steps
+  } else {
+    const std::size_t us = name.rfind('_');
+    if (us == std::string::npos) {
+      return false;
+    }
+    const std::string stem = name.substr(0, us);
+    u = time_unit_s(name.substr(us + 1));
+    if ((stem != "t" && stem != "time" && stem != "timestamp") || !(u > 0.0)) {
+      return false;
+    }
+  }
+  if (unit_s != nullptr) {
+    *unit_s = u;
+  }
+  return true;
+}
 
 bool looks_like_text(const std::string& path) {
   // A MAT-file starts with "MATLAB" text or carries its endian mark "IM"/"MI" at byte 126; any
@@ -138,27 +212,50 @@ bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max
   in_.close();
   in_.clear();
   in_.open(path, std::ios::binary);
+  pending_ = false;
+  needed_.clear();
+  exact_column_ = kNoColumn;
   err.clear();
+  std::string last_comment;
   int got = 0;
   while ((got = read_line(err)) > 0) {
     if (blank_or_comment(line_)) {
+      if (!line_.empty() && line_[0] == '#') {
+        last_comment = line_;
+      }
       continue;
     }
     delim_ = line_.find(',') != std::string::npos ? ','
              : (line_.find('\t') != std::string::npos ? '\t' : ' ');
-    names_ = split(line_, delim_);
-    if (names_.size() > kMaxColumns) {
-      err = path + ": line " + std::to_string(line_no_) + ": " + std::to_string(names_.size()) +
+    std::vector<std::string> fields = split(line_, delim_);
+    if (fields.size() > kMaxColumns) {
+      err = path + ": line " + std::to_string(line_no_) + ": " + std::to_string(fields.size()) +
             " columns, more than " + std::to_string(kMaxColumns) + " (text input of IMU channels)";
       return false;
     }
-    double probe = 0.0;
-    for (const auto& n : names_) {
-      if (n.empty() || parse_field(n, probe)) {
+    if (!names_row(fields)) {
+      // EuRoC and other loggers put the names in the last comment line before the data
+      // ("#timestamp [ns],w_RS_S_x [rad s^-1],..."): that line, if it names every column.
+      std::vector<std::string> named;
+      if (!last_comment.empty()) {
+        const std::size_t b = last_comment.find_first_not_of("# \t");
+        named = split(b == std::string::npos ? std::string() : last_comment.substr(b), delim_);
+      }
+      if (named.size() != fields.size() || !names_row(named)) {
         err = path + ": line " + std::to_string(line_no_) +
-              ": the first row must name the columns (a header), e.g. t,acc_x,acc_y";
+              ": the first row must name the columns (a header, or a last '#' comment line "
+              "before the data with one name per column), e.g. t,acc_x,acc_y";
         return false;
       }
+      fields = named;
+      pending_ = true;  // line_ is the first data row
+    }
+    names_.clear();
+    units_.clear();
+    for (const auto& f : fields) {
+      auto nu = name_and_unit(f);
+      names_.push_back(std::move(nu.first));
+      units_.push_back(std::move(nu.second));
     }
     return true;
   }
@@ -169,9 +266,19 @@ bool TextRows::open(const std::string& path, std::string& err, std::uint64_t max
   return false;
 }
 
+void TextRows::only(const std::vector<std::size_t>& columns) {
+  needed_.assign(names_.size(), false);
+  for (const std::size_t c : columns) {
+    if (c < needed_.size()) {
+      needed_[c] = true;
+    }
+  }
+}
+
 bool TextRows::next(std::vector<double>& row, std::string& err) {
   err.clear();
-  while (read_line(err) > 0) {
+  while (pending_ || read_line(err) > 0) {
+    pending_ = false;
     if (blank_or_comment(line_)) {
       continue;
     }
@@ -183,7 +290,12 @@ bool TextRows::next(std::vector<double>& row, std::string& err) {
       return false;
     }
     row.resize(fields.size());
+    has_exact_ = exact_column_ < fields.size() && parse_integer(fields[exact_column_], exact_);
     for (std::size_t c = 0; c < fields.size(); ++c) {
+      if (!needed_.empty() && !needed_[c]) {
+        row[c] = std::nan("");  // a column not read (a frame name, a covariance): not parsed
+        continue;
+      }
       if (!parse_field(fields[c], row[c])) {
         err = path_ + ": line " + std::to_string(line_no_) + ", column " + names_[c] + ": '" +
               fields[c] + "' is not a number";
@@ -203,6 +315,7 @@ bool read_text_table(const std::string& path, TextTable& table, std::string& err
     return false;
   }
   table.names = rows.names();
+  table.units = rows.units();
   table.cols.assign(table.names.size(), {});
   std::vector<double> row;
   while (rows.next(row, err)) {
@@ -222,11 +335,47 @@ bool read_text_table(const std::string& path, TextTable& table, std::string& err
 
 std::size_t time_column(const std::vector<std::string>& names) {
   for (std::size_t c = 0; c < names.size(); ++c) {
-    if (names[c] == "t" || names[c] == "time" || names[c] == "timestamp") {
+    if (is_time_name(names[c], nullptr)) {
       return c;
     }
   }
   return names.size();
+}
+
+void time_scale(const double* t, std::size_t n, double fs_hz, double stated_s, double& unit_s,
+                bool& detected) {
+  detected = false;
+  unit_s = stated_s > 0.0 ? stated_s : 1.0;
+  if (stated_s > 0.0) {
+    return;
+  }
+  std::vector<double> steps;
+  steps.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(t[i]) || std::fabs(t[i] - std::floor(t[i])) > 0.0) {
+      return;  // times that are not all integers are seconds
+    }
+    if (i > 0 && t[i] > t[i - 1]) {
+      steps.push_back(t[i] - t[i - 1]);
+    }
+  }
+  if (steps.empty()) {
+    return;
+  }
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
+                   steps.end());
+  const double median = steps[steps.size() / 2];
+  static constexpr double kUnits[] = {1.0, 1e-3, 1e-6, 1e-9};
+  for (const double u : kUnits) {
+    // A given rate picks the unit it agrees with; else the first unit in which the steps are an
+    // IMU's rate.
+    if (fs_hz > 0.0 ? std::fabs(median * u * fs_hz - 1.0) <= 0.02
+                    : 1.0 / (median * u) >= kMinDetectedRateHz) {
+      unit_s = u;
+      detected = u < 1.0;
+      return;
+    }
+  }
 }
 
 namespace {
@@ -261,7 +410,7 @@ bool grid_period(const double* t, std::size_t n, double fs_hz, const std::string
     if (!(std::fabs(median_s * fs_hz - 1.0) <= 0.02)) {
       err = "--fs " + num_text(fs_hz) + " Hz contradicts the time column '" + column +
             "': its median step " + num_text(median_s) + " s is " + num_text(1.0 / median_s) +
-            " Hz (drop --fs, or give the column's rate; a time column must be in seconds)";
+            " Hz (drop --fs, or give the column's rate or its unit with --time-unit)";
       return false;
     }
     ts_s = 1.0 / fs_hz;
@@ -269,6 +418,41 @@ bool grid_period(const double* t, std::size_t n, double fs_hz, const std::string
   }
   ts_s = median_s;
   return true;
+}
+
+// The clock of a time column from its first raw times: the unit (stated_s if > 0, else
+// time_scale's), the first time (the origin: epoch nanoseconds keep their steps), and the
+// sample period (grid_period over the times in seconds). A note when the unit was detected.
+bool head_clock(const std::vector<double>& raw, double fs_hz, double stated_s,
+                const std::string& column, double& ts_s, double& unit_s, double& t0,
+                std::string& note, std::string& err) {
+  bool detected = false;
+  time_scale(raw.data(), raw.size(), fs_hz, stated_s, unit_s, detected);
+  t0 = raw.empty() ? 0.0 : raw[0];
+  std::vector<double> t(raw.size());
+  for (std::size_t i = 0; i < raw.size(); ++i) {
+    t[i] = (raw[i] - t0) * unit_s;
+  }
+  note.clear();
+  if (detected) {
+    const char* name = unit_s > 5e-4 ? "ms" : (unit_s > 5e-7 ? "us" : "ns");
+    note = std::string("the time column '") + column + "' read in " + name +
+           " (from its steps; --time-unit s|ms|us|ns says otherwise)";
+  }
+  return grid_period(t.data(), t.size(), fs_hz, column, ts_s, err);
+}
+
+// The unit a time column states: stated_s (an option) if > 0, else its name's suffix
+// (timestamp_ns), else its header's bracketed unit ([ns]); 0 if none.
+double stated_unit(const std::string& name, const std::string& header_unit, double stated_s) {
+  double u = 0.0;
+  if (stated_s > 0.0) {
+    return stated_s;
+  }
+  if (is_time_name(name, &u) && u > 0.0) {
+    return u;
+  }
+  return time_unit_s(header_unit);
 }
 
 std::string no_column(const std::vector<std::string>& names, const std::string& name) {
@@ -341,7 +525,7 @@ bool TimeGrid::place(double t_s, std::uint64_t row, const std::string& column,
 }
 
 bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
-                  TextChannel& out, std::string& err) {
+                  TextChannel& out, std::string& err, double time_unit_s_given) {
   out = TextChannel{};
   const auto it = std::find(table.names.begin(), table.names.end(), name);
   if (it == table.names.end()) {
@@ -362,8 +546,14 @@ bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
   const std::vector<double>& t = table.cols[ti];
   out.time_column = table.names[ti];
   double ts = 0.0;
-  if (!grid_period(t.data(), std::min(t.size(), kRateRows + 1), fs_hz, out.time_column, ts,
-                   err)) {
+  double t0 = 0.0;
+  const std::vector<double> head(t.begin(),
+                                 t.begin() + static_cast<std::ptrdiff_t>(std::min(t.size(), kRateRows + 1)));
+  const double stated =
+      stated_unit(out.time_column, ti < table.units.size() ? table.units[ti] : std::string(),
+                  time_unit_s_given);
+  if (!head_clock(head, fs_hz, stated, out.time_column, ts, out.time_unit_s, t0, out.time_note,
+                  err)) {
     return false;
   }
   out.fs_hz = 1.0 / ts;
@@ -371,7 +561,7 @@ bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
   out.samples.reserve(v.size());
   for (std::size_t i = 0; i < v.size(); ++i) {
     std::uint64_t missing = 0;
-    if (!grid.place(t[i], i + 1, out.time_column, missing, err)) {
+    if (!grid.place((t[i] - t0) * out.time_unit_s, i + 1, out.time_column, missing, err)) {
       return false;
     }
     out.samples.insert(out.samples.end(), missing, std::nan(""));
@@ -382,28 +572,61 @@ bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
 }
 
 bool TextColumnStream::open(const std::string& path, const std::string& name, double fs_hz,
-                            std::string& err) {
-  return open(path, std::vector<std::string>{name}, fs_hz, err);
+                            std::string& err, double time_unit_s_given) {
+  return open(path, std::vector<std::string>{name}, fs_hz, err, time_unit_s_given);
 }
 
-void TextColumnStream::hold(std::vector<double>& to) const {
-  to.push_back(time_ < row_.size() ? row_[time_] : 0.0);
+double TextColumnStream::raw_time() {
+  if (time_ >= row_.size()) {
+    return 0.0;
+  }
+  if (!have_origin_) {
+    have_origin_ = true;
+    origin_exact_ = rows_.has_exact();
+    origin_i_ = rows_.exact();
+    origin_ = row_[time_];
+  }
+  // From the first row: exactly when both are integers (epoch nanoseconds), else in double.
+  return origin_exact_ && rows_.has_exact() ? static_cast<double>(rows_.exact() - origin_i_)
+                                            : row_[time_] - origin_;
+}
+
+void TextColumnStream::hold(std::vector<double>& to) {
+  to.push_back(raw_time());  // in the column's unit: the clock is known later
   for (const std::size_t c : cols_) {
     to.push_back(row_[c]);
   }
 }
 
 bool TextColumnStream::open(const std::string& path, const std::vector<std::string>& names_in,
-                            double fs_hz, std::string& err) {
+                            double fs_hz, std::string& err, double time_unit_s_given) {
   head_pos_ = 0;
   row_no_ = 0;
   pending_missing_ = 0;
   have_pending_ = false;
   time_name_.clear();
+  time_note_.clear();
+  unit_s_ = 1.0;
+  have_origin_ = false;
   cols_.clear();
   if (!rows_.open(path, err)) {
     return false;
   }
+  const std::vector<std::string>& names = rows_.names();
+  std::string column_err;
+  for (const auto& name : names_in) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) {
+      column_err = no_column(names, name);
+      break;
+    }
+    cols_.push_back(static_cast<std::size_t>(it - names.begin()));
+  }
+  time_ = time_column(names);
+  std::vector<std::size_t> read_cols = cols_;
+  read_cols.push_back(time_);
+  rows_.only(read_cols);  // the other columns (a frame name, covariances) are not parsed
+  rows_.exact_integers(time_);
   // A file without data rows is refused as such before its columns are looked at (as
   // read_text_table refuses it before text_channel).
   const bool first = rows_.next(row_, err);
@@ -413,14 +636,9 @@ bool TextColumnStream::open(const std::string& path, const std::vector<std::stri
   if (!first) {
     return false;
   }
-  const std::vector<std::string>& names = rows_.names();
-  for (const auto& name : names_in) {
-    const auto it = std::find(names.begin(), names.end(), name);
-    if (it == names.end()) {
-      err = no_column(names, name);
-      return false;
-    }
-    cols_.push_back(static_cast<std::size_t>(it - names.begin()));
+  if (!column_err.empty()) {
+    err = column_err;
+    return false;
   }
   if (cols_.empty()) {
     err = "no column asked for";
@@ -428,7 +646,6 @@ bool TextColumnStream::open(const std::string& path, const std::vector<std::stri
   }
   pending_values_.assign(cols_.size(), 0.0);
   values_.assign(cols_.size(), 0.0);
-  time_ = time_column(names);
   if (time_ == names.size() && !(fs_hz > 0.0)) {
     err = "no --fs and no time column (t, time or timestamp) to take the rate from";
     return false;
@@ -446,11 +663,13 @@ bool TextColumnStream::open(const std::string& path, const std::vector<std::stri
   double ts = fs_hz > 0.0 ? 1.0 / fs_hz : 0.0;
   if (time_ < names.size()) {
     time_name_ = names[time_];
-    std::vector<double> t(head_.size() / stride);
-    for (std::size_t i = 0; i < t.size(); ++i) {
-      t[i] = head_[i * stride];
+    std::vector<double> raw(head_.size() / stride);
+    for (std::size_t i = 0; i < raw.size(); ++i) {
+      raw[i] = head_[i * stride];
     }
-    if (!grid_period(t.data(), t.size(), fs_hz, time_name_, ts, err)) {
+    const double stated = stated_unit(time_name_, rows_.units()[time_], time_unit_s_given);
+    double t0 = 0.0;  // 0: raw_time() is already from the first row
+    if (!head_clock(raw, fs_hz, stated, time_name_, ts, unit_s_, t0, time_note_, err)) {
       return false;
     }
   }
@@ -464,7 +683,7 @@ bool TextColumnStream::next_row(double& t, bool& have, std::string& err) {
   const std::size_t k = cols_.size();
   if (head_pos_ < head_.size() / (k + 1)) {
     const double* r = head_.data() + head_pos_ * (k + 1);
-    t = r[0];
+    t = r[0] * unit_s_;
     std::copy(r + 1, r + 1 + k, values_.begin());
     have = true;
     if (++head_pos_ == head_.size() / (k + 1)) {
@@ -473,7 +692,7 @@ bool TextColumnStream::next_row(double& t, bool& have, std::string& err) {
     return true;
   }
   if (head_pos_ > 0 && head_.empty() && rows_.next(row_, err)) {
-    t = time_ < row_.size() ? row_[time_] : 0.0;
+    t = raw_time() * unit_s_;
     for (std::size_t c = 0; c < k; ++c) {
       values_[c] = row_[cols_[c]];
     }
@@ -527,7 +746,7 @@ bool text_channels(const std::vector<std::string>& names, const std::string& spe
     return false;
   }
   for (const auto& n : names) {
-    if (n != "t" && n != "time" && n != "timestamp") {
+    if (!is_time_name(n, nullptr)) {
       out.push_back(n);
     }
   }

@@ -1,7 +1,12 @@
 // Text input for imu-sim: CSV, TSV or whitespace-separated columns with a header row of names,
 // as loggers and spreadsheets write them. Lines starting with '#' are comments. An empty field
-// or nan/NaN is a missing sample. A column named t, time or timestamp (seconds) gives the rate
-// when none is given, and its irregularities become gaps: a step of k sample periods (k >= 1.5)
+// or nan/NaN is a missing sample. The header is the first row, or the last '#' line before the
+// data when that names every column (EuRoC's "#timestamp [ns],w_RS_S_x [rad s^-1],..."); a unit
+// in brackets after a blank is not part of the name. A time column (t, time, timestamp, %time,
+// or time/timestamp with a unit suffix: timestamp_us) gives the rate when none is given; its
+// unit is the one it states (suffix, bracket, --time-unit), else read from its steps (integer
+// times whose steps are under 1 Hz in seconds are ms, us or ns: the first giving 1 Hz or more),
+// and and its irregularities become gaps: a step of k sample periods (k >= 1.5)
 // inserts k - 1 missing samples, counted and reported. The work is bounded by the file: lines
 // of at most kMaxLineBytes, at most kMaxColumns columns, at most kGapAllowance + 4 per row
 // missing samples filled in from the time column. Host code.
@@ -19,6 +24,7 @@ namespace imu::cli {
 
 struct TextTable {
   std::vector<std::string> names;          ///< the header's column names
+  std::vector<std::string> units;          ///< the header's bracketed units ("" if none)
   std::vector<std::vector<double>> cols;   ///< one vector per column, NaN where missing
 };
 
@@ -26,6 +32,9 @@ struct TextTable {
 inline constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20U;
 /// Most columns in a header (a wider one is refused).
 inline constexpr std::size_t kMaxColumns = 4096;
+/// The slowest rate a time column's unit is read as from its steps (below it in seconds, the
+/// times are taken as ms, us or ns).
+inline constexpr double kMinDetectedRateHz = 1.0;
 /// Missing samples filled in from the time column's steps: at most this plus 4 per row read.
 inline constexpr std::uint64_t kGapAllowance = std::uint64_t{1} << 20U;
 
@@ -43,6 +52,15 @@ class TextRows {
   [[nodiscard]] bool open(const std::string& path, std::string& err,
                           std::uint64_t max_bytes = std::uint64_t{2} << 30U);
   [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
+  /// Each column's unit from its header ("w_RS_S_x [rad s^-1]": "rad s^-1"; "" if none).
+  [[nodiscard]] const std::vector<std::string>& units() const { return units_; }
+  /// Parse only these columns in next() (the others come back NaN, whatever they hold).
+  void only(const std::vector<std::size_t>& columns);
+  /// Also keep this column's exact value when it is an integer (has_exact(), exact()): epoch
+  /// nanoseconds have more digits than a double.
+  void exact_integers(std::size_t column) { exact_column_ = column; }
+  [[nodiscard]] bool has_exact() const { return has_exact_; }
+  [[nodiscard]] long long exact() const { return exact_; }
   /// The next data row as numbers (names().size() of them; NaN for an empty or nan field).
   /// False at the end (err empty) or on a bad row (err names the line: another number of fields
   /// than the header, a field that is not a number, a line longer than kMaxLineBytes).
@@ -55,8 +73,15 @@ class TextRows {
   std::ifstream in_;
   std::string line_;
   std::vector<std::string> names_;
+  std::vector<std::string> units_;
+  std::vector<bool> needed_;  // empty: every column
   std::uint64_t line_no_ = 0;
   char delim_ = ' ';
+  bool pending_ = false;  // line_ holds the first data row (the header was a comment line)
+  static constexpr std::size_t kNoColumn = ~std::size_t{0};
+  std::size_t exact_column_ = kNoColumn;
+  long long exact_ = 0;
+  bool has_exact_ = false;
 };
 
 /// Read the whole table (TextRows into one vector per column). The errors of TextRows, and no
@@ -64,8 +89,19 @@ class TextRows {
 [[nodiscard]] bool read_text_table(const std::string& path, TextTable& table, std::string& err,
                                    std::uint64_t max_bytes = std::uint64_t{2} << 30U);
 
-/// The time column of a table: the first named t, time or timestamp; names.size() if none.
+/// The time column of a table: the first whose name is_time_name; names.size() if none.
 [[nodiscard]] std::size_t time_column(const std::vector<std::string>& names);
+/// t, time, timestamp, %time (rostopic's), or t/time/timestamp with a unit suffix (_s, _ms,
+/// _us, _ns): then *unit_s is that unit in seconds, else 0.
+[[nodiscard]] bool is_time_name(const std::string& name, double* unit_s);
+/// Seconds per unit of a time unit's name (s, sec, ms, msec, us, usec, µs, ns, nsec); 0 if none.
+[[nodiscard]] double time_unit_s(const std::string& unit);
+/// The unit of raw times t[0..n): stated_s if > 0; else seconds unless every time is an integer,
+/// then the first of s, ms, us, ns in which the median step matches fs_hz within 2 % (a rate
+/// given) or is a rate of kMinDetectedRateHz or more. detected: a unit other than seconds was
+/// read from the steps.
+void time_scale(const double* t, std::size_t n, double fs_hz, double stated_s, double& unit_s,
+                bool& detected);
 
 /// Rows whose time steps decide the rate when no --fs is given: the median step of the time
 /// column over its first kRateRows + 1 rows (every command, whole or streamed).
@@ -108,14 +144,17 @@ struct TextChannel {
   double fs_hz = 0.0;           ///< given, or 1 / median step of the time column
   std::uint64_t time_gap_samples = 0;  ///< samples inserted for steps of the time column
   std::string time_column;             ///< the time column used ("" if none)
+  double time_unit_s = 1.0;            ///< its unit in seconds
+  std::string time_note;               ///< how the unit was found, when read from the steps
 };
 
 /// Column `name` of the table on a regular grid. fs_hz > 0: that rate (the time column, if
 /// any, still places the samples); else the time column's median step (kRateRows). Refused:
 /// unknown name (the names are listed), no rate and no time column, a time column TimeGrid
 /// refuses, an fs_hz more than 2 % from the time column's median step.
+/// time_unit_s > 0: the time column's unit (--time-unit), else the one it states or its steps'.
 [[nodiscard]] bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
-                                TextChannel& out, std::string& err);
+                                TextChannel& out, std::string& err, double time_unit_s = 0.0);
 
 /// Columns of a text file on the same grid as text_channel gives, read row by row: memory
 /// independent of the number of rows (the first kRateRows rows are held while the rate is
@@ -125,9 +164,9 @@ struct TextChannel {
 class TextColumnStream {
  public:
   [[nodiscard]] bool open(const std::string& path, const std::string& name, double fs_hz,
-                          std::string& err);
+                          std::string& err, double time_unit_s = 0.0);
   [[nodiscard]] bool open(const std::string& path, const std::vector<std::string>& names,
-                          double fs_hz, std::string& err);
+                          double fs_hz, std::string& err, double time_unit_s = 0.0);
   /// Up to n samples into out (n x columns() values): got samples, 0 at the end. False on a
   /// bad row (err).
   [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err);
@@ -136,10 +175,13 @@ class TextColumnStream {
   /// Samples inserted for time steps so far (all of them once read() gave 0).
   [[nodiscard]] std::uint64_t time_gap_samples() const { return grid_.gap_samples(); }
   [[nodiscard]] const std::string& time_name() const { return time_name_; }
+  /// How the time column's unit was found, when it was read from the steps ("" otherwise).
+  [[nodiscard]] const std::string& time_note() const { return time_note_; }
 
  private:
   bool next_row(double& t, bool& have, std::string& err);
-  void hold(std::vector<double>& to) const;  // t, then the columns' values of row_
+  void hold(std::vector<double>& to);  // t (raw_time()), then the columns' values of row_
+  double raw_time();  // row_'s time from the first row's, in the column's unit
   TextRows rows_;
   std::vector<double> row_;
   std::vector<double> head_;  // (t, values...) of the rows read for the rate
@@ -147,6 +189,12 @@ class TextColumnStream {
   std::vector<std::size_t> cols_;
   std::size_t time_ = 0;
   std::string time_name_;
+  std::string time_note_;
+  double unit_s_ = 1.0;  // the time column's unit in seconds
+  bool have_origin_ = false;  // the first row's time (times are taken from it):
+  bool origin_exact_ = false;  //   as an integer (origin_i_) or a double (origin_)
+  long long origin_i_ = 0;
+  double origin_ = 0.0;
   double fs_hz_ = 0.0;
   TimeGrid grid_{1.0};
   std::uint64_t row_no_ = 0;
@@ -157,7 +205,7 @@ class TextColumnStream {
 };
 
 /// --channel SPEC on a text table (imu/cli/args.hpp expand_channels): `all` is the IMU channels
-/// it holds, else every column but a time column (t, time, timestamp); or a comma list.
+/// it holds, else every column but a time column (is_time_name); or a comma list.
 [[nodiscard]] bool text_channels(const std::vector<std::string>& names, const std::string& spec,
                                  std::vector<std::string>& out, std::string& err);
 
