@@ -185,6 +185,18 @@ ModelParams with_sines(ModelParams p, const ModelParams& from) {
   return p;
 }
 
+// What a fit's status means, for a note.
+const char* fit_status_text(FitStatus s) {
+  switch (s) {
+    case FitStatus::kOk: return "ok";
+    case FitStatus::kBadOptions: return "no usable range or term";
+    case FitStatus::kTooFewPoints: return "fewer usable ADEV points than parameters";
+    case FitStatus::kTooManyPoints: return "more ADEV points than the fit holds";
+    case FitStatus::kSingular: return "singular normal equations";
+  }
+  return "unknown";
+}
+
 // tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max).
 // shape: the oscillation's f0 and beta when terms hold kFitOscillation.
 FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
@@ -1806,7 +1818,14 @@ class Analysis {
     outlier = gap.empty() ? std::vector<std::uint8_t>(y.size(), 0) : gap;
     bool outliers_replaced = false;
     {
-      const double scale = robust_scale(fb.nu);
+      // On a coarse lattice most innovations are a fraction of a step and the robust scale
+      // sees only them: a sample one step away would be an "outlier". The rounding's own
+      // variance (q^2 / 12, Sheppard) is part of every innovation's; the innovations are
+      // normalised by the filter's, at least the white noise's N^2 / Ts.
+      const double mad_scale = robust_scale(fb.nu);
+      const double white_var = out.model_before.n * out.model_before.n / ts;
+      const double rounding = white_var > 0.0 ? lsb * lsb / 12.0 / white_var : 0.0;
+      const double scale = std::sqrt(mad_scale * mad_scale + rounding);
       const double thr = two_sided_normal_threshold(o.alpha / n_d);
       OutlierGate gate;
       std::vector<double> times;
@@ -2042,8 +2061,18 @@ class Analysis {
     const std::uint32_t base_terms = kFitWhite | kFitGm1;
     const FitResult base0 = fit_terms(clean.by_alpha[2], base_terms, ts, tau_max, tb_max);
     if (base0.status != FitStatus::kOk) {
-      error = "analyze: the white + GM fit over [Ts, T/10] failed";
-      return false;
+      // Finite data always gets a report: the first-order model fitted before stands, unsearched.
+      out.notes.push_back("the white + GM fit over [Ts, T/10] failed (" +
+                          std::string(fit_status_text(base0.status)) +
+                          "): the model after is the model before, no term searched");
+      terms = base_terms;
+      cur_p = out.model_before;
+      eval = in_range(points_for_model(clean, cur_p), tau_max);
+      fit_set = clean;
+      fit_pts = eval;
+      cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
+      y_fit = y;
+      return true;
     }
     eval = in_range(points_for_model(clean, base0.params), tau_max);
     fit_set = clean;
