@@ -55,7 +55,8 @@ TEST(SimAdis, RunAtMaxRateOverLoopback) {
   EXPECT_NE(line.find("acc_z"), std::string::npos) << line;
 
   const double t1 = now_s();
-  r = simtest::run({"adev", mat, "--channel", "acc_z", "--json", dir.file("adev.json")});
+  r = simtest::run({"adev", mat, "--channel", "acc_z", "--estimator", "online", "--json",
+                    dir.file("adev.json")});
   std::printf("imu-sim adev on adis16405_imu1 acc_z: %.2f s\n", now_s() - t1);
   ASSERT_EQ(r.status, 0) << r.err;
   const auto a = simtest::json_adev(simtest::read_text(dir.file("adev.json")));

@@ -270,9 +270,26 @@ std::string to_text(const Report& r) {
   model_line("model before (white + GM over [Ts, 100 s])", r.model_before);
   error_line("error before", r.error_before);
   if (r.effects.empty()) {
-    s << (r.model_after.n_gm > r.model_before.n_gm
-              ? "effects: none of the named effects (a second GM term was needed, see notes)\n"
-              : "effects: none (the first-order model explains the data within the intervals)\n");
+    // The terms the model after holds beyond white noise and one GM, each said: the effect list
+    // never reads as if the model after were the first-order one when it is not.
+    const ModelParams& m = r.model_after;
+    std::string held;
+    const auto hold = [&held](bool in, const char* name) {
+      if (in) {
+        held += (held.empty() ? "" : ", ") + std::string(name);
+      }
+    };
+    hold(m.n_gm > 1, "a second GM term");
+    hold(m.q > 0.0, "quantization");
+    hold(m.k > 0.0, "rate random walk");
+    hold(std::fabs(m.r) > 0.0, "ramp");
+    hold(std::fabs(m.sin_a) + std::fabs(m.sin2_a) > 0.0, "sinusoid");
+    hold(m.bi > 0.0, "bias instability");
+    hold(m.osc_sigma > 0.0, "narrowband oscillation");
+    s << (held.empty()
+              ? "effects: none (white noise and one GM term; the model after is that model "
+                "refitted over [Ts, T/10])\n"
+              : "effects: none named; the model after also holds " + held + " (see notes)\n");
   }
   for (const auto& e : r.effects) {
     s << effect_text(e) << "\n";
