@@ -775,11 +775,8 @@ int cli_main(int argc, char** argv) {
     return fail(err, kExitUsage);
   }
   double time_unit_s = 0.0;
-  if (a.has("--time-unit")) {
-    time_unit_s = imu::cli::time_unit_s(a.get("--time-unit"));
-    if (!(time_unit_s > 0.0)) {
-      return fail("--time-unit " + a.get("--time-unit") + ": s, ms, us or ns", kExitUsage);
-    }
+  if (!imu::cli::time_unit_option(a, time_unit_s, err)) {
+    return fail(err, kExitUsage);
   }
   if (a.positional().empty() || !a.has("--channel")) {
     return fail("FILE and --channel NAME are required (imu-sim analyze --help)", kExitUsage);

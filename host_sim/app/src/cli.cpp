@@ -304,20 +304,6 @@ struct AdevOptions {
   double time_unit_s = 0.0;  // --time-unit; 0: the time column's own
 };
 
-// --time-unit s|ms|us|ns: seconds per unit of a text file's time column (0 if not given).
-bool parse_time_unit(const Args& a, double& unit_s, std::string& err) {
-  unit_s = 0.0;
-  if (!a.has("--time-unit")) {
-    return true;
-  }
-  unit_s = imu::cli::time_unit_s(a.get("--time-unit"));
-  if (!(unit_s > 0.0)) {
-    err = "--time-unit " + a.get("--time-unit") + ": s, ms, us or ns";
-    return false;
-  }
-  return true;
-}
-
 bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
   o.estimator = a.get("--estimator", "full");
   o.full = o.estimator == "full";
@@ -343,7 +329,7 @@ bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
   o.spec = a.get("--channel", "acc_z");
   return (!a.has("--lsb") || a.number("--lsb", 0.0, 1e-12, 1e6, o.lsb, err)) &&
          (!a.has("--fs") || a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, o.fs, err)) &&
-         parse_time_unit(a, o.time_unit_s, err);
+         imu::cli::time_unit_option(a, o.time_unit_s, err);
 }
 
 // One channel's ADEV: what it was read as, its rows, the time each step took, or its error.

@@ -111,6 +111,19 @@ bool names_row(const std::vector<std::string>& fields) {
 
 }  // namespace
 
+bool time_unit_option(const Args& a, double& unit_s, std::string& err) {
+  unit_s = 0.0;
+  if (!a.has("--time-unit")) {
+    return true;
+  }
+  unit_s = time_unit_s(a.get("--time-unit"));
+  if (!(unit_s > 0.0)) {
+    err = "--time-unit " + a.get("--time-unit") + ": s, ms, us or ns";
+    return false;
+  }
+  return true;
+}
+
 double time_unit_s(const std::string& unit) {
   static const std::pair<const char*, double> kUnits[] = {
       {"s", 1.0},     {"sec", 1.0},    {"seconds", 1.0}, {"ms", 1e-3},   {"msec", 1e-3},
@@ -342,6 +355,27 @@ std::size_t time_column(const std::vector<std::string>& names) {
   return names.size();
 }
 
+namespace {
+
+// The median of the steps t[i] - t[i-1] > 0 over t[0..n); 0 if there is none.
+double median_step(const double* t, std::size_t n) {
+  std::vector<double> steps;
+  steps.reserve(n);
+  for (std::size_t i = 1; i < n; ++i) {
+    if (t[i] > t[i - 1]) {
+      steps.push_back(t[i] - t[i - 1]);
+    }
+  }
+  if (steps.empty()) {
+    return 0.0;
+  }
+  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
+                   steps.end());
+  return steps[steps.size() / 2];
+}
+
+}  // namespace
+
 void time_scale(const double* t, std::size_t n, double fs_hz, double stated_s, double& unit_s,
                 bool& detected) {
   detected = false;
@@ -349,22 +383,15 @@ void time_scale(const double* t, std::size_t n, double fs_hz, double stated_s, d
   if (stated_s > 0.0) {
     return;
   }
-  std::vector<double> steps;
-  steps.reserve(n);
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(t[i]) || std::fabs(t[i] - std::floor(t[i])) > 0.0) {
       return;  // times that are not all integers are seconds
     }
-    if (i > 0 && t[i] > t[i - 1]) {
-      steps.push_back(t[i] - t[i - 1]);
-    }
   }
-  if (steps.empty()) {
+  const double median = median_step(t, n);
+  if (!(median > 0.0)) {
     return;
   }
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
-                   steps.end());
-  const double median = steps[steps.size() / 2];
   static constexpr double kUnits[] = {1.0, 1e-3, 1e-6, 1e-9};
   for (const double u : kUnits) {
     // A given rate picks the unit it agrees with; else the first unit in which the steps are an
@@ -384,17 +411,14 @@ namespace {
 // step. False with err: one row, or a time that does not increase (as TimeGrid says it).
 bool grid_period(const double* t, std::size_t n, double fs_hz, const std::string& column,
                  double& ts_s, std::string& err) {
-  std::vector<double> steps;
-  steps.reserve(n);
   for (std::size_t i = 1; i < n; ++i) {
     if (!(t[i] > t[i - 1])) {
       err = "the time column '" + column + "' does not increase at row " + std::to_string(i + 1) +
             " (" + num_text(t[i - 1]) + " then " + num_text(t[i]) + ")";
       return false;
     }
-    steps.push_back(t[i] - t[i - 1]);
   }
-  if (steps.empty()) {
+  if (n < 2) {
     if (fs_hz > 0.0) {
       ts_s = 1.0 / fs_hz;
       return true;
@@ -402,9 +426,7 @@ bool grid_period(const double* t, std::size_t n, double fs_hz, const std::string
     err = "one row: no rate from the time column";
     return false;
   }
-  std::nth_element(steps.begin(), steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2),
-                   steps.end());
-  const double median_s = steps[steps.size() / 2];
+  const double median_s = median_step(t, n);
   if (fs_hz > 0.0) {
     // A given rate must agree with the time column it places the samples by.
     if (!(std::fabs(median_s * fs_hz - 1.0) <= 0.02)) {

@@ -94,6 +94,10 @@ class TextRows {
 /// t, time, timestamp, %time (rostopic's), or t/time/timestamp with a unit suffix (_s, _ms,
 /// _us, _ns): then *unit_s is that unit in seconds, else 0.
 [[nodiscard]] bool is_time_name(const std::string& name, double* unit_s);
+class Args;
+/// --time-unit s|ms|us|ns: unit_s its seconds per unit (0 when the option is absent). False
+/// with err on another value.
+[[nodiscard]] bool time_unit_option(const Args& a, double& unit_s, std::string& err);
 /// Seconds per unit of a time unit's name (s, sec, ms, msec, us, usec, µs, ns, nsec); 0 if none.
 [[nodiscard]] double time_unit_s(const std::string& unit);
 /// The unit of raw times t[0..n): stated_s if > 0; else seconds unless every time is an integer,
