@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -190,6 +191,87 @@ TEST(AnalyzeInputs, LsbToleratesFloatingPointResidueAndNeverOverflows) {
   }
   EXPECT_LT((hi - lo) / lsb2, 2147483647.0) << note;
   EXPECT_GT(lsb2, 0.0);
+}
+
+// A delta-velocity record on a lattice of step q offset by gravity, its values printed to six
+// significant digits (as a text log holds them): each value is then off the exact lattice by up
+// to 5e-6, a few 1e-3 of the coarsest step. The step is still found (before: the smallest
+// difference, off by twice that residue, was taken for the step, the check of every value
+// against it within 1e-3 of a step failed, and the LSB fell back to robust std / 4096).
+TEST(AnalyzeInputs, LatticeWithAnOffsetAndPrintResidueGivesTheStep) {
+  for (const double q : {0.0024525, 1e-3, 3.3e-4}) {
+    for (const double offset : {9.80665, -9.81}) {
+      std::vector<double> v(20000);
+      for (std::size_t i = 0; i < v.size(); ++i) {
+        const double k = static_cast<double>(static_cast<int>(i * 7919 % 41) - 20);
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.6g", k * q + offset);
+        v[i] = std::strtod(buf, nullptr);
+      }
+      std::string note;
+      const double lsb = imu::analyze::derive_lsb(v, note);
+      EXPECT_NEAR(lsb, q, 0.01 * q) << "offset " << offset << ": " << note;
+      EXPECT_NE(note.find("lattice"), std::string::npos) << note;
+    }
+  }
+}
+
+// White noise + a GM (Tb 10 s), quantised to q and offset by gravity in floating point (the
+// residue of k q + offset): a report, the step as the LSB, and no effect the record does not hold.
+TEST(AnalyzeInputs, QuantisedRecordWithAnOffsetGetsAReportAndItsStep) {
+  for (const double q : {0.0024525, 1e-3, 3.3e-4}) {
+    constexpr double kFs = 100.0;
+    std::mt19937_64 rng(8801);
+    std::normal_distribution<double> g(0.0, 1.0);
+    const double a = std::exp(-1.0 / (kFs * 10.0));
+    const double gm_sd = q * std::sqrt(1.0 - a * a);
+    double b = 0.0;
+    std::vector<double> y(360000);  // 1 h
+    for (double& v : y) {
+      b = a * b + gm_sd * g(rng);
+      v = std::round((b + 2.0 * q * g(rng)) / q) * q + 9.80665;
+    }
+    imu::analyze::Report r;
+    std::string err;
+    ASSERT_TRUE(imu::analyze::analyze(y, "acc_z", imu::analyze::Options{}, r, err))
+        << "q " << q << ": " << err;
+    EXPECT_NEAR(r.lsb, q, 0.01 * q) << r.lsb_note;
+    EXPECT_TRUE(r.effects.empty()) << "q " << q << "\n" << imu::analyze::to_text(r);
+  }
+}
+
+// A record whose noise never reaches half a step: every value the same level. No ADEV point
+// is nonzero, so the white + GM fit and the white-only fit fail; the analysis still reports
+// (before: "the first-order fit over [Ts, 100 s] failed", no report, exit 1), with the model's
+// fallback said in a note and nothing named.
+TEST(AnalyzeInputs, FailedFitsFallBackToASimplerModelWithANote) {
+  std::vector<double> y(360000, 3.0 * 0.0024525 + -9.81);
+  const std::string csv = tmp_path("one_level.csv");
+  {
+    std::ofstream f(csv);
+    f << "t,acc_z\n";
+    char buf[64];
+    for (std::size_t i = 0; i < y.size(); ++i) {
+      std::snprintf(buf, sizeof buf, "%.2f,%.17g\n", static_cast<double>(i) / 100.0, y[i]);
+      f << buf;
+    }
+  }
+  imu::analyze::Report r;
+  std::string err;
+  ASSERT_TRUE(imu::analyze::analyze(y, "acc_z", imu::analyze::Options{}, r, err)) << err;
+  EXPECT_TRUE(r.effects.empty()) << imu::analyze::to_text(r);
+  EXPECT_GT(r.model_before.n, 0.0);
+  EXPECT_EQ(r.model_before.n_gm, 0U);
+  bool noted = false;
+  for (const std::string& n : r.notes) {
+    noted = noted || n.find("white-only fits over [Ts, 100 s] failed") != std::string::npos;
+  }
+  EXPECT_TRUE(noted) << imu::analyze::to_text(r);
+  EXPECT_NE(imu::analyze::to_text(r).find("white noise only"), std::string::npos);
+  // Through the command line: exit 0 and a report.
+  const std::string json = tmp_path("one_level.json");
+  EXPECT_EQ(call({"analyze", csv, "--channel", "acc_z", "--json", json}), 0);
+  EXPECT_NE(slurp(json).find("\"channel\": \"acc_z\""), std::string::npos);
 }
 
 }  // namespace

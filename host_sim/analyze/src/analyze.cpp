@@ -1647,22 +1647,57 @@ double derive_lsb(const std::vector<double>& y, std::string& note) {
     }
   }
   const double spread = s.empty() ? 0.0 : s.back() - s.front();
-  if (dmin > 0.0) {
-    // Every value on the lattice y0 + k dmin within 1e-3 of a step (a sparse check suffices),
-    // and the lattice's span inside int32 counts.
+  if (dmin > 0.0 && spread / dmin < 2e9) {
+    // The step from the levels, not from one difference: every distinct level L is y0 + k dmin
+    // for an integer k, and the step is the least-squares slope of L - y0 on k. The smallest
+    // difference carries the residue of two values (after an offset such as gravity, or a
+    // print to a few digits, that can be a few 1e-3 of a step); the slope over the whole span
+    // carries it divided by the span's count of steps. Two passes: the first's k are exact
+    // for any span the smallest difference resolves, the second's for any span at all.
     const double y0 = s.front();
-    bool multiples = spread / dmin < 2e9;
-    for (std::size_t i = 0; i < y.size() && multiples; i += 97) {
+    double step = dmin;
+    for (int pass = 0; pass < 2; ++pass) {
+      double skk = 0.0;
+      double skl = 0.0;
+      double last = y0;
+      for (std::size_t i = 1; i < s.size(); ++i) {
+        if (s[i] - last <= resid) {
+          continue;  // the same level
+        }
+        last = s[i];
+        const double k = std::round((s[i] - y0) / step);
+        skk += k * k;
+        skl += k * (s[i] - y0);
+      }
+      if (skk > 0.0 && skl > 0.0) {
+        step = skl / skk;
+      }
+    }
+    // Every value on the lattice y0 + k step within 2 % of a step (the residue of an offset
+    // added in floating point, or of a print to six digits, is well inside it; values off a
+    // lattice, e.g. noise never quantised, are not), and the span inside int32 counts. Every
+    // value is checked: one off the lattice is enough to refuse it.
+    constexpr double kLatticeTol = 0.02;
+    bool multiples = spread / step < 2e9;
+    for (std::size_t i = 0; i < y.size() && multiples; ++i) {
       if (std::isfinite(y[i])) {
-        const double c = (y[i] - y0) / dmin;
-        multiples = std::fabs(c - std::round(c)) < 1e-3;
+        const double c = (y[i] - y0) / step;
+        multiples = std::fabs(c - std::round(c)) < kLatticeTol;
       }
     }
     if (multiples) {
-      note = "LSB derived: the values lie on a lattice of step " + fmt("%.6g", dmin) +
-             " (every checked value a multiple of it from the smallest, within 1e-3 step)";
-      return dmin;
+      note = "LSB derived: the values lie on a lattice of step " + fmt("%.6g", step) +
+             " (every value a multiple of it from the smallest, within 2 % of a step)";
+      return step;
     }
+  }
+  if (!s.empty() && !(dmin > 0.0)) {
+    // One level only: no step to derive and no noise to scale. The counts are then all 0 at
+    // any LSB; 1e-9 of |y| keeps a later value of another record's size inside int32 counts.
+    const double lsb = amax > 0.0 ? amax * 1e-9 : 1e-9;
+    note = "LSB chosen: every value is " + fmt("%.9g", s.front()) +
+           " (no step to derive); 1e-9 of |y| = " + fmt("%.6g", lsb);
+    return lsb;
   }
   const double sd = robust_scale(s);
   // Fine against the noise, yet the record's whole span inside int32 counts (2^30 of margin).
@@ -1781,18 +1816,45 @@ class Analysis {
     return true;
   }
 
+  // The first-order model over [Ts, tau_hi]: white + GM; if that fit fails, white noise alone;
+  // if that fails too (a record on one level, or too few nonzero ADEV points), white noise at
+  // the quantization's level, q / sqrt(12) per sample: all the record can say is that its noise
+  // is not above it. The status is kOk only for the white + GM fit.
+  FitResult fit_before_model(double tau_hi) {
+    FitResult r = fit_terms(raw.by_alpha[2], kFitWhite | kFitGm1, ts, tau_hi);
+    if (r.status == FitStatus::kOk) {
+      return r;
+    }
+    const FitStatus gm_status = r.status;
+    r.tb_at_bound = false;
+    const FitResult w = fit_terms(raw.by_alpha[2], kFitWhite, ts, tau_hi);
+    if (w.status == FitStatus::kOk && w.params.n > 0.0) {
+      r.params = w.params;
+      out.notes.push_back("the white + GM fit over [Ts, " + fmt("%g", tau_hi) + " s] failed (" +
+                          fit_status_text(gm_status) + "): the model before is white noise alone");
+      return r;
+    }
+    r.params = ModelParams{};
+    r.params.n = lsb / std::sqrt(12.0) * std::sqrt(ts);
+    out.notes.push_back("the white + GM and the white-only fits over [Ts, " + fmt("%g", tau_hi) +
+                        " s] failed (" + fit_status_text(gm_status) +
+                        "): the model before is white noise at the quantization's level, "
+                        "N = LSB / sqrt(12) * sqrt(Ts) = " + fmt("%.4g", r.params.n) +
+                        " (the record does not resolve its noise at this LSB)");
+    return r;
+  }
+
   // The first-order model, its filter and its errors (the "before").
   bool fit_before() {
     // ---- before: the first-order model over [Ts, 100 s]
     const double example_max = std::min(o.example_tau_max_s, tau_max);
-    const FitResult before0 = fit_terms(raw.by_alpha[2], kFitWhite | kFitGm1, ts, example_max);
-    if (before0.status != FitStatus::kOk) {
-      error = "analyze: the first-order fit over [Ts, 100 s] failed (status " +
-              std::to_string(static_cast<int>(before0.status)) + ")";
-      return false;
-    }
+    // Finite data always gets a report: a fit that fails falls back to a simpler model, and
+    // the note says which and why.
+    const FitResult before0 = fit_before_model(example_max);
     const Points raw_pts_b = points_for_model(raw, before0.params);
-    const FitResult before = fit_terms(raw_pts_b, kFitWhite | kFitGm1, ts, example_max);
+    const FitResult before = before0.status == FitStatus::kOk
+                                 ? fit_terms(raw_pts_b, kFitWhite | kFitGm1, ts, example_max)
+                                 : before0;
     out.model_before = before.status == FitStatus::kOk ? before.params : before0.params;
     if (before0.tb_at_bound || before.tb_at_bound) {
       out.notes.emplace_back("before: the GM correlation time is at its search bound (the range "

@@ -257,6 +257,15 @@ std::string to_text(const Report& r) {
     s << "\n";
   };
   const auto error_line = [&](const char* name, const ErrorStats& e) {
+    if (e.filter_states == 0) {
+      // White noise alone (a failed fit's fallback): no bias state, so no filter to check.
+      std::snprintf(buf, sizeof buf,
+                    "%s: |ADEV_model/ADEV_data - 1| RMS %.3f max %.3f over %zu taus [%.3g, %.4g] s;"
+                    " no bias filter (the model has no state)\n",
+                    name, e.adev_rms_rel, e.adev_max_rel, e.n_taus, e.tau_min_s, e.tau_max_s);
+      s << buf;
+      return;
+    }
     std::snprintf(buf, sizeof buf,
                   "%s: |ADEV_model/ADEV_data - 1| RMS %.3f max %.3f over %zu taus [%.3g, %.4g] s;"
                   " RMS %.3f max %.3f over [%.3g, %.4g] s; covariance ratio %.3f; NIS mean %.3f "
@@ -267,7 +276,10 @@ std::string to_text(const Report& r) {
                   100.0 * e.whiteness_flagged_fraction);
     s << buf;
   };
-  model_line("model before (white + GM over [Ts, 100 s])", r.model_before);
+  model_line(r.model_before.n_gm > 0 ? "model before (white + GM over [Ts, 100 s])"
+                                      : "model before (white noise only: the white + GM fit "
+                                        "failed, see notes)",
+             r.model_before);
   error_line("error before", r.error_before);
   if (r.effects.empty()) {
     // The terms the model after holds beyond white noise and one GM, each said: the effect list
@@ -287,8 +299,9 @@ std::string to_text(const Report& r) {
     hold(m.bi > 0.0, "bias instability");
     hold(m.osc_sigma > 0.0, "narrowband oscillation");
     s << (held.empty()
-              ? "effects: none (white noise and one GM term; the model after is that model "
-                "refitted over [Ts, T/10])\n"
+              ? (m.n_gm == 0 ? "effects: none (white noise only; see notes)\n"
+                             : "effects: none (white noise and one GM term; the model after is "
+                               "that model refitted over [Ts, T/10])\n")
               : "effects: none named; the model after also holds " + held + " (see notes)\n");
   }
   for (const auto& e : r.effects) {

@@ -164,11 +164,13 @@ struct Report {
 [[nodiscard]] bool analyze(std::vector<double>&& y, const std::string& channel,
                            const Options& options, Report& out, std::string& error);
 
-/// LSB for data without one (non-finite values ignored): the smallest difference between
-/// distinct values (values within 1e-9 of max |y| are one value: floating-point residue of
-/// scaling or differencing) when every value lies on that lattice from the smallest (within
-/// 1e-3 step) and the span fits int32 counts; else max(robust std / 4096, span / 2^30), and the
-/// note says why.
+/// LSB for data without one (non-finite values ignored): the step of the lattice the values lie
+/// on from the smallest (values within 1e-9 of max |y| are one value: floating-point residue of
+/// scaling or differencing), taken as the least-squares slope of the distinct levels on their
+/// step counts from the smallest difference, when every value lies on it within 2 % of a step
+/// (the residue of an offset added in floating point or of a six-digit print) and the span fits
+/// int32 counts; one level only: 1e-9 of max |y|; else max(robust std / 4096, span / 2^30),
+/// and the note says why.
 [[nodiscard]] double derive_lsb(const std::vector<double>& y, std::string& note);
 
 /// Non-finite samples of y are gaps: marked in gap (1), each run filled by the straight line
