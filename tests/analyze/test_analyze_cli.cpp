@@ -407,3 +407,161 @@ TEST(AnalyzeLongRecord, FastSinusoidIsFoundAtFullRateNotAtItsAlias) {
   std::printf("head: first-order model RMS %.4f, record's model RMS %.4f\n", before_rms, record_rms);
   EXPECT_LT(record_rms, before_rms);
 }
+
+namespace {
+
+// One axis of a static IMU in its own unit: white noise n (unit/sqrt(Hz)) plus a small GM and
+// a constant reading (gravity on z), 100 Hz.
+std::vector<double> static_axis(std::uint64_t seed, double n, double offset, std::size_t samples) {
+  imu::analyze::SynthSpec s;
+  s.samples = samples;
+  s.seed = seed;
+  s.n = n;
+  s.b = 0.2 * n;
+  s.tp_s = 20.0;
+  s.offset = offset;
+  return imu::analyze::synthesize(s);
+}
+
+std::size_t count_of(const std::string& text, const std::string& what) {
+  std::size_t c = 0;
+  for (std::size_t p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) {
+    ++c;
+  }
+  return c;
+}
+
+}  // namespace
+
+// A logger's N x 6 matrix in g and deg/s with no sensor names: --acc/--gyro declare the columns,
+// the accelerometer's unit is read from its triad's mean norm (about 1: g) and said, the
+// gyroscope's is declared; the imu.yaml is in SI: N x 9.80665 and N x pi/180. Before, such a
+// file got "--yaml needs at least one acc* and one gyro* channel" after the whole analysis, and
+// a g/deg-s file got an imu.yaml labelled m/s^2 and rad/s, 9.8x and 57x off.
+TEST(AnalyzeSensors, MatrixInGAndDegPerSecondGivesAnSiImuYamlWithItsUnitsSaid) {
+  constexpr std::size_t kSamples = 60000;
+  const double n_g = 1.5e-3;     // g/sqrt(Hz)
+  const double n_dps = 0.02;     // deg/s/sqrt(Hz)
+  const double gravity_g[3] = {0.03, -0.05, 0.998};
+  std::vector<double> data;  // column-major N x 6
+  for (std::size_t c = 0; c < 6; ++c) {
+    const bool acc = c < 3;
+    const std::vector<double> y = static_axis(8101 + c, acc ? n_g : n_dps,
+                                              acc ? gravity_g[c] : 0.2 * static_cast<double>(c),
+                                              kSamples);
+    data.insert(data.end(), y.begin(), y.end());
+  }
+  imu::mat::MatWriter w;
+  ASSERT_TRUE(w.add_matrix("data", kSamples, 6, data).ok());
+  ASSERT_TRUE(w.add_scalar("fs", 100.0).ok());
+  const std::string mat = tmp_path("g_dps.mat");
+  {
+    std::ofstream f(mat, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(w.bytes().data()),
+            static_cast<std::streamsize>(w.bytes().size()));
+  }
+  const std::string json = tmp_path("g_dps.json");
+  const std::string yaml = tmp_path("g_dps.yaml");
+  ASSERT_EQ(call({"analyze", mat, "--acc", "data:1,data:2,data:3", "--gyro",
+                  "data:4,data:5,data:6", "--gyro-unit", "deg/s", "--json", json, "--yaml", yaml}),
+            0);
+  const std::string y = slurp(yaml);
+  constexpr double kPi = 3.14159265358979323846;
+  EXPECT_NEAR(yaml_number(y, "accelerometer_noise_density"), n_g * 9.80665, 0.1 * n_g * 9.80665)
+      << y;
+  EXPECT_NEAR(yaml_number(y, "gyroscope_noise_density"), n_dps * kPi / 180.0,
+              0.1 * n_dps * kPi / 180.0)
+      << y;
+  const std::string j = slurp(json);
+  EXPECT_EQ(count_of(j, "\"sensor\": \"accelerometer\""), 3U) << j;
+  EXPECT_EQ(count_of(j, "\"sensor\": \"gyroscope\""), 3U);
+  EXPECT_EQ(count_of(j, "accelerometer (--acc/--gyro), in g: the mean norm of its three axes is "
+                        "0.99"), 3U);
+  EXPECT_EQ(count_of(j, "gyroscope (--acc/--gyro), in deg/s (--gyro-unit); analysed in rad/s"),
+            3U);
+  // The GM drive's PSD is in unit^2/s, not unit.
+  EXPECT_NE(j.find("\"sb\": \"(m/s^2)^2/s\""), std::string::npos);
+  EXPECT_NE(j.find("\"sb\": \"(rad/s)^2/s\""), std::string::npos);
+  // The same columns in m/s^2 (scaled by the test): the norm says m/s^2, nothing is scaled.
+  for (std::size_t i = 0; i < 3 * kSamples; ++i) {
+    data[i] *= 9.80665;
+  }
+  imu::mat::MatWriter w2;
+  ASSERT_TRUE(w2.add_matrix("data", kSamples, 6, data).ok());
+  ASSERT_TRUE(w2.add_scalar("fs", 100.0).ok());
+  {
+    std::ofstream f(mat, std::ios::binary);
+    f.write(reinterpret_cast<const char*>(w2.bytes().data()),
+            static_cast<std::streamsize>(w2.bytes().size()));
+  }
+  ASSERT_EQ(call({"analyze", mat, "--acc", "data:1,data:2,data:3", "--gyro",
+                  "data:4,data:5,data:6", "--json", json, "--yaml", yaml}),
+            0);
+  const std::string y2 = slurp(yaml);
+  EXPECT_NEAR(yaml_number(y2, "accelerometer_noise_density"), n_g * 9.80665,
+              0.1 * n_g * 9.80665);
+  // Undeclared gyroscope: taken as rad/s, and said.
+  EXPECT_NEAR(yaml_number(y2, "gyroscope_noise_density"), n_dps, 0.1 * n_dps);
+  const std::string j2 = slurp(json);
+  EXPECT_EQ(count_of(j2, "in m/s^2: the mean norm of its three axes is 9.80"), 3U) << j2;
+  EXPECT_EQ(count_of(j2, "taken as rad/s (--gyro-unit rad/s|deg/s|deg/h declares it)"), 3U);
+  // Declared against the norm: kept, with a warning.
+  ASSERT_EQ(call({"analyze", mat, "--acc", "data:1,data:2,data:3", "--acc-unit", "g", "--json",
+                  json}),
+            0);
+  EXPECT_EQ(count_of(slurp(json), "gravity in m/s^2: check --acc-unit"), 3U);
+  // Mistakes on the command line are usage errors (exit 2).
+  EXPECT_EQ(call({"analyze", mat, "--acc", "data:1", "--acc-unit", "furlong/s^2"}), 2);
+  EXPECT_EQ(call({"analyze", mat, "--acc", "data:1", "--channel", "data:2"}), 2);
+  EXPECT_EQ(call({"analyze", mat, "--acc", "data:1", "--gyro", "data:1"}), 2);
+}
+
+// EuRoC's column names (a_RS_S_x, w_RS_S_x) and ax..gz name their sensors: --channel all
+// --yaml works without --acc/--gyro, and each channel's note says the sensor came from its name.
+TEST(AnalyzeSensors, FieldColumnNamesNameTheirSensors) {
+  for (const bool euroc : {true, false}) {
+    const char* acc_names[3] = {"a_RS_S_x", "a_RS_S_y", "a_RS_S_z"};
+    const char* gyro_names[3] = {"w_RS_S_x", "w_RS_S_y", "w_RS_S_z"};
+    const char* short_acc[3] = {"ax", "ay", "az"};
+    const char* short_gyro[3] = {"gx", "gy", "gz"};
+    constexpr std::size_t kSamples = 20000;
+    std::vector<std::vector<double>> cols;
+    for (std::size_t c = 0; c < 6; ++c) {
+      cols.push_back(static_axis(8201 + c, c < 3 ? 2e-3 : 2e-4, c == 2 ? 9.81 : 0.0, kSamples));
+    }
+    const std::string csv = tmp_path(euroc ? "euroc.csv" : "short.csv");
+    {
+      std::ofstream f(csv);
+      f << (euroc ? "#timestamp [ns]" : "t");
+      for (std::size_t c = 0; c < 6; ++c) {
+        const char* name = c < 3 ? (euroc ? acc_names[c] : short_acc[c])
+                                 : (euroc ? gyro_names[c - 3] : short_gyro[c - 3]);
+        f << "," << name << (euroc ? (c < 3 ? " [m s^-2]" : " [rad s^-1]") : "");
+      }
+      f << "\n";
+      char buf[64];
+      for (std::size_t i = 0; i < kSamples; ++i) {
+        if (euroc) {
+          f << 1403636579758555392LL + static_cast<long long>(i) * 10000000LL;
+        } else {
+          std::snprintf(buf, sizeof buf, "%.2f", static_cast<double>(i) / 100.0);
+          f << buf;
+        }
+        for (std::size_t c = 0; c < 6; ++c) {
+          std::snprintf(buf, sizeof buf, ",%.9g", cols[c][i]);
+          f << buf;
+        }
+        f << "\n";
+      }
+    }
+    const std::string json = tmp_path("names.json");
+    const std::string yaml = tmp_path("names.yaml");
+    ASSERT_EQ(call({"analyze", csv, "--channel", "all", "--json", json, "--yaml", yaml}), 0)
+        << csv;
+    const std::string j = slurp(json);
+    EXPECT_EQ(count_of(j, "accelerometer (from the channel's name; --acc/--gyro declare it), "
+                          "in m/s^2"), 3U) << j;
+    EXPECT_EQ(count_of(j, "gyroscope (from the channel's name"), 3U);
+    EXPECT_NEAR(yaml_number(slurp(yaml), "gyroscope_noise_density"), 2e-4, 2e-5);
+  }
+}

@@ -22,6 +22,7 @@
 #include "imu/cli/args.hpp"
 #include "imu/cli/file_out.hpp"
 #include "imu/cli/json.hpp"
+#include "imu/cli/sensors.hpp"
 #include "imu/cli/text_input.hpp"
 #include "imu/mat/mat_reader.hpp"
 
@@ -36,12 +37,20 @@ constexpr const char* kUsage =
     "usage: imu-sim analyze FILE --channel NAME|NAME:K|A,B,..|all [--fs HZ] [--lsb UNITS]\n"
     "                         [--time-unit s|ms|us|ns] [--json OUT]\n"
     "                         [--plots DIR] [--yaml IMU.yaml]\n"
+    "       imu-sim analyze FILE --acc COLS --gyro COLS [--acc-unit g|m/s^2]\n"
+    "                         [--gyro-unit rad/s|deg/s|deg/h] [--acc-lsb X] [--gyro-lsb X] ..\n"
     "  NAME:K is column K (1-based) of a matrix NAME; a matrix without :K is refused.\n"
     "  (also imu-analyze) residual of the first-order model against the measured ADEV and the\n"
     "  bias filter's innovations, effects found, augmented model. --channel all: the channels\n"
     "  acc_x..gyro_z the file holds (a comma list: those), analysed in parallel on the machine's\n"
     "  cores; one report, one JSON ({\"file\", \"channels\": {NAME: ...}}; one channel: its\n"
-    "  object as before). --yaml: Kalibr's imu.yaml (needs acc* and gyro* channels). --fs (else\n"
+    "  object as before). --yaml: Kalibr's imu.yaml (needs accelerometer and gyroscope channels).\n"
+    "  Sensors: --acc/--gyro name each sensor's channels (any names, NAME:K columns; instead of\n"
+    "  --channel), else a name tells (acc*, a_*, ax..; gyro*, w_*, gx..); --acc-unit/--gyro-unit\n"
+    "  their unit, else the accelerometer's is read from its three axes' mean norm (about 1: g,\n"
+    "  about 9.81: m/s^2) and the gyroscope's taken as rad/s, each said in a note; everything is\n"
+    "  analysed and reported in m/s^2 and rad/s. --acc-lsb/--gyro-lsb: a sensor's LSB in its\n"
+    "  unit. --fs (else\n"
     "  the file's fs or Fs, else a text file's time column, in the unit it states or\n"
     "  --time-unit's, else the one its steps show) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
     "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
@@ -422,6 +431,40 @@ bool read_channel(const StreamedFile& m, const std::string& spec, std::vector<do
   return true;
 }
 
+// The sensors and units the command line declares (--acc/--gyro, --acc-unit/--gyro-unit,
+// --acc-lsb/--gyro-lsb). A factor or LSB of 0 is not declared.
+struct Declared {
+  std::vector<std::string> acc;
+  std::vector<std::string> gyro;
+  std::string acc_unit;
+  std::string gyro_unit;
+  double acc_to_si = 0.0;
+  double gyro_to_si = 0.0;
+  double acc_lsb = 0.0;
+  double gyro_lsb = 0.0;
+};
+
+// A channel's sensor: the one --acc/--gyro declare, else the one its name suggests.
+imu::cli::Sensor sensor_of(const std::string& channel, const Declared& d, bool& declared) {
+  declared = true;
+  if (std::find(d.acc.begin(), d.acc.end(), channel) != d.acc.end()) {
+    return imu::cli::Sensor::kAcc;
+  }
+  if (std::find(d.gyro.begin(), d.gyro.end(), channel) != d.gyro.end()) {
+    return imu::cli::Sensor::kGyro;
+  }
+  declared = false;
+  return imu::cli::guess_sensor(channel);
+}
+
+// The LSB a sensor's declaration gives (in its declared unit), else `lsb` (--lsb).
+double declared_lsb(imu::cli::Sensor s, const Declared& d, double lsb) {
+  const double own = s == imu::cli::Sensor::kAcc    ? d.acc_lsb
+                     : s == imu::cli::Sensor::kGyro ? d.gyro_lsb
+                                                    : 0.0;
+  return own > 0.0 ? own : lsb;
+}
+
 // The LSB's file name for a channel spec: the base name of NAME:K.
 std::string base_name(const std::string& spec) {
   imu::cli::ChannelSpec cs;
@@ -431,6 +474,8 @@ std::string base_name(const std::string& spec) {
 
 struct Job {
   std::string channel;
+  imu::cli::Sensor sensor = imu::cli::Sensor::kUnknown;
+  bool sensor_declared = false;  // by --acc/--gyro (else from the name)
   // A long record (block > 1, read_head set): its first kMaxAnalysedSamples samples, read again
   // at full rate (a second pass over the file's first chunks), are analysed with head_o after
   // the means.
@@ -440,6 +485,7 @@ struct Job {
   bool counts_scaled = false;    // an integer variable, multiplied by its LSB
   bool counts_unscaled = false;  // an integer variable without an LSB: counts
   std::string text_note;         // where a text file's rate and gaps came from
+  std::string unit_note;         // the sensor and its unit, and how they were found
   std::string block_note;        // a long record analysed on block means
   std::vector<double> samples;
   Options o;
@@ -480,32 +526,134 @@ void run_jobs(std::vector<Job>& jobs) {
   });
 }
 
+// The mean of a record's finite samples (NaN if none).
+double finite_mean(const std::vector<double>& v) {
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (const double x : v) {
+    if (std::isfinite(x)) {
+      sum += x;
+      ++n;
+    }
+  }
+  return n > 0 ? sum / static_cast<double>(n) : std::numeric_limits<double>::quiet_NaN();
+}
+
+// Every job in SI units: the accelerometer's unit declared (--acc-unit), else the one a static
+// triad's mean norm shows (about 1: g, about 9.81: m/s^2), else m/s^2; the gyroscope's
+// declared (--gyro-unit), else rad/s. Samples and LSBs are scaled to SI (a long record's
+// full-rate head too); each channel's note says its sensor, its unit and how both were found.
+void apply_units(std::vector<Job>& jobs, const Declared& d) {
+  using imu::cli::Sensor;
+  std::vector<const Job*> acc;
+  for (const Job& j : jobs) {
+    if (j.sensor == Sensor::kAcc) {
+      acc.push_back(&j);
+    }
+  }
+  double norm = std::numeric_limits<double>::quiet_NaN();
+  if (acc.size() == 3) {
+    double sum2 = 0.0;
+    for (const Job* j : acc) {
+      const double m = finite_mean(j->samples);
+      sum2 += m * m;
+    }
+    norm = std::sqrt(sum2);
+  }
+  const std::string gravity = imu::cli::unit_from_gravity(norm);
+  const std::string norm_text = "the mean norm of its three axes is " + imu::cli::num_text(norm);
+  double acc_f = 1.0;
+  std::string acc_note;
+  if (d.acc_to_si > 0.0) {
+    acc_f = d.acc_to_si;
+    acc_note = "in " + d.acc_unit + " (--acc-unit)";
+    if (!gravity.empty() && (gravity == "g") != (d.acc_unit == "g")) {
+      acc_note += "; but " + norm_text + ", gravity in " + gravity + ": check --acc-unit";
+    }
+  } else if (gravity == "g") {
+    acc_f = imu::cli::kStandardGravity;
+    acc_note = "in g: " + norm_text + " (a static accelerometer reads 1 g; --acc-unit m/s^2 "
+               "says otherwise)";
+  } else if (gravity == "m/s^2") {
+    acc_note = "in m/s^2: " + norm_text + " (gravity)";
+  } else if (acc.size() == 3) {
+    acc_note = "taken as m/s^2 (--acc-unit g|m/s^2 declares it): " + norm_text +
+               ", neither 1 g nor 9.81 m/s^2 (not static, or another unit)";
+  } else {
+    acc_note = "taken as m/s^2 (--acc-unit g|m/s^2 declares it; with its three axes, the mean "
+               "norm checks it)";
+  }
+  const double gyro_f = d.gyro_to_si > 0.0 ? d.gyro_to_si : 1.0;
+  const std::string gyro_note = d.gyro_to_si > 0.0
+                                    ? "in " + d.gyro_unit + " (--gyro-unit)"
+                                    : "taken as rad/s (--gyro-unit rad/s|deg/s|deg/h declares it)";
+  for (Job& j : jobs) {
+    if (j.sensor == Sensor::kUnknown) {
+      continue;
+    }
+    const bool is_acc = j.sensor == Sensor::kAcc;
+    const double f = is_acc ? acc_f : gyro_f;
+    j.unit_note = std::string(imu::cli::sensor_name(j.sensor)) +
+                  (j.sensor_declared ? " (--acc/--gyro)" : " (from the channel's name; --acc/--gyro "
+                                                           "declare it)") +
+                  ", " + (is_acc ? acc_note : gyro_note);
+    if (!(f < 1.0 || f > 1.0)) {  // SI already
+      continue;
+    }
+    j.unit_note += "; analysed in " + std::string(imu::cli::si_unit(j.sensor)) + " (x " +
+                   imu::cli::num_text(f) + ")";
+    for (double& v : j.samples) {
+      v *= f;
+    }
+    j.o.lsb *= f;
+    j.head_o.lsb *= f;
+    if (j.read_head) {
+      j.read_head = [inner = std::move(j.read_head), f](std::vector<double>& out,
+                                                        std::string& e) {
+        if (!inner(out, e)) {
+          return false;
+        }
+        for (double& v : out) {
+          v *= f;
+        }
+        return true;
+      };
+    }
+  }
+}
+
 // Analyse the jobs (in parallel), print, write. Exit status.
-int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const std::string& json,
-           const std::string& plots, const std::string& yaml) {
+int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const Declared& d,
+           const std::string& json, const std::string& plots, const std::string& yaml) {
   std::string err;
   if (!yaml.empty()) {
     // Kalibr takes both sensors: said before the analysis, not after it.
     bool acc = false;
     bool gyro = false;
     for (const Job& j : jobs) {
-      acc = acc || base_name(j.channel).rfind("acc", 0) == 0;
-      gyro = gyro || base_name(j.channel).rfind("gyro", 0) == 0;
+      acc = acc || j.sensor == imu::cli::Sensor::kAcc;
+      gyro = gyro || j.sensor == imu::cli::Sensor::kGyro;
     }
     if (!acc || !gyro) {
-      return fail("--yaml needs at least one acc* and one gyro* channel (Kalibr takes both "
-                  "sensors); use --channel all",
+      return fail("--yaml needs at least one accelerometer and one gyroscope channel (Kalibr "
+                  "takes both sensors): declare them with --acc COLS --gyro COLS",
                   kExitUsage);
     }
   }
+  apply_units(jobs, d);
   run_jobs(jobs);
   std::vector<Report> reports;
   for (Job& j : jobs) {
     if (!j.ok) {
       return fail((jobs.size() > 1 ? j.channel + ": " : std::string()) + j.err, kExitRuntime);
     }
-    if (j.o.lsb > 0.0 && lsb <= 0.0) {
+    if (j.o.lsb > 0.0 && declared_lsb(j.sensor, d, lsb) <= 0.0) {
       j.r.lsb_note = "LSB from the file: " + j.r.lsb_note.substr(j.r.lsb_note.find(':') + 2);
+    }
+    j.r.sensor = imu::cli::sensor_name(j.sensor);
+    j.r.unit = imu::cli::si_unit(j.sensor);
+    if (!j.unit_note.empty()) {
+      j.r.notes.insert(j.r.notes.begin(), j.unit_note);
     }
     if (!j.text_note.empty()) {
       j.r.notes.insert(j.r.notes.begin(), j.text_note);
@@ -611,7 +759,7 @@ void on_block_means(Job& j, double fs_hz, std::uint64_t block, std::uint64_t dro
 // rows for every channel (imu::cli::TextColumnStream), each into its BlockMeans: a channel is
 // held as its samples, or as block means once it passes kMaxAnalysedSamples, never the table.
 bool text_jobs(const std::string& file, const std::string& spec, double fs, double time_unit_s,
-               double lsb, std::vector<Job>& jobs, std::string& err) {
+               double lsb, const Declared& d, std::vector<Job>& jobs, std::string& err) {
   std::vector<std::string> names;
   {
     imu::cli::TextRows header;
@@ -661,7 +809,8 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     std::uint64_t dropped = 0;
     j.samples = means[c].take(dropped);
     j.o.fs_hz = st.fs_hz();
-    j.o.lsb = lsb;
+    j.sensor = sensor_of(j.channel, d, j.sensor_declared);
+    j.o.lsb = declared_lsb(j.sensor, d, lsb);
     if (!st.time_name().empty()) {
       j.text_note = "text input: rate " + imu::cli::num_text(st.fs_hz()) + " Hz" +
                     (fs > 0.0 ? " (--fs)" : " from the time column '" + st.time_name() + "'");
@@ -687,15 +836,15 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
 
 // The run-time part: read, analyse (in parallel), print, write. Exit status.
 int analyze_file(const std::string& file, const std::string& channel_spec, double fs,
-                 double time_unit_s, double lsb,
+                 double time_unit_s, double lsb, const Declared& d,
                  const std::string& json, const std::string& plots, const std::string& yaml) {
   std::string err;
   if (imu::cli::looks_like_text(file)) {
     std::vector<Job> jobs;
-    if (!text_jobs(file, channel_spec, fs, time_unit_s, lsb, jobs, err)) {
+    if (!text_jobs(file, channel_spec, fs, time_unit_s, lsb, d, jobs, err)) {
       return fail(err, read_status(err));
     }
-    return finish(file, jobs, lsb, json, plots, yaml);
+    return finish(file, jobs, lsb, d, json, plots, yaml);
   }
   const StreamedFile m(file);
   if (auto listed = m.list_variables(); !listed) {
@@ -726,9 +875,10 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
       return fail(err, read_status(err));
     }
     jobs[i].channel = channels[i];
+    jobs[i].sensor = sensor_of(channels[i], d, jobs[i].sensor_declared);
     jobs[i].o = o;
-    jobs[i].o.lsb = lsb;
-    if (lsb <= 0.0 && !file_lsb(m, channels[i], jobs[i].o.lsb, err)) {
+    jobs[i].o.lsb = declared_lsb(jobs[i].sensor, d, lsb);
+    if (jobs[i].o.lsb <= 0.0 && !file_lsb(m, channels[i], jobs[i].o.lsb, err)) {
       return fail(err, kExitRuntime);
     }
     // Integer counts (int16 from a logger) with a known LSB are counts x LSB in the channel's
@@ -750,7 +900,51 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
       };
     }
   }
-  return finish(file, jobs, lsb, json, plots, yaml);
+  return finish(file, jobs, lsb, d, json, plots, yaml);
+}
+
+// --acc COLS, --gyro COLS (comma lists of channel specs), --acc-unit, --gyro-unit, --acc-lsb,
+// --gyro-lsb. False with err on a unit neither sensor has, an LSB out of range, a channel
+// named twice.
+bool declared_sensors(const imu::cli::Args& a, Declared& d, std::string& err) {
+  const auto split = [](const std::string& list) {
+    std::vector<std::string> out;
+    std::size_t start = 0;
+    while (start <= list.size()) {
+      const std::size_t comma = std::min(list.find(',', start), list.size());
+      if (comma > start) {
+        out.push_back(list.substr(start, comma - start));
+      }
+      start = comma + 1;
+    }
+    return out;
+  };
+  d.acc = split(a.get("--acc"));
+  d.gyro = split(a.get("--gyro"));
+  for (const std::string& c : d.acc) {
+    if (std::count(d.acc.begin(), d.acc.end(), c) > 1 ||
+        std::find(d.gyro.begin(), d.gyro.end(), c) != d.gyro.end()) {
+      err = "channel '" + c + "' is named twice in --acc/--gyro";
+      return false;
+    }
+  }
+  if (a.has("--acc-unit")) {
+    d.acc_unit = a.get("--acc-unit");
+    if (!imu::cli::unit_to_si(imu::cli::Sensor::kAcc, d.acc_unit, d.acc_to_si, err)) {
+      err = "--acc-unit: " + err;
+      return false;
+    }
+    d.acc_unit = d.acc_to_si > 1.0 ? "g" : "m/s^2";
+  }
+  if (a.has("--gyro-unit")) {
+    d.gyro_unit = a.get("--gyro-unit");
+    if (!imu::cli::unit_to_si(imu::cli::Sensor::kGyro, d.gyro_unit, d.gyro_to_si, err)) {
+      err = "--gyro-unit: " + err;
+      return false;
+    }
+  }
+  return (!a.has("--acc-lsb") || a.number("--acc-lsb", 0.0, 1e-12, 1e6, d.acc_lsb, err)) &&
+         (!a.has("--gyro-lsb") || a.number("--gyro-lsb", 0.0, 1e-12, 1e6, d.gyro_lsb, err));
 }
 
 }  // namespace
@@ -759,8 +953,10 @@ int cli_main(int argc, char** argv) {
   imu::cli::Args a;
   std::string err;
   const std::vector<imu::cli::OptSpec> specs = {
-      {"--channel", true}, {"--json", true}, {"--plots", true}, {"--fs", true}, {"--lsb", true},
-      {"--yaml", true},    {"--time-unit", true}};
+      {"--channel", true},  {"--json", true},      {"--plots", true},     {"--fs", true},
+      {"--lsb", true},      {"--yaml", true},      {"--time-unit", true}, {"--acc", true},
+      {"--gyro", true},     {"--acc-unit", true},  {"--gyro-unit", true}, {"--acc-lsb", true},
+      {"--gyro-lsb", true}};
   if (!a.parse(argc, argv, 1, specs, 1, err)) {
     return fail(err + " (imu-sim analyze --help)", kExitUsage);
   }
@@ -778,8 +974,28 @@ int cli_main(int argc, char** argv) {
   if (!imu::cli::time_unit_option(a, time_unit_s, err)) {
     return fail(err, kExitUsage);
   }
-  if (a.positional().empty() || !a.has("--channel")) {
-    return fail("FILE and --channel NAME are required (imu-sim analyze --help)", kExitUsage);
+  Declared d;
+  if (!declared_sensors(a, d, err)) {
+    return fail(err, kExitUsage);
+  }
+  const bool by_sensor = a.has("--acc") || a.has("--gyro");
+  if (a.has("--channel") && by_sensor) {
+    return fail("--channel and --acc/--gyro both name the channels: give one of them",
+                kExitUsage);
+  }
+  if (a.positional().empty() || !(a.has("--channel") || by_sensor)) {
+    return fail("FILE and --channel NAME (or --acc COLS --gyro COLS) are required "
+                "(imu-sim analyze --help)",
+                kExitUsage);
+  }
+  std::string channel_spec = a.get("--channel");
+  if (by_sensor) {
+    channel_spec.clear();
+    for (const auto* list : {&d.acc, &d.gyro}) {
+      for (const std::string& c : *list) {
+        channel_spec += (channel_spec.empty() ? "" : ",") + c;
+      }
+    }
   }
   // Output paths are checked before the work (an analysis is not lost to a typo in --json).
   for (const char* opt : {"--json", "--yaml"}) {
@@ -794,17 +1010,17 @@ int cli_main(int argc, char** argv) {
     return fail("--plots: " + err, kExitUsage);
   }
   if (a.has("--yaml")) {
-    const std::string spec = a.get("--channel");
-    if (spec != "all" && spec.find(',') == std::string::npos) {
-      return fail("--yaml needs several channels (at least one acc* and one gyro*; Kalibr takes "
-                  "both sensors): use --channel all or a list",
+    if (channel_spec != "all" && channel_spec.find(',') == std::string::npos) {
+      return fail("--yaml needs several channels (at least one accelerometer and one gyroscope; "
+                  "Kalibr takes both sensors): use --channel all, a list, or --acc COLS --gyro "
+                  "COLS",
                   kExitUsage);
     }
   }
   // Sizes are bounded by the MAT reader's budget; this is the last line of defence (a machine
   // short of memory): one line, exit 1, no exception escapes.
   try {
-    return analyze_file(a.positional()[0], a.get("--channel"), fs, time_unit_s, lsb, a.get("--json"),
+    return analyze_file(a.positional()[0], channel_spec, fs, time_unit_s, lsb, d, a.get("--json"),
                         a.get("--plots"), a.get("--yaml"));
   } catch (const std::bad_alloc&) {
     return fail("out of memory", kExitRuntime);

@@ -96,17 +96,17 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
   for (const Report& r : reports) {
     fs = r.head.samples > 0 ? r.head.fs_hz : r.fs_hz;  // a long record: the IMU's rate, not
                                                        // its block means'
-    if (r.channel.rfind("acc", 0) == 0) {
+    if (r.sensor == "accelerometer") {
       acc.push_back(project(r));
       acc_r.push_back(&r);
-    } else if (r.channel.rfind("gyro", 0) == 0) {
+    } else if (r.sensor == "gyroscope") {
       gyro.push_back(project(r));
       gyro_r.push_back(&r);
     }
   }
   if (acc.empty() || gyro.empty()) {
-    err = "--yaml needs at least one acc* and one gyro* channel (Kalibr takes both sensors); "
-          "use --channel all";
+    err = "--yaml needs at least one accelerometer and one gyroscope channel (Kalibr takes "
+          "both sensors): declare them with --acc COLS --gyro COLS";
     return false;
   }
   const auto worst = [](const std::vector<KalibrAxis>& v, bool walk) {

@@ -10,6 +10,7 @@
 #include "imu/analyze/analyze.hpp"
 #include "imu/cli/file_out.hpp"
 #include "imu/cli/json.hpp"
+#include "imu/cli/sensors.hpp"
 
 namespace imu::analyze {
 namespace {
@@ -145,17 +146,10 @@ std::string effect_text(const Effect& e) {
   return line + buf;
 }
 
-// The unit of a channel from its name (its last field for a struct's): acc* m/s^2, gyro* rad/s;
-// otherwise the file's own, which the analysis does not know.
-std::string channel_unit_of(const std::string& channel) {
-  const std::string field = channel.substr(channel.rfind('.') + 1);
-  if (field.rfind("acc", 0) == 0) {
-    return "m/s^2";
-  }
-  if (field.rfind("gyro", 0) == 0) {
-    return "rad/s";
-  }
-  return "unit";
+// The unit of a report's numbers: the one the reading set (declared or checked), else the
+// one its name suggests (imu::cli::guess_sensor), "unit" when it suggests none.
+std::string unit_of(const Report& r) {
+  return r.unit.empty() ? imu::cli::si_unit(imu::cli::guess_sensor(r.channel)) : r.unit;
 }
 
 double model_adev(const ModelParams& p, double tau) { return std::sqrt(model_avar(p, tau)); }
@@ -164,8 +158,9 @@ double model_adev(const ModelParams& p, double tau) { return std::sqrt(model_ava
 
 std::string to_json(const Report& r) {
   std::ostringstream s;
-  const std::string unit = channel_unit_of(r.channel);
-  s << "{\n  \"channel\": " << quoted(r.channel) << ",\n  \"fs_hz\": " << num(r.fs_hz)
+  const std::string unit = unit_of(r);
+  s << "{\n  \"channel\": " << quoted(r.channel) << ",\n  \"sensor\": " << quoted(r.sensor)
+    << ",\n  \"fs_hz\": " << num(r.fs_hz)
     << ",\n  \"n_samples\": " << r.samples << ",\n  \"lsb\": " << num(r.lsb)
     << ",\n  \"lsb_note\": " << quoted(r.lsb_note) << ",\n  \"unit\": " << quoted(unit)
     << ",\n  \"units\": " << imu::cli::json_units(unit) << ",\n  \"adev\": [";
@@ -376,17 +371,6 @@ void term_adevs(const ModelParams& p, double tau, double (&out)[kTerms]) {
                : 0.0;
 }
 
-// The unit of a channel from its name (acc* m/s^2, gyro* rad/s), else the file's own.
-std::string unit_of(const std::string& channel) {
-  if (channel.rfind("acc", 0) == 0) {
-    return "m/s^2";
-  }
-  if (channel.rfind("gyro", 0) == 0) {
-    return "rad/s";
-  }
-  return "unit of the data";
-}
-
 // A path made absolute (so the .gp script works from any directory).
 std::string absolute(const std::string& path) {
   char* real = ::realpath(path.c_str(), nullptr);
@@ -456,7 +440,7 @@ bool write_plots(const Report& r, const std::string& dir, const std::string& ste
       << "# Run from any directory: gnuplot " << gq(gp) << "\n"
       << "set datafile separator ','\nset logscale xy\nset format y '%.0e'\nset grid\n"
       << "set key bottom left noenhanced\nset xlabel 'tau [s]'\n"
-      << "set ylabel " << gq("Allan deviation [" + unit_of(r.channel) + "]") << "\n"
+      << "set ylabel " << gq("Allan deviation [" + unit_of(r) + "]") << "\n"
       << "set style line 9 lc rgb '#888888' dt 2\n"
       << "set arrow 1 from " << num(tau_fit_lo) << ", graph 0 to " << num(tau_fit_lo)
       << ", graph 1 nohead ls 9\n"

@@ -78,8 +78,8 @@ std::string json_units(const std::string& unit) {
   const std::string u = json_str(unit).substr(1, std::string::npos);  // escaped, no quotes
   const std::string base = u.substr(0, u.size() - 1);
   return "{\"n\": \"" + base + "/sqrt(Hz)\", \"q\": \"" + base + "*s\", \"b\": \"" + base +
-         "\", \"k\": \"" + base + "*sqrt(Hz)\", \"r\": \"" + base + "/s\", \"sb\": \"" + base +
-         "\", \"tb_s\": \"s\", \"sigma\": \"" + base + "\", \"amplitude\": \"" + base +
+         "\", \"k\": \"" + base + "*sqrt(Hz)\", \"r\": \"" + base + "/s\", \"sb\": \"(" + base +
+         ")^2/s\", \"tb_s\": \"s\", \"sigma\": \"" + base + "\", \"amplitude\": \"" + base +
          "\", \"size\": \"" + base + "\", \"adev\": \"" + base + "\"}";
 }
 

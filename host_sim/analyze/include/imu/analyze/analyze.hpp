@@ -131,6 +131,8 @@ struct FullRateHead {
 
 struct Report {
   std::string channel;
+  std::string sensor;  ///< "accelerometer", "gyroscope" or "" (declared or from the name)
+  std::string unit;    ///< the analysed numbers' unit: m/s^2, rad/s ("" : from the name)
   double fs_hz = 0.0;
   std::uint64_t samples = 0;
   double lsb = 0.0;
@@ -213,7 +215,8 @@ void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, co
 [[nodiscard]] bool write_plots(const Report& r, const std::string& dir, const std::string& stem,
                                std::string& message);
 /// Kalibr's imu.yaml (accelerometer/gyroscope noise density and random walk, update_rate,
-/// rostopic) from the reports of one IMU's channels (acc* and gyro*, at least one of each):
+/// rostopic) from the reports of one IMU's channels (Report::sensor accelerometer and gyroscope, at
+/// least one of each; numbers in SI, as the reading converted them):
 /// per sensor the largest axis of the white + walk model fitted to each after-model's ADEV;
 /// per-axis values, bias instability and the full models as extra keys and comments. False
 /// with err if a sensor is missing. source: named in the header comment.

@@ -24,7 +24,8 @@ namespace imu::cli {
 /// are not valid UTF-8 (a stray continuation byte, a cut, overlong or surrogate sequence).
 [[nodiscard]] std::size_t utf8_sequence(const std::string& s, std::size_t i);
 /// The "units" object of a JSON whose channel is in `unit` (e.g. "m/s^2"): each noise term's
-/// unit, e.g. {"n": "m/s^2/sqrt(Hz)", "k": "m/s^2*sqrt(Hz)", ...}.
+/// unit, e.g. {"n": "m/s^2/sqrt(Hz)", "k": "m/s^2*sqrt(Hz)", ...}; "sb", the GM drive's PSD, is
+/// (unit)^2/s (its steady variance Sb Tb / 2 is in unit^2).
 [[nodiscard]] std::string json_units(const std::string& unit);
 
 }  // namespace imu::cli
