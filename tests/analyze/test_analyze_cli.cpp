@@ -335,7 +335,7 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   // Numbers carry a mantissa dot: YAML 1.1 (PyYAML, Kalibr's loader) reads "1e-05" as a string.
   EXPECT_NE(y.find("\nupdate_rate: 1.0000e+02"), std::string::npos) << y;
   EXPECT_NE(y.find("\nrostopic: /imu0\n"), std::string::npos);
-  // A comma list: those channels only; one channel alone keeps the single-channel JSON.
+  // A comma list: those channels only, under "channels" as for one channel or all.
   ASSERT_EQ(call({"analyze", mat, "--channel", "gyro_y,acc_x", "--json", json}), 0);
   const std::string j2 = slurp(json);
   EXPECT_NE(j2.find("\"gyro_y\": {"), std::string::npos);

@@ -43,8 +43,9 @@ constexpr const char* kUsage =
     "  (also imu-analyze) residual of the first-order model against the measured ADEV and the\n"
     "  bias filter's innovations, effects found, augmented model. --channel all: the channels\n"
     "  acc_x..gyro_z the file holds (a comma list: those), analysed in parallel on the machine's\n"
-    "  cores; one report, one JSON ({\"file\", \"channels\": {NAME: ...}}; one channel: its\n"
-    "  object as before). --yaml: Kalibr's imu.yaml (needs accelerometer and gyroscope channels).\n"
+    "  cores; one report, one JSON ({\"schema_version\", \"command\", \"source\", \"channels\":\n"
+    "  {NAME: ...}}, for one channel too; host_sim/cli/imu-sim.schema.json). --yaml: Kalibr's\n"
+    "  imu.yaml (needs accelerometer and gyroscope channels).\n"
     "  Sensors: --acc/--gyro name each sensor's channels (any names, NAME:K columns; instead of\n"
     "  --channel), else a name tells (acc*, a_*, ax..; gyro*, w_*, gx..); --acc-unit/--gyro-unit\n"
     "  their unit, else the accelerometer's is read from its three axes' mean norm (about 1: g,\n"
@@ -680,17 +681,13 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const De
     std::fputs(imu::cli::term_safe_text(to_text(r)).c_str(), info);
   }
   if (!json.empty()) {
-    std::string text;
-    if (reports.size() == 1) {
-      text = to_json(reports[0]);
-    } else {
-      text = "{\n\"file\": " + imu::cli::json_str(file) + ",\n\"channels\": {";
-      for (std::size_t i = 0; i < reports.size(); ++i) {
-        text += std::string(i > 0 ? "," : "") + "\n" + imu::cli::json_str(reports[i].channel) +
-                ": " + to_json(reports[i]);
-      }
-      text += "\n}\n}\n";
+    // One shape for one channel or many (host_sim/cli/imu-sim.schema.json).
+    std::string text = "{\n" + imu::cli::json_head("analyze", file, "") + "\"channels\": {";
+    for (std::size_t i = 0; i < reports.size(); ++i) {
+      text += std::string(i > 0 ? "," : "") + "\n" + imu::cli::json_str(reports[i].channel) +
+              ": " + to_json(reports[i]);
     }
+    text += "\n}\n}\n";
     if (!imu::cli::write_file_atomic(json, text, err)) {
       return fail(err, kExitRuntime);
     }

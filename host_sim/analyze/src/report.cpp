@@ -193,8 +193,8 @@ std::string to_json(const Report& r) {
       << ",\n    \"unexplained\": [" << unexplained_json(h.unexplained) << "]}";
   }
   s << ",\n  \"gaps\": {\"samples\": " << r.gap_samples << ", \"runs\": " << r.gap_runs
-    << "},\n  \"seconds\": " << num(r.seconds) << ",\n  \"cpu_seconds\": " << num(r.cpu_seconds)
-    << "\n}\n";
+    << "},\n  \"timing_s\": {\"total\": " << num(r.seconds) << ", \"cpu\": " << num(r.cpu_seconds)
+    << "}\n}\n";
   return s.str();
 }
 

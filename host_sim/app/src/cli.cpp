@@ -54,7 +54,7 @@ constexpr const char* kUsageAdev =
     "  ADEV of a channel, with the time it took. --channel: a variable (NAME, NAME:K column K\n"
     "  of a matrix, imu.acc_z a struct field), a comma list, or all (the channels acc_x..gyro_z\n"
     "  the file holds; a text file without them: every column but the time): the channels in\n"
-    "  parallel on the machine's cores, one table each, one JSON ({\"source\", \"estimator\",\n"
+    "  parallel on the machine's cores, one table each, one JSON ({\"schema_version\", \"command\",\n  \"source\", \"estimator\",\n"
     "  \"channels\": {NAME: ...}}), one CSV with a channel column, --plots DIR: a plot per\n"
     "  channel (DIR/adev_NAME.svg/.png, its .csv and a .gp that runs from any directory; DIR\n"
     "  is created). --estimator full\n"
@@ -553,7 +553,8 @@ std::string adev_members(const AdevResult& r, const std::string& in) {
   j += in + "\"fs_hz\": " + json_num(r.sd.fs_hz) + ",\n";
   j += in + "\"lsb\": " + json_num(ch.lsb) + ",\n";
   j += in + "\"n_samples\": " + std::to_string(r.sd.n_samples) + ",\n";
-  j += in + "\"gaps\": " + std::to_string(ch.non_finite) + ",\n";
+  j += in + "\"gaps\": {\"samples\": " + std::to_string(ch.non_finite) + "},\n";
+  j += in + "\"units\": " + imu::cli::json_units(adev_unit(r.name, r.chan)) + ",\n";
   j += in + "\"adev\": " + adev_json_list(r.rows) + ",\n";
   j += in + "\"timing_s\": {\"read\": " + json_num(r.t.read) + ", \"quantize\": " +
        json_num(r.t.quantize) + ", \"adev\": " + json_num(r.t.adev) + ", \"total\": " +
@@ -561,15 +562,11 @@ std::string adev_members(const AdevResult& r, const std::string& in) {
   return j;
 }
 
-// One channel: its members at the top level (as before --channel took lists); several: one
-// object {"source", "estimator", "channels": {NAME: {...}}} (as analyze's).
+// {"schema_version", "command", "source", "estimator", "channels": {NAME: {...}}}: one shape
+// for one channel or many (host_sim/cli/imu-sim.schema.json).
 std::string adev_json(const AdevOptions& o, const std::vector<AdevResult>& rs) {
-  std::string j = "{\n";
-  j += "  \"source\": " + json_str(o.path) + ",\n";
+  std::string j = "{\n" + imu::cli::json_head("adev", o.path, "  ");
   j += "  \"estimator\": " + json_str(o.estimator) + ",\n";
-  if (rs.size() == 1) {
-    return j + adev_members(rs[0], "  ") + "}\n";
-  }
   j += "  \"channels\": {\n";
   for (std::size_t i = 0; i < rs.size(); ++i) {
     j += "    " + json_str(rs[i].name) + ": {\n" + adev_members(rs[i], "      ") + "    }";

@@ -387,8 +387,8 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
     t += line + "\n";
   }
   appendf(t, "\n== Timing\n\n");
-  for (const auto& kv : in.timing_s) {
-    appendf(t, "  %-34s %8.3f s\n", kv.first.c_str(), kv.second);
+  for (const auto& tm : in.timing_s) {
+    appendf(t, "  %-34s %8.3f s\n", tm.label.c_str(), tm.seconds);
   }
   appendf(t, "  %-34s %8.3f s\n", "model simulation + covariance check", rs.t_sim);
   for (const std::string& n : in.notes) {
@@ -616,8 +616,10 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
   std::vector<std::string>& plot_files = rs.plot_files;
   const std::size_t j_end = rs.cov.n_int - 1;
   // ---- JSON ------------------------------------------------------------------------------
-  std::string j = "{\n";
-  j += "  \"source\": " + json_str(in.source) + ",\n";
+  // One shape with adev's and analyze's (host_sim/cli/imu-sim.schema.json): the run's channel under "channels",
+  // the bus, the node and the timings beside it.
+  std::string j = "{\n" + imu::cli::json_head("run", in.source, "  ");
+  j += "  \"channels\": {" + json_str(in.channel) + ": {\n";
   j += "  \"channel\": " + json_str(in.channel) + ",\n";
   j += "  \"unit\": " + json_str(unit) + ",\n";
   j += "  \"fs_hz\": " + json_num(in.fs_hz) + ",\n";
@@ -636,10 +638,10 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
   j += "]";
   if (have_gm) {
     j += ",\n    \"example_layout\": {\"mu_per_s\": " + json_num(gm.mu_per_s) +
-         ", \"Sn\": " + json_num(gm.sn) + ", \"Sw\": " + json_num(gm.sb) +
-         ", \"Pss_c\": " + json_num(gm.pss) + ", \"phi\": " + json_num(gm.phi) +
-         ", \"Qn\": " + json_num(gm.qn) + ", \"Qw\": " + json_num(gm.qw) +
-         ", \"Pss_d\": " + json_num(gm.pss_d) + "}";
+         ", \"sn\": " + json_num(gm.sn) + ", \"sw\": " + json_num(gm.sb) +
+         ", \"pss_c\": " + json_num(gm.pss) + ", \"phi\": " + json_num(gm.phi) +
+         ", \"qn\": " + json_num(gm.qn) + ", \"qw\": " + json_num(gm.qw) +
+         ", \"pss_d\": " + json_num(gm.pss_d) + "}";
   }
   j += "},\n";
   j += "  \"fit\": {\"status\": " + std::to_string(static_cast<int>(fr.status)) +
@@ -660,7 +662,8 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
        ", \"empirical_data\": " +
        (cov.data_windows > 0 ? json_num(cov.emp_data[j_end]) : std::string("null")) +
        ", \"predicted\": " + json_num(cov.pred_exact[j_end]) +
-       ", \"predicted_uncorrelated\": " + json_num(cov.pred_uncorr[j_end]) + "}},\n";
+       ", \"predicted_uncorrelated\": " + json_num(cov.pred_uncorr[j_end]) + "}}\n";
+  j += "  }},\n";
   j += "  \"frame_stats\": {";
   for (std::size_t gi = 0; gi < in.stats.size(); ++gi) {
     j += (gi == 0 ? "\n" : ",\n") + std::string("    ") + json_str(in.stats[gi].key) + ": {";
@@ -676,8 +679,8 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
   }
   j += "  \"timing_s\": {";
   for (std::size_t k = 0; k < in.timing_s.size(); ++k) {
-    j += (k == 0 ? "" : ", ") + json_str(in.timing_s[k].first) + ": " +
-         json_num(in.timing_s[k].second);
+    j += (k == 0 ? "" : ", ") + json_str(in.timing_s[k].key) + ": " +
+         json_num(in.timing_s[k].seconds);
   }
   j += "},\n  \"plots\": [";
   for (std::size_t k = 0; k < plot_files.size(); ++k) {

@@ -70,7 +70,12 @@ struct ReportInput {
   std::vector<AdevRow> adev;       ///< the node's ADEV of the channel
   std::string adev_origin;         ///< where adev came from (text)
   std::vector<StatGroup> stats;    ///< frame statistics
-  std::vector<std::pair<std::string, double>> timing_s;
+  struct Timing {
+    std::string key;    ///< the JSON key (snake_case)
+    std::string label;  ///< the text report's words
+    double seconds = 0.0;
+  };
+  std::vector<Timing> timing_s;
   std::vector<std::string> notes;  ///< printed at the end
   std::string node_json;           ///< the run JSON's "node" object (empty: left out)
   std::string node_text;           ///< the node's per-channel monitors, a text table

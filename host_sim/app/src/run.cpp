@@ -928,6 +928,7 @@ std::vector<AdevRow> received_adev(const Telemetry& tel, std::size_t chan, doubl
     row.ci_lo = static_cast<double>(r.ci_lo);
     row.ci_hi = static_cast<double>(r.ci_hi);
     row.n_terms = r.n_terms;
+    row.af = af;
     row.edf = edf_of(af, r.n_terms);
     rows.push_back(row);
   }
@@ -1213,7 +1214,7 @@ std::string node_json(const RunOptions& o, const Telemetry& tel, const Verdicts&
         first = false;
       }
     }
-    j += "], \"k\": " + f(m.k) + ", \"bias_instability\": {\"B\": " + f(m.bi) +
+    j += "], \"k\": " + f(m.k) + ", \"bias_instability\": {\"b\": " + f(m.bi) +
          ", \"tau_lo_s\": " + f(m.bi_tau_lo_s) + ", \"tau_hi_s\": " + f(m.bi_tau_hi_s) + "}}";
   } else {
     j += "null";
@@ -1298,9 +1299,9 @@ ReportInput report_input(const RunOptions& o, const SensorData& sd, const SendPl
   ri.adev_origin = "online ADEV of the firmware node, received as telemetry over " + s.bus_used;
   ri.adev = received_adev(tel, o.chan, sd.fs_hz);
   ri.stats = chain_stats(o, sd, plan, s, link, tel);
-  ri.timing_s = {{"check MAT-file channels + plan", times.load_s},
-                 {"send all samples (" + o.rate + ")", times.send_s},
-                 {"until final telemetry", times.total_s}};
+  ri.timing_s = {{"load", "check MAT-file channels + plan", times.load_s},
+                 {"send", "send all samples (" + o.rate + ")", times.send_s},
+                 {"total", "until final telemetry", times.total_s}};
   ri.notes = report_notes(o, sd, plan, s);
   const Verdicts vs = channel_verdicts(tel);
   const std::string mon_note = monitor_note(o, tel, vs);

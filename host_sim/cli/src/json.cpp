@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <string>
 
 namespace imu::cli {
 
@@ -81,6 +82,13 @@ std::string json_units(const std::string& unit) {
          "\", \"k\": \"" + base + "*sqrt(Hz)\", \"r\": \"" + base + "/s\", \"sb\": \"(" + base +
          ")^2/s\", \"tb_s\": \"s\", \"sigma\": \"" + base + "\", \"amplitude\": \"" + base +
          "\", \"size\": \"" + base + "\", \"adev\": \"" + base + "\"}";
+}
+
+std::string json_head(const std::string& command, const std::string& source,
+                      const std::string& indent) {
+  return indent + "\"schema_version\": " + std::to_string(kJsonSchemaVersion) + ",\n" + indent +
+         "\"command\": " + json_str(command) + ",\n" + indent + "\"source\": " + json_str(source) +
+         ",\n";
 }
 
 std::string num_text(double v) {

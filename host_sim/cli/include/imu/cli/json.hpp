@@ -28,6 +28,14 @@ namespace imu::cli {
 /// (unit)^2/s (its steady variance Sb Tb / 2 is in unit^2).
 [[nodiscard]] std::string json_units(const std::string& unit);
 
+/// The version of the shape of every command's JSON (its JSON Schema:
+/// host_sim/cli/imu-sim.schema.json). Raised when a key is renamed, moved or removed.
+inline constexpr int kJsonSchemaVersion = 1;
+/// The members every command's JSON document starts with, one per line after `indent`, each
+/// followed by a comma: "schema_version", "command" (adev, analyze, run), "source" (the input).
+[[nodiscard]] std::string json_head(const std::string& command, const std::string& source,
+                                    const std::string& indent);
+
 }  // namespace imu::cli
 
 #endif  // IMU_CLI_JSON_HPP
