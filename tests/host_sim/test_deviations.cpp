@@ -84,6 +84,7 @@ std::map<std::string, std::vector<Row>> golden(const std::string& grid) {
 
 std::vector<std::uint64_t> afs(const std::vector<Row>& rows) {
   std::vector<std::uint64_t> v;
+  v.reserve(rows.size());
   for (const Row& r : rows) {
     v.push_back(r.af);
   }
@@ -100,7 +101,7 @@ std::string input_prefix(simtest::TempDir& tmp, std::size_t n) {
   for (std::size_t lines = 0; lines < n + 1; ++lines) {  // header + n rows
     pos = all.find('\n', pos) + 1;
   }
-  const std::string path = tmp.file("prefix.csv");
+  std::string path = tmp.file("prefix.csv");
   std::ofstream(path) << all.substr(0, pos);
   return path;
 }
