@@ -78,6 +78,16 @@ constexpr A01 kTable2[7][3] = {
     {{0.0, 0.0}, {0.0, 0.0}, {1.053, 0.553}},
     {{0.0, 0.0}, {0.0, 0.0}, {1.302, 0.535}},
 };
+// Table 1 (modified variances, large r): rows alpha = 2 .. -4, columns d = 1 .. 3.
+constexpr A01 kTable1[7][3] = {
+    {{2.0 / 3.0, 1.0 / 3.0}, {7.0 / 9.0, 0.5}, {22.0 / 25.0, 2.0 / 3.0}},
+    {{0.840, 0.345}, {0.997, 0.616}, {1.141, 0.843}},
+    {{1.079, 0.368}, {1.033, 0.607}, {1.184, 0.848}},
+    {{0.0, 0.0}, {1.048, 0.534}, {1.180, 0.816}},
+    {{0.0, 0.0}, {1.302, 0.535}, {1.175, 0.777}},
+    {{0.0, 0.0}, {0.0, 0.0}, {1.194, 0.703}},
+    {{0.0, 0.0}, {0.0, 0.0}, {1.489, 0.702}},
+};
 // Table 3 (alpha = 1): b0 + b1 ln m, d = 1 .. 3.
 constexpr A01 kTable3[3] = {{6.0, 4.0}, {15.23, 12.0}, {47.8, 40.0}};
 
@@ -171,6 +181,33 @@ double edf_greenhall(int alpha, int d, double m, double stride_factor, double n_
     } else {
       inv_edf = (t2.a0 - t2.a1 / r) / big_m;
     }
+  }
+  if (!(inv_edf > 0.0) || std::isinf(inv_edf)) {
+    return 0.0;
+  }
+  return 1.0 / inv_edf;
+}
+
+double edf_greenhall_modified(int alpha, int d, double m, double stride_factor,
+                              double n_terms) {
+  if (d < 1 || d > 3 || alpha < -4 || alpha > 2 || alpha + 2 * d <= 1 || !(m >= 1.0) ||
+      !(stride_factor >= 1.0) || stride_factor > m || !(n_terms >= 1.0)) {
+    return 0.0;
+  }
+  const double dd = static_cast<double>(d);
+  const double s = stride_factor;
+  const double big_m = std::floor(n_terms);
+  const double j = std::fmin(big_m, (dd + 1.0) * s);
+  const double r = big_m / s;
+  const double z0 = sz(0.0, 1.0, alpha, d);
+  double inv_edf = 0.0;
+  if (j <= kJMax) {  // case 1: modified variance, every alpha
+    inv_edf = basic_sum(j, big_m, s, 1.0, alpha, d) / (z0 * z0 * big_m);
+  } else if (r > dd + 1.0) {
+    const A01 t1 = kTable1[2 - alpha][d - 1];
+    inv_edf = (t1.a0 - t1.a1 / r) / r;
+  } else {
+    inv_edf = basic_sum(kJMax, kJMax, kJMax / r, 1.0, alpha, d) / (z0 * z0 * kJMax);
   }
   if (!(inv_edf > 0.0) || std::isinf(inv_edf)) {
     return 0.0;

@@ -147,9 +147,40 @@ TEST(GreenhallEdf, InvalidArgumentsGiveZero) {
   EXPECT_EQ(imu::edf_greenhall(0, 2, 4.0, 8.0, 100.0), 0.0);  // stride factor > m
   EXPECT_EQ(imu::edf_greenhall(-3, 1, 4.0, 4.0, 100.0), 0.0); // alpha + 2d <= 1
   EXPECT_EQ(imu::edf_greenhall(0, 2, 4.0, 4.0, 0.0), 0.0);
+  EXPECT_EQ(imu::edf_greenhall_modified(0, 2, 4.0, 8.0, 100.0), 0.0);
+  EXPECT_EQ(imu::edf_greenhall_modified(-3, 1, 4.0, 4.0, 100.0), 0.0);
+  EXPECT_EQ(imu::edf_greenhall_modified(0, 2, 4.0, 4.0, 0.0), 0.0);
   const imu::DevInterval ci = imu::deviation_interval(1.0, 0.0);
   EXPECT_EQ(ci.lo, 0.0);
   EXPECT_TRUE(std::isinf(ci.hi));
+}
+
+// The modified variance's EDF (MDEV, TDEV; fully overlapping, S = m) in each of Greenhall and
+// Riley's three branches of case 1: the basic sum (J <= 100), table 1 (r > d + 1) and the basic
+// sum with m' = 100 / r. Reference: allantools 2024.06 ci.edf_greenhall(alpha, d=2, m, N=3073,
+// overlapping=True, modified=True), an independent implementation, printed with repr; the
+// number of terms is N - 3m + 1. Both evaluate the same closed forms: 1e-12 relative covers
+// the order of the sums.
+TEST(GreenhallEdf, ModifiedMatchesAllantools) {
+  struct Ref {
+    int alpha;
+    double m;
+    double edf;
+  };
+  const Ref refs[] = {
+      {0, 1.0, 2403.595480481969},     // basic sum, J = 3
+      {0, 32.0, 90.63253973277344},    // basic sum, J = 96
+      {0, 64.0, 44.16904931425355},    // table 1
+      {0, 700.0, 2.230581804527173},   // m' = 100 / r
+      {0, 1024.0, 1.0000028594748331}, // two terms
+      {2, 64.0, 58.735822312179415},   {1, 64.0, 45.795084035244344},
+      {-1, 64.0, 43.460518692903264},  {-2, 64.0, 34.904716061110385},
+  };
+  for (const Ref& r : refs) {
+    const double n_terms = 3073.0 - 3.0 * r.m + 1.0;
+    EXPECT_NEAR(imu::edf_greenhall_modified(r.alpha, 2, r.m, r.m, n_terms) / r.edf, 1.0, 1e-12)
+        << "alpha " << r.alpha << " m " << r.m;
+  }
 }
 
 }  // namespace

@@ -415,6 +415,8 @@ TEST(JsonSchema, EveryCommandsJsonFollowsTheSchemaForOneChannelAndMany) {
       {{"adev", mat, "--channel", "acc_z"}, dir.file("adev1.json")},
       {{"adev", mat, "--channel", "acc_z,gyro_x"}, dir.file("adev2.json")},
       {{"adev", mat, "--channel", "gyro_x", "--estimator", "online"}, dir.file("adev_on.json")},
+      {{"adev", mat, "--channel", "acc_z", "--deviation", "adev,mdev,hdev,tdev"},
+       dir.file("adev_devs.json")},
       {{"adev", csv, "--channel", "acc_z,gyro_x"}, dir.file("adev_csv.json")},
       {{"analyze", mat, "--channel", "acc_z"}, dir.file("an1.json")},
       {{"analyze", csv, "--channel", "acc_z,gyro_x"}, dir.file("an2.json")},

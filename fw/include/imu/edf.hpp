@@ -2,7 +2,8 @@
 //
 // EDF: C. A. Greenhall and W. J. Riley, "Uncertainty of stability variances based on finite
 // differences", Proc. 35th PTTI (2003), the "basic sum" algorithm (eqns. 7-10 and tables 1-3),
-// implemented here from the paper's formulas for unmodified variances (filter factor F = m).
+// implemented here from the paper's formulas for unmodified variances (filter factor F = m) and
+// modified ones (F = 1).
 // The estimator is described by: d (2 = Allan), m = averaging factor tau/tau0, S = stride factor
 // (terms are tau/S apart: S = 1 non-overlapping, S = m fully overlapping, anything in between
 // partially overlapping), n_terms = number of terms in the sum (Greenhall's M) and the power-law
@@ -26,6 +27,13 @@ inline constexpr double kOneSigmaConfidence = 0.683;
 /// alpha + 2 d > 1. Returns 0.0 when the preconditions are not met (no estimate possible).
 [[nodiscard]] double edf_greenhall(int alpha, int d, double m, double stride_factor,
                                    double n_terms);
+
+/// Greenhall-Riley EDF of a modified d-th difference variance (filter factor F = 1: MVAR for
+/// d = 2, as MDEV and TDEV use; the paper's case 1, eqns. 7-10 and table 1). Same arguments,
+/// preconditions and cost as edf_greenhall (alpha in [-4, 2], alpha + 2 d > 1); n_terms is the
+/// number of terms of the modified sum. Returns 0.0 when the preconditions are not met.
+[[nodiscard]] double edf_greenhall_modified(int alpha, int d, double m, double stride_factor,
+                                            double n_terms);
 
 /// Quantile of the standard normal distribution (0 < p < 1): Acklam's approximation refined by
 /// one Halley step (relative error ~1e-15).

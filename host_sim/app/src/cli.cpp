@@ -51,6 +51,7 @@ constexpr const char* kUsageAdev =
     "                         [--fs X] [--time-unit s|ms|us|ns] [--estimator online|full]\n"
     "                         [--plots DIR]\n"
     "                         [--taus octave|decade|quarter|all]\n"
+    "                         [--deviation adev|mdev|hdev|tdev|A,B]\n"
     "  ADEV of a channel, with the time it took. --channel: a variable (NAME, NAME:K column K\n"
     "  of a matrix, imu.acc_z a struct field), a comma list, or all (the channels acc_x..gyro_z\n"
     "  the file holds; a text file without them: every column but the time): the channels in\n"
@@ -70,7 +71,16 @@ constexpr const char* kUsageAdev =
     "  data's). --fs (else the file's fs or Fs, else a text file's time column) in [1e-3, 1e6]\n"
     "  Hz. A text file's time column (t, time, timestamp, %time, timestamp_ns ..) is in the\n"
     "  unit its name or header states ([ns]), else --time-unit's, else the one its steps show\n"
-    "  (integer times: the first of s, ms, us, ns giving 1 Hz or more; said in a note).\n";
+    "  (integer times: the first of s, ms, us, ns giving 1 Hz or more; said in a note).\n"
+    "  --deviation (full only; default adev; a comma list for several): adev the overlapping\n"
+    "  Allan deviation (allantools oadev); mdev the modified Allan deviation (allantools mdev,\n"
+    "  NIST SP 1065 eqn. 14); hdev the overlapping Hadamard deviation (allantools ohdev, eqn.\n"
+    "  20); tdev the time deviation tau mdev / sqrt(3) (allantools tdev, eqn. 15), in the\n"
+    "  channel's unit times s. Each on the --taus grid up to its own last tau (mdev, tdev:\n"
+    "  3 tau <= T; hdev: 3 tau < T), gaps left out as for adev, a 68.3 % interval from the\n"
+    "  Greenhall-Riley EDF for white FM (mdev, tdev: of the modified variance). Output: a\n"
+    "  table per deviation, the JSON key and the CSV column named by it (several: a CSV\n"
+    "  column deviation, the values in column dev); --plots DIR/KIND_NAME.svg.\n";
 constexpr const char* kUsageRun =
     "usage: imu-sim run FILE [--channel acc_z] [--bus loopback|vcan0|can0] [--rate max|realtime]\n"
     "      [--node inproc|spawn|external] [--out DIR] [--json FILE] [--N --B --Tp [--K]]\n"
@@ -298,6 +308,7 @@ struct AdevOptions {
   std::string spec;  // --channel: NAME, NAME:K, a comma list or `all`
   std::string estimator;
   std::string taus;  // "" : the online estimator's own grid
+  std::vector<Deviation> devs;  // --deviation, in the order given
   bool full = false;
   double lsb = 0.0;  // 0: the file's or the default
   double fs = 0.0;   // 0: the file's
@@ -321,6 +332,15 @@ bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
     err = "--taus all needs --estimator full (the online estimator has its own grid)";
     return false;
   }
+  if (!parse_deviations(a.get("--deviation", "adev"), o.devs, err)) {
+    err = "--deviation " + err;
+    return false;
+  }
+  if (!o.full && (o.devs.size() > 1 || o.devs[0] != Deviation::kAdev)) {
+    err = "--deviation " + a.get("--deviation") +
+          " needs --estimator full (the online estimator computes adev only)";
+    return false;
+  }
   if (a.positional().empty()) {
     err = "a MAT-file or text file is required: imu-sim adev FILE --channel C";
     return false;
@@ -332,13 +352,19 @@ bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
          imu::cli::time_unit_option(a, o.time_unit_s, err);
 }
 
+// One deviation's rows.
+struct DevRows {
+  Deviation kind = Deviation::kAdev;
+  std::vector<AdevRow> rows;
+};
+
 // One channel's ADEV: what it was read as, its rows, the time each step took, or its error.
 struct AdevResult {
   std::string name;  // as named on the command line
   std::size_t chan = 0;  // its slot: acc_x..gyro_z, else acc_z (gyro* names: gyro_z) for the
                          // default LSB and the unit
   SensorData sd;
-  std::vector<AdevRow> rows;
+  std::vector<DevRows> devs;  // one per --deviation, in its order
   AdevTiming t{};
   std::string err;
   int status = kExitOk;
@@ -447,7 +473,7 @@ int adev_load(const AdevOptions& o, bool text, AdevResult& r) {
 }
 
 // The ADEV of a loaded channel: the counts streamed (MAT) or fed (text) into the estimator.
-// Exit status; r.rows and r.t set, or r.err.
+// Exit status; r.devs and r.t set, or r.err.
 int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
   ChannelData& ch = r.sd.ch[r.chan];
   std::vector<std::uint64_t> grid;
@@ -458,11 +484,14 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     if (!o.taus.empty()) {
       (void)tau_grid(o.taus, r.sd.n_samples, grid);  // the keyword was checked by parse_adev
     }
-    const double cost = o.full ? full_adev_cost(r.sd.n_samples, grid) : 0.0;
+    const double cost =
+        o.full ? full_adev_cost(r.sd.n_samples, grid) * static_cast<double>(o.devs.size()) : 0.0;
     if (cost > 2e9) {
       r.err = "--taus " + o.taus + " on " + std::to_string(r.sd.n_samples) +
               " samples would sum " + imu::cli::num_text(cost) +
-              " second differences (limit 2e9): use --taus quarter or octave";
+              (o.devs.size() == 1 && o.devs[0] == Deviation::kAdev ? " second differences"
+                                                                    : " differences") +
+              " (limit 2e9): use --taus quarter or octave";
       return false;
     }
     return true;
@@ -488,7 +517,9 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     if (st != kExitOk) {
       return st;
     }
-    r.rows = full_adev(sink, grid, 1.0 / r.sd.fs_hz, ch.lsb);
+    for (const Deviation d : o.devs) {
+      r.devs.push_back(DevRows{d, full_deviation(sink, d, grid, 1.0 / r.sd.fs_hz, ch.lsb)});
+    }
   } else {
     OnlineAdev<8, 22> adev(1.0 / r.sd.fs_hz, ch.lsb);
     AdevSink sink(adev);
@@ -498,10 +529,11 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     }
     AdevPoint pts[OnlineAdev<8, 22>::kMaxPoints];
     const std::size_t np = adev.snapshot(pts, OnlineAdev<8, 22>::kMaxPoints);
-    r.rows = rows_from_points(pts, np);
+    std::vector<AdevRow> rows = rows_from_points(pts, np);
     if (!grid.empty()) {
-      r.rows = rows_on_grid(r.rows, grid);
+      rows = rows_on_grid(rows, grid);
     }
+    r.devs.push_back(DevRows{Deviation::kAdev, rows});
   }
   // The times of the interleaved steps are summed: read = metadata + read + inflate.
   const double total = now_s() - t0;
@@ -523,14 +555,37 @@ void adev_channel(const AdevOptions& o, bool text, AdevResult& r) {
   }
 }
 
+// The heading and axis name of a deviation, and whether a result is the plain ADEV (its
+// output as it was before --deviation).
+const char* deviation_title(Deviation d) {
+  switch (d) {
+    case Deviation::kAdev: return "Allan deviation";
+    case Deviation::kMdev: return "modified Allan deviation";
+    case Deviation::kHdev: return "overlapping Hadamard deviation";
+    case Deviation::kTdev: return "time deviation";
+  }
+  return "";
+}
+
+bool adev_only(const AdevResult& r) {
+  return r.devs.size() == 1 && r.devs[0].kind == Deviation::kAdev;
+}
+
 void print_adev(FILE* out, const std::string& path, const AdevResult& r) {
   const ChannelData& ch = r.sd.ch[r.chan];
   std::fprintf(out, "%s %s: %zu samples at %g Hz, LSB %g %s%s\n", imu::cli::term_safe(path).c_str(), imu::cli::term_safe(r.name).c_str(),
               r.sd.n_samples, r.sd.fs_hz, ch.lsb, adev_unit(r.name, r.chan).c_str(),
               ch.lsb_from_file ? " (from the file)" : "");
-  std::fputs(format_adev_table(r.rows).c_str(), out);
-  std::fprintf(out, "time: read %.3f s, quantize %.3f s, online ADEV %.3f s, total %.3f s\n", r.t.read,
-              r.t.quantize, r.t.adev, r.t.total);
+  const bool plain = adev_only(r);
+  for (const DevRows& d : r.devs) {
+    if (!plain) {
+      std::fprintf(out, "%s: %s%s\n", deviation_name(d.kind), deviation_title(d.kind),
+                   d.kind == Deviation::kTdev ? " (unit x s)" : "");
+    }
+    std::fputs(format_adev_table(d.rows, deviation_name(d.kind)).c_str(), out);
+  }
+  std::fprintf(out, "time: read %.3f s, quantize %.3f s, %s %.3f s, total %.3f s\n", r.t.read,
+               r.t.quantize, plain ? "online ADEV" : "deviations", r.t.adev, r.t.total);
   if (ch.non_finite > 0) {
     std::fprintf(out, "note: %llu non-finite samples (NaN/Inf) treated as gaps\n",
                 static_cast<unsigned long long>(ch.non_finite));
@@ -555,7 +610,10 @@ std::string adev_members(const AdevResult& r, const std::string& in) {
   j += in + "\"n_samples\": " + std::to_string(r.sd.n_samples) + ",\n";
   j += in + "\"gaps\": {\"samples\": " + std::to_string(ch.non_finite) + "},\n";
   j += in + "\"units\": " + imu::cli::json_units(adev_unit(r.name, r.chan)) + ",\n";
-  j += in + "\"adev\": " + adev_json_list(r.rows) + ",\n";
+  for (const DevRows& d : r.devs) {
+    j += in + json_str(deviation_name(d.kind)) + ": " +
+         adev_json_list(d.rows, deviation_name(d.kind)) + ",\n";
+  }
   j += in + "\"timing_s\": {\"read\": " + json_num(r.t.read) + ", \"quantize\": " +
        json_num(r.t.quantize) + ", \"adev\": " + json_num(r.t.adev) + ", \"total\": " +
        json_num(r.t.total) + "}\n";
@@ -575,22 +633,30 @@ std::string adev_json(const AdevOptions& o, const std::vector<AdevResult>& rs) {
   return j + "  }\n}\n";
 }
 
-// One channel: adev_csv's table; several: the same with a first column `channel`.
+// One channel and one deviation: adev_csv's table named by it; several channels: a first column
+// `channel`; several deviations: then a column `deviation`, the values in column `dev`.
 std::string adev_csv_all(const std::vector<AdevResult>& rs) {
-  if (rs.size() == 1) {
-    return adev_csv(rs[0].rows);
+  const bool chans = rs.size() > 1;
+  const bool kinds = rs[0].devs.size() > 1;
+  if (!chans && !kinds) {
+    return adev_csv(rs[0].devs[0].rows, deviation_name(rs[0].devs[0].kind));
   }
+  const std::string head = std::string(chans ? "channel," : "") + (kinds ? "deviation," : "");
   std::string out;
   for (const AdevResult& r : rs) {
-    const std::string t = adev_csv(r.rows);
-    std::size_t pos = 0;
-    for (bool header = true; pos < t.size(); header = false) {
-      const std::size_t eol = t.find('\n', pos);
-      const std::string line = t.substr(pos, eol - pos);
-      if (!header || out.empty()) {
-        out += (header ? std::string("channel") : r.name) + "," + line + "\n";
+    for (const DevRows& d : r.devs) {
+      const std::string t = adev_csv(d.rows, kinds ? "dev" : deviation_name(d.kind));
+      const std::string prefix = (chans ? r.name + "," : std::string()) +
+                                 (kinds ? std::string(deviation_name(d.kind)) + "," : "");
+      std::size_t pos = 0;
+      for (bool header = true; pos < t.size(); header = false) {
+        const std::size_t eol = t.find('\n', pos);
+        const std::string line = t.substr(pos, eol - pos);
+        if (!header || out.empty()) {
+          out += (header ? head : prefix) + line + "\n";
+        }
+        pos = eol == std::string::npos ? t.size() : eol + 1;
       }
-      pos = eol == std::string::npos ? t.size() : eol + 1;
     }
   }
   return out;
@@ -599,22 +665,30 @@ std::string adev_csv_all(const std::vector<AdevResult>& rs) {
 // One channel's plot in `abs` (an absolute folder): adev_NAME.csv, .gp (runs from any
 // directory), and with gnuplot (`have`) .svg and .png: the ADEV with its 68.3 % intervals, the
 // unit on the axis, the name as given (noenhanced). False with err.
-bool adev_plot(const std::string& abs, bool have, const AdevResult& r, const std::string& stem,
-               std::string& err) {
-  const std::string base = "adev_" + stem;
+bool adev_plot(const std::string& abs, bool have, const AdevResult& r, const DevRows& d,
+               const std::string& stem, std::string& err) {
+  const std::string kind = deviation_name(d.kind);
+  std::string upper = kind;
+  for (char& c : upper) {
+    c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  }
+  const std::string unit =
+      adev_unit(r.name, r.chan) + (d.kind == Deviation::kTdev ? " x s" : "");
+  const std::string base = kind + "_" + stem;
   std::string gp = "cd " + imu::cli::gnuplot_str(abs) + "\n";
   gp += "set datafile separator ','\nset logscale xy\nset format x '10^{%L}'\n";
   gp += "set format y '10^{%L}'\nset grid xtics ytics mxtics mytics lc rgb '#dddddd'\n";
   gp += "set key bottom left box opaque noenhanced\nset xlabel 'tau [s]'\n";
   gp += "set ylabel " +
-        imu::cli::gnuplot_str("Allan deviation [" + adev_unit(r.name, r.chan) + "]") +
+        imu::cli::gnuplot_str(std::string(deviation_title(d.kind)) + " [" + unit + "]") +
         " noenhanced\n";
-  gp += "set title " + imu::cli::gnuplot_str("ADEV of " + r.name + " (" + r.sd.path + ")") +
+  gp += "set title " + imu::cli::gnuplot_str(upper + " of " + r.name + " (" + r.sd.path + ")") +
         " noenhanced\n";
   gp += "plot '" + base + ".csv' skip 1 using 1:3:4:5 with yerrorbars pt 7 ps 0.6 lc rgb ";
-  gp += "'#1f77b4' title 'ADEV, 68.3 % interval'\n";
+  gp += "'#1f77b4' title '" + upper + ", 68.3 % interval'\n";
   const std::string path = abs + "/" + base;
-  if (!write_file(path + ".csv", adev_csv(r.rows), err) || !write_file(path + ".gp", gp, err)) {
+  if (!write_file(path + ".csv", adev_csv(d.rows, kind.c_str()), err) ||
+      !write_file(path + ".gp", gp, err)) {
     return false;
   }
   if (!have) {
@@ -629,7 +703,7 @@ bool adev_plot(const std::string& abs, bool have, const AdevResult& r, const std
   return true;
 }
 
-// --plots DIR (created): a plot per channel (adev_plot). False with err.
+// --plots DIR (created): a plot per channel and deviation (adev_plot). False with err.
 bool adev_plots(const std::string& dir, const std::vector<AdevResult>& rs, std::string& err) {
   if (!imu::cli::make_dirs(dir, err)) {
     return false;
@@ -645,8 +719,10 @@ bool adev_plots(const std::string& dir, const std::vector<AdevResult>& rs, std::
   }
   const std::vector<std::string> stems = imu::cli::safe_components(names);
   for (std::size_t i = 0; i < rs.size(); ++i) {
-    if (!adev_plot(abs, have, rs[i], stems[i], err)) {
-      return false;
+    for (const DevRows& d : rs[i].devs) {
+      if (!adev_plot(abs, have, rs[i], d, stems[i], err)) {
+        return false;
+      }
     }
   }
   return true;
@@ -684,7 +760,7 @@ int cmd_adev(int argc, char** argv) {
   const std::vector<OptSpec> specs = {{"--channel", true},   {"--json", true}, {"--lsb", true},
                                       {"--fs", true},        {"--csv", true},  {"--taus", true},
                                       {"--estimator", true}, {"--plots", true},
-                                      {"--time-unit", true}};
+                                      {"--time-unit", true}, {"--deviation", true}};
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
     return fail(cmd, err, kExitUsage);
   }

@@ -106,9 +106,9 @@ std::vector<AdevRow> rows_from_points(const AdevPoint* p, std::size_t n) {
   return rows;
 }
 
-std::string format_adev_table(const std::vector<AdevRow>& rows) {
+std::string format_adev_table(const std::vector<AdevRow>& rows, const char* value) {
   std::string s;
-  appendf(s, "%12s %10s %12s %12s %12s %10s %10s\n", "tau_s", "af", "adev", "ci_lo", "ci_hi",
+  appendf(s, "%12s %10s %12s %12s %12s %10s %10s\n", "tau_s", "af", value, "ci_lo", "ci_hi",
           "edf", "n_terms");
   for (const AdevRow& r : rows) {
     appendf(s, "%12.4g %10llu %12.4e %12.4e %12.4e %10.4g %10llu\n", r.tau_s,
@@ -118,12 +118,13 @@ std::string format_adev_table(const std::vector<AdevRow>& rows) {
   return s;
 }
 
-std::string adev_json_list(const std::vector<AdevRow>& rows) {
+std::string adev_json_list(const std::vector<AdevRow>& rows, const char* value) {
   std::string s = "[";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const AdevRow& r = rows[i];
     s += i == 0 ? "\n" : ",\n";
-    s += "    {\"tau_s\": " + json_num(r.tau_s) + ", \"adev\": " + json_num(r.adev) +
+    s += "    {\"tau_s\": " + json_num(r.tau_s) + ", " + json_str(value) + ": " +
+         json_num(r.adev) +
          ", \"edf\": " + json_num(r.edf) + ", \"ci_lo\": " + json_num(r.ci_lo) +
          ", \"ci_hi\": " + json_num(r.ci_hi) +
          ", \"n_terms\": " + std::to_string(r.n_terms) + ", \"af\": " + std::to_string(r.af) +

@@ -14,7 +14,8 @@
 
 namespace imu::sim {
 
-/// One ADEV point as reported (JSON keys tau_s, adev, edf, ci_lo, ci_hi; plus n_terms).
+/// One ADEV point as reported (JSON keys tau_s, adev, edf, ci_lo, ci_hi; plus n_terms). The
+/// rows of `imu-sim adev --deviation` hold MDEV, HDEV or TDEV in `adev` (full_adev.hpp).
 struct AdevRow {
   double tau_s = 0.0;
   double adev = 0.0;
@@ -26,10 +27,13 @@ struct AdevRow {
 };
 
 [[nodiscard]] std::vector<AdevRow> rows_from_points(const AdevPoint* p, std::size_t n);
-/// Fixed-width table, one line per tau.
-[[nodiscard]] std::string format_adev_table(const std::vector<AdevRow>& rows);
-/// JSON array of {"tau_s","adev","edf","ci_lo","ci_hi","n_terms","af"} objects.
-[[nodiscard]] std::string adev_json_list(const std::vector<AdevRow>& rows);
+/// Fixed-width table, one line per tau; `value` heads the deviation's column.
+[[nodiscard]] std::string format_adev_table(const std::vector<AdevRow>& rows,
+                                            const char* value = "adev");
+/// JSON array of {"tau_s","adev","edf","ci_lo","ci_hi","n_terms","af"} objects; `value` is the
+/// deviation's key ("mdev", ..).
+[[nodiscard]] std::string adev_json_list(const std::vector<AdevRow>& rows,
+                                         const char* value = "adev");
 /// A JSON number (%.10g; non-finite -> null) and a JSON string literal: the CLI library's, one
 /// writer for every command.
 using imu::cli::json_num;
