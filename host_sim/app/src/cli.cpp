@@ -90,6 +90,8 @@ constexpr const char* kUsageRun =
     "  sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON, CSV, SVG/PNG\n"
     "  plots in DIR, default out/run). --channel: acc_x..gyro_z, or any variable as for adev\n"
     "  (NAME, NAME:K, imu.acc_z), which takes the acc_z slot (gyro*: gyro_z) of the six sent.\n"
+    "  FILE: a MAT-file, or text as adev reads it (its columns on their time grid, written to\n"
+    "  DIR/input.mat, which the run streams; said in a note).\n"
     "  A sample with NaN/Inf in a channel sent is not sent (the\n"
     "  node counts it missing). LSB and rate rules as for adev. Ranges: --T-avg + --T-int at\n"
     "  most the recording, --sim-windows in [1, 1e5] (x window samples <= 2e8), --seed in\n"

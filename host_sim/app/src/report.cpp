@@ -678,6 +678,11 @@ std::string report_json(const ReportInput& in, const ReportOptions& opt, ReportS
   if (!in.node_json.empty()) {
     j += "  \"node\": " + in.node_json + ",\n";
   }
+  j += "  \"notes\": [";
+  for (std::size_t k = 0; k < in.notes.size(); ++k) {
+    j += (k == 0 ? "" : ", ") + json_str(in.notes[k]);
+  }
+  j += "],\n";
   j += "  \"timing_s\": {";
   for (std::size_t k = 0; k < in.timing_s.size(); ++k) {
     j += (k == 0 ? "" : ", ") + json_str(in.timing_s[k].key) + ": " +

@@ -12,6 +12,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <bitset>
@@ -31,7 +32,9 @@
 #include "imu/edf.hpp"
 #include "imu/hal/linux/can_socket.hpp"
 #include "imu/hal/sim/memory_line.hpp"
+#include "imu/cli/text_input.hpp"
 #include "imu/mat/mat_reader.hpp"
+#include "imu/mat/mat_writer.hpp"
 #include "imu/node/node.hpp"
 #include "imu/node/node_loop.hpp"
 #include "model_json.hpp"
@@ -285,6 +288,8 @@ void print_progress(double t0, std::uint64_t sent, std::uint64_t total,
 struct RunOptions {
   bool help = false;
   std::string path;
+  std::string source;  ///< the input as given (path: the MAT-file a text input became)
+  std::string input_note;  ///< how a text input became that MAT-file
   std::string chan_name;
   std::size_t chan = 0;
   ChannelVars vars;  // a variable other than acc_x..gyro_z in the slot `chan` (if renamed)
@@ -558,6 +563,106 @@ bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& e
           std::to_string(kMaxSamples) + " samples)";
     return false;
   }
+  return true;
+}
+
+// The most samples per channel a text input is taken to: its channels are held while the
+// MAT-file the run streams is written (8 bytes per sample per channel, twice).
+constexpr std::size_t kMaxTextRunSamples = std::size_t{1} << 25U;
+
+// A text input (CSV, TSV; imu::cli::TextColumnStream: the rate from --fs or its time column,
+// missing rows as gaps, the same grid as adev and analyze) becomes DIR/input.mat: the slots'
+// columns it holds (acc_x..gyro_z, or the column --channel names in its slot) and fs. The run
+// then streams that file like any MAT input; a note says so. False with err (a missing
+// column names the columns; `usage` when --channel named it: exit 2, as for a MAT variable).
+bool text_input_to_mat(RunOptions& o, std::string& note, bool& usage, std::string& err) {
+  usage = false;
+  imu::cli::TextRows header;
+  if (!header.open(o.path, err)) {
+    return false;
+  }
+  const std::vector<std::string>& names = header.names();
+  const auto holds = [&names](const std::string& n) {
+    return std::find(names.begin(), names.end(), n) != names.end();
+  };
+  std::vector<std::string> cols;
+  std::vector<std::size_t> slots;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const std::string n = o.renamed && c == o.chan ? o.vars.names[c] : kChannelNames[c];
+    if (o.only_channel && c != o.chan) {
+      continue;
+    }
+    if (holds(n)) {
+      cols.push_back(n);
+      slots.push_back(c);
+    } else if (c == o.chan) {
+      std::string listed;
+      for (const std::string& h : names) {
+        listed += (listed.empty() ? "" : ", ") + h;
+      }
+      err = o.path + ": no column '" + n + "'; columns: " + listed;
+      usage = o.renamed;  // a name given on the command line, as for a MAT-file's variable
+      return false;
+    }
+  }
+  imu::cli::TextColumnStream st;
+  if (!st.open(o.path, cols, o.fs_opt, err)) {
+    return false;
+  }
+  std::vector<std::vector<double>> data(cols.size());
+  std::vector<double> buf(4096 * cols.size());
+  for (;;) {
+    std::size_t got = 0;
+    if (!st.read(buf.data(), 4096, got, err)) {
+      return false;
+    }
+    if (got == 0) {
+      break;
+    }
+    if (data[0].size() + got > kMaxTextRunSamples) {
+      err = o.path + ": more than " + std::to_string(kMaxTextRunSamples) +
+            " samples per channel: too long for run from text (adev and analyze read it in "
+            "constant memory)";
+      return false;
+    }
+    for (std::size_t i = 0; i < got; ++i) {
+      for (std::size_t k = 0; k < cols.size(); ++k) {
+        data[k].push_back(buf[i * cols.size() + k]);
+      }
+    }
+  }
+  imu::mat::MatWriter w;
+  for (std::size_t k = 0; k < cols.size(); ++k) {
+    // A column's own name may not be a MAT name (w_RS_S_x is, gyro_rad[0] is not): it is written
+    // under its slot's name, which the run then reports.
+    if (!w.add_column(kChannelNames[slots[k]], data[k]).ok()) {
+      err = o.path + ": column '" + cols[k] + "' could not be converted";
+      return false;
+    }
+  }
+  if (!w.add_scalar("fs", st.fs_hz()).ok() || !imu::cli::make_dirs(o.out_dir, err)) {
+    err = err.empty() ? o.path + ": could not convert" : err;
+    return false;
+  }
+  const std::string mat = o.out_dir + "/input.mat";
+  if (!imu::cli::write_file_atomic(
+          mat, std::string(w.bytes().begin(), w.bytes().end()), err)) {
+    return false;
+  }
+  note = "text input: " + std::to_string(cols.size()) + " column(s) at " +
+         imu::cli::num_text(st.fs_hz()) + " Hz" +
+         (o.fs_opt > 0.0 ? " (--fs)" : " from the time column '" + st.time_name() + "'") +
+         (st.time_note().empty() ? "" : "; " + st.time_note()) +
+         (st.time_gap_samples() > 0
+              ? "; its steps left " + std::to_string(st.time_gap_samples()) + " samples missing"
+              : "") +
+         "; streamed from " + mat;
+  if (o.renamed) {
+    note += " (column '" + o.vars.names[o.chan] + "' as " + kChannelNames[o.chan] + ")";
+    o.renamed = false;
+    o.vars = ChannelVars{};
+  }
+  o.path = mat;
   return true;
 }
 
@@ -1289,7 +1394,7 @@ ReportInput report_input(const RunOptions& o, const SensorData& sd, const SendPl
                          const std::vector<double>& cov_prefix, const RunTimes& times,
                          const std::string& model_note) {
   ReportInput ri;
-  ri.source = o.path;
+  ri.source = o.source;
   ri.channel = o.chan_name;
   ri.channel_index = o.chan;
   ri.fs_hz = sd.fs_hz;
@@ -1303,6 +1408,9 @@ ReportInput report_input(const RunOptions& o, const SensorData& sd, const SendPl
                  {"send", "send all samples (" + o.rate + ")", times.send_s},
                  {"total", "until final telemetry", times.total_s}};
   ri.notes = report_notes(o, sd, plan, s);
+  if (!o.input_note.empty()) {
+    ri.notes.insert(ri.notes.begin(), o.input_note);
+  }
   const Verdicts vs = channel_verdicts(tel);
   const std::string mon_note = monitor_note(o, tel, vs);
   if (!mon_note.empty()) {
@@ -1337,6 +1445,13 @@ int cmd_run(int argc, char** argv) {
     return fail(kCmd, err);
   }
   const double t0 = now_s();
+  o.source = o.path;
+  if (imu::cli::looks_like_text(o.path)) {
+    bool usage = false;
+    if (!text_input_to_mat(o, o.input_note, usage, err)) {
+      return fail(kCmd, err, usage ? kExitUsage : kExitRuntime);
+    }
+  }
   SensorData sd;
   SendPlan plan;
   const int load_status = load_run_data(o, sd, plan, err);
