@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -15,6 +17,7 @@
 #include "common.hpp"
 #include "data.hpp"
 #include "full_adev.hpp"
+#include "model_json.hpp"
 #include "imu/cli/file_out.hpp"
 #include "imu/cli/text_input.hpp"
 #include "imu/error_model.hpp"
@@ -38,6 +41,12 @@ using imu::cli::AtomicFileWriter;
 constexpr const char* kUsageSynth =
     "usage: imu-sim synth [--out FILE] [--N 3.3e-3] [--B 9e-4] [--Tp 300] [--K 1.4e-4]\n"
     "                     [--fs 100] [--duration 10000] [--seed 1] [--lsb 1e-6] [--channel acc_z]\n"
+    "       imu-sim synth --model A.json [--out FILE] [--duration 3600] [--fs HZ] [--seed 1]\n"
+    "                     [--lsb X]\n"
+    "  --model: every channel acc_x..gyro_z of an analyze JSON (--channel all) simulated from\n"
+    "  its model_after (white, quantization, GM terms, rate random walk, bias instability; at\n"
+    "  most 8 states, as the node runs it: ramp and sinusoids left out, said) at the analysis's\n"
+    "  rate, one MAT-file.\n"
     "  synthetic recording (MAT-file: channel, fs, acc_lsb/gyro_lsb, source) from the example's\n"
     "  error model plus rate random walk. Ranges: --N --B in [1e-12, 1e3], --K in [0, 1e3],\n"
     "  --Tp in [1e-6, 1e9] s, --fs in [1e-3, 1e6] Hz, --duration x --fs in [16, 2^25] samples,\n"
@@ -191,6 +200,146 @@ int synth_write(const SynthOptions& o, ModelSimulator<4>& sim, mat::MatWriter& w
   return kExitOk;
 }
 
+// The rate analyze gave a channel: "fs_hz" of its object in `json` (0 if absent).
+double analysis_fs(const std::string& json, const std::string& name) {
+  const std::size_t at = json.find(imu::cli::json_str(name) + ": {");
+  const std::size_t fs = at == std::string::npos ? at : json.find("\"fs_hz\": ", at);
+  return fs == std::string::npos ? 0.0 : std::strtod(json.c_str() + fs + 9, nullptr);
+}
+
+// `synth --model A.json`: every channel acc_x..gyro_z an analysis JSON holds, simulated from
+// its model_after (white, quantization, GM terms, rate random walk, bias instability: the
+// model the node runs, read by the reader of run --model; ramp and sinusoids are deterministic
+// and left out, said) at the analysis's rate (or --fs), quantised to --lsb (else the usual
+// default per sensor), into one MAT-file. Memory: the channels are held (8 bytes per sample
+// each). Exit status.
+int synth_from_model(const Args& a, const char* cmd) {
+  std::string err;
+  for (const char* opt : {"--N", "--B", "--Tp", "--K", "--channel"}) {
+    if (a.has(opt)) {
+      return fail(cmd, std::string(opt) + " and --model both give the model: use one",
+                  kExitUsage);
+    }
+  }
+  double dur = 0.0;
+  double fs_opt = 0.0;
+  double lsb_opt = 0.0;
+  std::uint64_t seed = 0;
+  if (!a.number("--duration", 3600.0, 0.0, 1e12, dur, err) ||
+      (a.has("--fs") && !a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, fs_opt, err)) ||
+      (a.has("--lsb") && !a.number("--lsb", 0.0, 1e-12, 1e6, lsb_opt, err)) ||
+      !a.integer("--seed", 1, 0, std::uint64_t{1} << 53U, seed, err)) {
+    return fail(cmd, err, kExitUsage);
+  }
+  const std::string path = a.get("--model");
+  const std::string out = a.get("--out", "synth.mat");
+  std::string json;
+  {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    std::ifstream in(path, std::ios::binary);
+    if (ec || !in || size > (std::uintmax_t{64} << 20U)) {
+      return fail(cmd, "--model " + path + ": cannot read" +
+                           (ec || !in ? std::string() : " (larger than 64 MiB)"));
+    }
+    std::stringstream buf;
+    buf << in.rdbuf();
+    json = buf.str();
+  }
+  mat::MatWriter w;
+  std::string source = "SYNTHETIC data from imu-sim synth --model " + path + ":";
+  std::size_t written = 0;
+  double fs_all = 0.0;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    const std::string name = kChannelNames[c];
+    if (!analysis_holds_channel(json, name)) {
+      continue;
+    }
+    hal::ModelRecord rec{};
+    std::string dropped;
+    if (!model_from_analysis_json(json, name, c, rec, dropped, err)) {
+      return fail(cmd, path + ": " + err);
+    }
+    const double fs = fs_opt > 0.0 ? fs_opt : analysis_fs(json, name);
+    if (!(fs >= kMinFsHz && fs <= kMaxFsHz) || (fs_all > 0.0 && std::fabs(fs - fs_all) > 0.0)) {
+      return fail(cmd, path + ": " + name + ": no rate, or not the other channels' (give --fs)",
+                  kExitUsage);
+    }
+    fs_all = fs;
+    const double samples = std::round(dur * fs);
+    if (!(samples >= 16.0 && samples <= static_cast<double>(std::size_t{1} << 26U))) {
+      return fail(cmd, "--duration x rate = " + std::to_string(samples) +
+                           " samples, outside [16, 2^26] per channel", kExitUsage);
+    }
+    ModelParams mp{};
+    mp.n = rec.n;
+    mp.q = rec.q;
+    for (std::size_t g = 0; g < 2; ++g) {
+      if (rec.gm_sb[g] > 0.0F && rec.gm_tb_s[g] > 0.0F) {
+        mp.gm[mp.n_gm++] = GmParam{rec.gm_sb[g], rec.gm_tb_s[g]};
+      }
+    }
+    mp.k = rec.k;
+    mp.bi = rec.bi;
+    mp.bi_tau_lo_s = rec.bi_tau_lo_s;
+    mp.bi_tau_hi_s = rec.bi_tau_hi_s;
+    ContinuousModel<8> cm;
+    DiscreteModel<8> dm;
+    ModelSimulator<8> sim;
+    if (build_model(mp, cm) != ModelStatus::kOk ||
+        discretize(cm, 1.0 / fs, dm) != ModelStatus::kOk ||
+        sim.configure(dm, seed + c) != ModelStatus::kOk) {
+      return fail(cmd, path + ": " + name + "'s model could not be built or simulated (at most "
+                       "8 states, the node's largest filter)");
+    }
+    const double lsb = lsb_opt > 0.0 ? lsb_opt : default_lsb(c);
+    std::vector<double> z(static_cast<std::size_t>(samples));
+    for (double& v : z) {
+      const double x = sim.next();
+      const QuantizeResult q = quantize(x, lsb);
+      if (q.saturated || !std::isfinite(x)) {
+        return fail(cmd, name + ": the model's values reach " + imu::cli::num_text(x) +
+                             ", beyond int32 counts of the LSB " + imu::cli::num_text(lsb) +
+                             " (raise --lsb)", kExitUsage);
+      }
+      v = static_cast<double>(q.counts) * lsb;
+    }
+    if (auto st = w.add_column(name, z); !st.ok()) {
+      return fail(cmd, st.error().message);
+    }
+    appendf(source, " %s N=%.4g Q=%.4g", name.c_str(), mp.n, mp.q);
+    for (std::size_t g = 0; g < mp.n_gm; ++g) {
+      appendf(source, " GM(Sb=%.4g,Tb=%.4g s)", mp.gm[g].sb, mp.gm[g].tb_s);
+    }
+    appendf(source, " K=%.4g B=%.4g LSB=%.4g;", mp.k, mp.bi, lsb);
+    if (!dropped.empty()) {
+      std::printf("note: %s: simulated as the node runs it: %s\n", name.c_str(),
+                  imu::cli::term_safe(dropped).c_str());
+    }
+    ++written;
+  }
+  if (written == 0) {
+    return fail(cmd, path + ": no channel acc_x..gyro_z in it (imu-sim analyze FILE --channel "
+                     "all --json A.json writes one)");
+  }
+  appendf(source, " %g Hz, seed %llu", fs_all, static_cast<unsigned long long>(seed));
+  auto st = w.add_scalar("fs", fs_all);
+  if (st.ok()) {
+    st = w.add_string("source", source);
+  }
+  if (!st.ok()) {
+    return fail(cmd, st.error().message);
+  }
+  const std::size_t slash = out.rfind('/');
+  if ((slash != std::string::npos && !make_dirs(out.substr(0, slash), err)) ||
+      !imu::cli::write_file_atomic(out, std::string(w.bytes().begin(), w.bytes().end()), err)) {
+    return fail(cmd, err);
+  }
+  std::printf("wrote %s: %zu channels at %g Hz, %g s\n%s\n", imu::cli::term_safe(out).c_str(),
+              written, fs_all, dur, imu::cli::term_safe(source).c_str());
+  return kExitOk;
+}
+
 int cmd_synth(int argc, char** argv) {
   const char* cmd = "imu-sim synth";
   Args a;
@@ -198,12 +347,15 @@ int cmd_synth(int argc, char** argv) {
   const std::vector<OptSpec> specs = {{"--out", true},  {"--N", true},        {"--B", true},
                                       {"--Tp", true},   {"--K", true},        {"--fs", true},
                                       {"--duration", true}, {"--seed", true}, {"--lsb", true},
-                                      {"--channel", true}};
+                                      {"--channel", true},  {"--model", true}};
   if (!a.parse(argc, argv, 2, specs, 0, err)) {
     return fail(cmd, err, kExitUsage);
   }
   if (a.help()) {
     return print_help("synth");
+  }
+  if (a.has("--model")) {
+    return synth_from_model(a, cmd);
   }
   SynthOptions o;
   if (!parse_synth(a, o, err)) {
