@@ -258,12 +258,13 @@ int synth_from_model(const Args& a, const char* cmd) {
     hal::ModelRecord rec{};
     std::string dropped;
     if (!model_from_analysis_json(json, name, c, rec, dropped, err)) {
-      return fail(cmd, path + ": " + err);
+      return fail(cmd, path + ": " + err);  // NOLINT(performance-inefficient-string-concatenation)
     }
     const double fs = fs_opt > 0.0 ? fs_opt : analysis_fs(json, name);
     if (!(fs >= kMinFsHz && fs <= kMaxFsHz) || (fs_all > 0.0 && std::fabs(fs - fs_all) > 0.0)) {
-      return fail(cmd, path + ": " + name + ": no rate, or not the other channels' (give --fs)",
-                  kExitUsage);
+      std::string msg = path;
+      msg += ": " + name + ": no rate, or not the other channels' (give --fs)";
+      return fail(cmd, msg, kExitUsage);
     }
     fs_all = fs;
     const double samples = std::round(dur * fs);
@@ -271,26 +272,29 @@ int synth_from_model(const Args& a, const char* cmd) {
       return fail(cmd, "--duration x rate = " + std::to_string(samples) +
                            " samples, outside [16, 2^26] per channel", kExitUsage);
     }
+    const auto d = [](float v) { return static_cast<double>(v); };
     ModelParams mp{};
-    mp.n = rec.n;
-    mp.q = rec.q;
+    mp.n = d(rec.n);
+    mp.q = d(rec.q);
     for (std::size_t g = 0; g < 2; ++g) {
       if (rec.gm_sb[g] > 0.0F && rec.gm_tb_s[g] > 0.0F) {
-        mp.gm[mp.n_gm++] = GmParam{rec.gm_sb[g], rec.gm_tb_s[g]};
+        mp.gm[mp.n_gm++] = GmParam{d(rec.gm_sb[g]), d(rec.gm_tb_s[g])};
       }
     }
-    mp.k = rec.k;
-    mp.bi = rec.bi;
-    mp.bi_tau_lo_s = rec.bi_tau_lo_s;
-    mp.bi_tau_hi_s = rec.bi_tau_hi_s;
+    mp.k = d(rec.k);
+    mp.bi = d(rec.bi);
+    mp.bi_tau_lo_s = d(rec.bi_tau_lo_s);
+    mp.bi_tau_hi_s = d(rec.bi_tau_hi_s);
     ContinuousModel<8> cm;
     DiscreteModel<8> dm;
     ModelSimulator<8> sim;
     if (build_model(mp, cm) != ModelStatus::kOk ||
         discretize(cm, 1.0 / fs, dm) != ModelStatus::kOk ||
         sim.configure(dm, seed + c) != ModelStatus::kOk) {
-      return fail(cmd, path + ": " + name + "'s model could not be built or simulated (at most "
-                       "8 states, the node's largest filter)");
+      std::string msg = path;
+      msg += ": " + name + "'s model could not be built or simulated (at most 8 states, the "
+             "node's largest filter)";
+      return fail(cmd, msg);
     }
     const double lsb = lsb_opt > 0.0 ? lsb_opt : default_lsb(c);
     std::vector<double> z(static_cast<std::size_t>(samples));

@@ -600,7 +600,11 @@ bool text_input_to_mat(RunOptions& o, std::string& note, bool& usage, std::strin
       for (const std::string& h : names) {
         listed += (listed.empty() ? "" : ", ") + h;
       }
-      err = o.path + ": no column '" + n + "'; columns: " + listed;
+      err = o.path;
+      err += ": no column '";
+      err += n;
+      err += "'; columns: ";
+      err += listed;
       usage = o.renamed;  // a name given on the command line, as for a MAT-file's variable
       return false;
     }
@@ -660,7 +664,7 @@ bool text_input_to_mat(RunOptions& o, std::string& note, bool& usage, std::strin
   if (o.renamed) {
     note += " (column '" + o.vars.names[o.chan] + "' as " + kChannelNames[o.chan] + ")";
     o.renamed = false;
-    o.vars = ChannelVars{};
+    o.vars.names[o.chan].clear();
   }
   o.path = mat;
   return true;
