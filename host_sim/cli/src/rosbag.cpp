@@ -348,8 +348,10 @@ bool BagRows::open(const std::string& path, const std::string& topic, std::strin
     err = at(r.pos) + why;
     return false;
   }
+  // Both fields point into header_, which the next record read replaces.
   data_start_ = r.end;
   index_pos_ = le64(index_pos);
+  const std::uint32_t conns = le32(conn_count);
   if (index_pos_ == 0U) {
     err = path + ": ROS bag without an index (the recording was not closed); run `rosbag "
                  "reindex " + path + "` first";
@@ -367,9 +369,9 @@ bool BagRows::open(const std::string& path, const std::string& topic, std::strin
   if (!read_index(err)) {
     return false;
   }
-  if (conns_.size() != le32(conn_count)) {
+  if (conns_.size() != conns) {
     err = path + ": ROS bag index holds " + std::to_string(conns_.size()) +
-          " connections, its header says " + std::to_string(le32(conn_count));
+          " connections, its header says " + std::to_string(conns);
     return false;
   }
   if (!pick_topic(topic, err)) {
