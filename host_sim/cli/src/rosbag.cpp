@@ -48,9 +48,13 @@ double le_double(const std::uint8_t* p) {
   return v;
 }
 
-// A ROS time (uint32 sec, uint32 nsec) in nanoseconds.
+// A ROS time (uint32 sec, then uint32 nsec) in nanoseconds.
 long long time_ns(const std::uint8_t* p) {
   return static_cast<long long>(le32(p)) * kNsPerS + static_cast<long long>(le32(p + 4));
+}
+long long time_ns(std::uint64_t sec_nsec) {
+  return static_cast<long long>(sec_nsec & 0xFFFFFFFFU) * kNsPerS +
+         static_cast<long long>(sec_nsec >> 32U);
 }
 
 // A record header (or a connection header): fields of a uint32 length, then name=value. Empty
@@ -92,16 +96,22 @@ bool find_field(const std::uint8_t* h, std::size_t n, const char* name, const st
   return false;
 }
 
-// A field of exactly `bytes` bytes; empty string, else what is wrong.
-std::string fixed_field(const std::uint8_t* h, std::size_t n, const char* name,
-                        std::size_t bytes, const std::uint8_t*& v) {
+// An integer field of exactly `bytes` bytes (1, 4 or 8), little endian, copied into v (the
+// header's buffer may be replaced before the value is used); empty string, else what is wrong.
+std::string int_field(const std::uint8_t* h, std::size_t n, const char* name, std::size_t bytes,
+                      std::uint64_t& v) {
+  const std::uint8_t* p = nullptr;
   std::size_t size = 0;
-  if (!find_field(h, n, name, v, size)) {
+  if (!find_field(h, n, name, p, size) || p == nullptr) {
     return std::string("no '") + name + "' field";
   }
   if (size != bytes) {
     return std::string("the '") + name + "' field has " + std::to_string(size) + " bytes, not " +
            std::to_string(bytes);
+  }
+  v = 0;
+  for (std::size_t k = bytes; k > 0; --k) {
+    v = (v << 8U) | p[k - 1U];
   }
   return std::string();
 }
@@ -198,15 +208,15 @@ bool BagRows::read_record(std::uint64_t pos, std::uint64_t limit, Record& r, std
   }
   r.end = r.data_pos + r.data_len;
   std::string why = check_header(header_.data(), header_.size());
-  const std::uint8_t* op = nullptr;
+  std::uint64_t op = 0;
   if (why.empty()) {
-    why = fixed_field(header_.data(), header_.size(), "op", 1U, op);
+    why = int_field(header_.data(), header_.size(), "op", 1U, op);
   }
   if (!why.empty()) {
     err = at(pos) + why;
     return false;
   }
-  r.op = *op;
+  r.op = static_cast<std::uint8_t>(op);
   return true;
 }
 
@@ -234,10 +244,10 @@ bool BagRows::read_index(std::string& err) {
       return false;
     }
     BagConnection c;
-    const std::uint8_t* id = nullptr;
-    std::string why = fixed_field(header_.data(), header_.size(), "conn", 4U, id);
+    std::uint64_t id = 0;
+    std::string why = int_field(header_.data(), header_.size(), "conn", 4U, id);
     if (why.empty()) {
-      c.id = le32(id);
+      c.id = static_cast<std::uint32_t>(id);
       why = string_field(header_.data(), header_.size(), "topic", c.topic);
     }
     if (why.empty() && r.data_len > kMaxBagRecordBytes) {
@@ -325,8 +335,12 @@ bool BagRows::open(const std::string& path, const std::string& topic, std::strin
   in_.close();
   in_.clear();
   in_.open(path, std::ios::binary);
+  if (!in_) {
+    err = path + ": " + std::strerror(errno);
+    return false;
+  }
   char magic[kMagicBytes] = {};
-  if (!in_ || file_size_ < kMagicBytes || !read_at(0, magic, kMagicBytes, err) ||
+  if (file_size_ < kMagicBytes || !read_at(0, magic, kMagicBytes, err) ||
       std::memcmp(magic, kMagic, kMagicBytes) != 0) {
     err = path + ": not a ROS bag of format 2.0 (it does not begin with #ROSBAG V2.0)";
     return false;
@@ -335,23 +349,21 @@ bool BagRows::open(const std::string& path, const std::string& topic, std::strin
   if (!read_record(kMagicBytes, file_size_, r, err)) {
     return false;
   }
-  const std::uint8_t* index_pos = nullptr;
-  const std::uint8_t* conn_count = nullptr;
+  std::uint64_t index_pos = 0;
+  std::uint64_t conns = 0;
   std::string why = r.op == kOpBagHeader ? std::string() : "not the bag header record (op 0x03)";
   if (why.empty()) {
-    why = fixed_field(header_.data(), header_.size(), "index_pos", 8U, index_pos);
+    why = int_field(header_.data(), header_.size(), "index_pos", 8U, index_pos);
   }
   if (why.empty()) {
-    why = fixed_field(header_.data(), header_.size(), "conn_count", 4U, conn_count);
+    why = int_field(header_.data(), header_.size(), "conn_count", 4U, conns);
   }
   if (!why.empty()) {
     err = at(r.pos) + why;
     return false;
   }
-  // Both fields point into header_, which the next record read replaces.
   data_start_ = r.end;
-  index_pos_ = le64(index_pos);
-  const std::uint32_t conns = le32(conn_count);
+  index_pos_ = index_pos;
   if (index_pos_ == 0U) {
     err = path + ": ROS bag without an index (the recording was not closed); run `rosbag "
                  "reindex " + path + "` first";
@@ -417,16 +429,15 @@ std::string BagRows::note() const {
 
 bool BagRows::load_chunk(const Record& r, std::string& err) {
   std::string compression;
-  const std::uint8_t* size_field = nullptr;
+  std::uint64_t size = 0;
   std::string why = string_field(header_.data(), header_.size(), "compression", compression);
   if (why.empty()) {
-    why = fixed_field(header_.data(), header_.size(), "size", 4U, size_field);
+    why = int_field(header_.data(), header_.size(), "size", 4U, size);
   }
   if (!why.empty()) {
     err = at(r.pos) + "chunk: " + why;
     return false;
   }
-  const std::uint32_t size = le32(size_field);
   if (compression == "bz2") {
     err = path_ + ": ROS bag chunk compressed with bz2: not read; run `rosbag decompress " +
           path_ + "` (or `rosbag compress --lz4`) first";
@@ -441,28 +452,34 @@ bool BagRows::load_chunk(const Record& r, std::string& err) {
           " bytes, above the " + std::to_string(kMaxBagChunkBytes) + "-byte limit";
     return false;
   }
+  const auto n = static_cast<std::size_t>(size);  // at most kMaxBagChunkBytes
   chunk_at_ = r.pos;
   chunk_pos_ = 0;
+  chunk_.clear();
   if (compression == "none") {
     if (r.data_len != size) {
       err = at(r.pos) + "an uncompressed chunk of " + std::to_string(r.data_len) +
             " bytes, its header says " + std::to_string(size);
       return false;
     }
-    chunk_.resize(size);
-    return read_at(r.data_pos, chunk_.data(), size, err);
+    chunk_.resize(n);
+    if (!read_at(r.data_pos, chunk_.data(), n, err)) {
+      chunk_.clear();
+      return false;
+    }
+    return true;
   }
   raw_.resize(r.data_len);
   if (!read_at(r.data_pos, raw_.data(), raw_.size(), err)) {
     return false;
   }
-  const Lz4Status st = lz4_decode_frames(raw_.data(), raw_.size(), size, chunk_);
+  const Lz4Status st = lz4_decode_frames(raw_.data(), raw_.size(), n, chunk_);
   if (st != Lz4Status::ok) {
     chunk_.clear();
     err = at(r.pos) + "lz4 chunk: " + describe(st);
     return false;
   }
-  if (chunk_.size() != size) {
+  if (chunk_.size() != n) {
     err = at(r.pos) + "an lz4 chunk of " + std::to_string(chunk_.size()) +
           " bytes, its header says " + std::to_string(size);
     chunk_.clear();
@@ -493,29 +510,30 @@ bool BagRows::next_message(std::string& err) {
       const std::uint8_t* d = p + 8U + hl;
       chunk_pos_ += 8U + hl + dl;
       std::string why = check_header(h, hl);
-      const std::uint8_t* op = nullptr;
+      std::uint64_t op = 0;
       if (why.empty()) {
-        why = fixed_field(h, hl, "op", 1U, op);
+        why = int_field(h, hl, "op", 1U, op);
       }
-      if (why.empty() && *op == kOpConnection) {
+      if (why.empty() && op == kOpConnection) {
         continue;  // the connections were read from the index
       }
-      if (why.empty() && *op != kOpMessage) {
-        why = "a record of op " + std::to_string(*op) + " (connection and message data only)";
+      if (why.empty() && op != kOpMessage) {
+        why = "a record of op " + std::to_string(op) + " (connection and message data only)";
       }
-      const std::uint8_t* conn = nullptr;
-      const std::uint8_t* time = nullptr;
+      std::uint64_t conn = 0;
+      std::uint64_t time = 0;
       if (why.empty()) {
-        why = fixed_field(h, hl, "conn", 4U, conn);
+        why = int_field(h, hl, "conn", 4U, conn);
       }
       if (why.empty()) {
-        why = fixed_field(h, hl, "time", 8U, time);
+        why = int_field(h, hl, "time", 8U, time);
       }
       if (!why.empty()) {
         err = where() + why;
         return false;
       }
-      if (std::find(selected_.begin(), selected_.end(), le32(conn)) == selected_.end()) {
+      if (std::find(selected_.begin(), selected_.end(), static_cast<std::uint32_t>(conn)) ==
+          selected_.end()) {
         continue;
       }
       // sensor_msgs/Imu: the frame_id's length decides where the float64 begin.
