@@ -9,7 +9,7 @@ core=(cmake ninja-build g++ make pkg-config libgpiod-dev gpiod gnuplot-nox)
 test=(clang clang-tidy libclang-rt-14-dev libfuzzer-14-dev libgtest-dev libbenchmark-dev
       binutils gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
       g++-aarch64-linux-gnu qemu-user qemu-system-x86 qemu-system-arm busybox-static can-utils
-      iproute2 kmod cpio xz-utils python3)
+      iproute2 kmod cpio xz-utils python3 python3-rosbag python3-sensor-msgs)
 bench=(time python3 python3-numpy python3-scipy)
 case "$group" in
   core) want=("${core[@]}") ;;

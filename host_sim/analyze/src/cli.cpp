@@ -23,6 +23,7 @@
 #include "imu/cli/file_out.hpp"
 #include "imu/cli/json.hpp"
 #include "imu/cli/sensors.hpp"
+#include "imu/cli/rosbag.hpp"
 #include "imu/cli/text_input.hpp"
 #include "imu/mat/mat_reader.hpp"
 
@@ -36,7 +37,7 @@ using imu::cli::kExitUsage;
 constexpr const char* kUsage =
     "usage: imu-sim analyze FILE --channel NAME|NAME:K|A,B,..|all [--fs HZ] [--lsb UNITS]\n"
     "                         [--time-unit s|ms|us|ns] [--json OUT]\n"
-    "                         [--plots DIR] [--yaml IMU.yaml]\n"
+    "                         [--plots DIR] [--yaml IMU.yaml] [--topic NAME]\n"
     "       imu-sim analyze FILE --acc COLS --gyro COLS [--acc-unit g|m/s^2]\n"
     "                         [--gyro-unit rad/s|deg/s|deg/h] [--acc-lsb X] [--gyro-lsb X] ..\n"
     "  NAME:K is column K (1-based) of a matrix NAME; a matrix without :K is refused.\n"
@@ -58,7 +59,10 @@ constexpr const char* kUsage =
     "  the report's `gaps`). --plots DIR is created if missing. A channel longer than 2^22\n"
     "  samples is analysed on block means of 2^k samples, and its first 2^22 samples at full\n"
     "  rate for what the means cannot resolve (said in the report); the file (MAT or text) is\n"
-    "  read in chunks, never whole.\n"
+    "  read in chunks, never whole. A ROS bag (format 2.0; chunks uncompressed or LZ4, BZ2\n"
+    "  refused) is read as the columns t_ns (header stamps), acc_x..acc_z (m/s^2),\n"
+    "  gyro_x..gyro_z (rad/s) of its sensor_msgs/Imu topic: --topic NAME, needed when it holds\n"
+    "  several.\n"
     "exit status: 0 success, 1 run-time error (bad or unreadable file, data that cannot be\n"
     "processed, failed write, out of memory), 2 command-line error\n";
 
@@ -353,12 +357,13 @@ bool read_head_mat(const std::string& path, const std::string& spec, double scal
 
 // A text file's column's head (its rows again: the same grid and gaps as the first pass).
 bool read_head_text(const std::string& file, const std::string& name, double fs,
-                    double time_unit_s, std::vector<double>& out, std::string& err) {
+                    double time_unit_s, const std::string& topic, std::vector<double>& out,
+                    std::string& err) {
   imu::cli::TextColumnStream st;
   const auto read = [&st](double* dst, std::size_t max, std::size_t& got, std::string& e) {
     return st.read(dst, std::min<std::size_t>(4096, max), got, e);
   };
-  return st.open(file, {name}, fs, err, time_unit_s) && read_head(read, out, err);
+  return st.open(file, {name}, fs, err, time_unit_s, topic) && read_head(read, out, err);
 }
 
 // NAME or NAME:K (column K, 1-based as in Octave, of a matrix NAME). A matrix named without a
@@ -751,19 +756,21 @@ void on_block_means(Job& j, double fs_hz, std::uint64_t block, std::uint64_t dro
                  "them (full_rate_head)";
 }
 
-// A text file's channels as jobs: NAME, a comma list, or all (the IMU channels it holds, else
-// every column but the time column). The rate: --fs, else the time column's. One pass over the
-// rows for every channel (imu::cli::TextColumnStream), each into its BlockMeans: a channel is
-// held as its samples, or as block means once it passes kMaxAnalysedSamples, never the table.
+// A text file's channels as jobs (or a ROS bag topic's, imu/cli/row_source.hpp): NAME, a comma
+// list, or all (the IMU channels it holds, else every column but the time column). The rate:
+// --fs, else the time column's. One pass over the rows for every channel
+// (imu::cli::TextColumnStream), each into its BlockMeans: a channel is held as its samples, or
+// as block means once it passes kMaxAnalysedSamples, never the table.
 bool text_jobs(const std::string& file, const std::string& spec, double fs, double time_unit_s,
-               double lsb, const Declared& d, std::vector<Job>& jobs, std::string& err) {
+               const std::string& topic, double lsb, const Declared& d, std::vector<Job>& jobs,
+               std::string& err) {
   std::vector<std::string> names;
   {
-    imu::cli::TextRows header;
-    if (!header.open(file, err)) {
+    const auto header = imu::cli::open_rows(file, topic, err);
+    if (header == nullptr) {
       return false;
     }
-    if (!imu::cli::text_channels(header.names(), spec, names, err)) {
+    if (!imu::cli::text_channels(header->names(), spec, names, err)) {
       err.insert(0, file + ": ");
       return false;
     }
@@ -777,7 +784,7 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     }
   };
   imu::cli::TextColumnStream st;
-  if (!st.open(file, names, fs, err, time_unit_s)) {
+  if (!st.open(file, names, fs, err, time_unit_s, topic)) {
     with_file(err);
     return false;
   }
@@ -809,7 +816,7 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     j.sensor = sensor_of(j.channel, d, j.sensor_declared);
     j.o.lsb = declared_lsb(j.sensor, d, lsb);
     if (!st.time_name().empty()) {
-      j.text_note = "text input: rate " + imu::cli::num_text(st.fs_hz()) + " Hz" +
+      j.text_note = st.origin() + ": rate " + imu::cli::num_text(st.fs_hz()) + " Hz" +
                     (fs > 0.0 ? " (--fs)" : " from the time column '" + st.time_name() + "'");
       if (!st.time_note().empty()) {
         j.text_note += "; " + st.time_note();
@@ -821,9 +828,9 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
     }
     on_block_means(j, st.fs_hz(), means[c].block(), dropped);
     if (j.block > 1) {
-      j.read_head = [file, name = names[c], fs, time_unit_s](std::vector<double>& out,
-                                                            std::string& e) {
-        return read_head_text(file, name, fs, time_unit_s, out, e);
+      j.read_head = [file, name = names[c], fs, time_unit_s, topic](std::vector<double>& out,
+                                                                   std::string& e) {
+        return read_head_text(file, name, fs, time_unit_s, topic, out, e);
       };
     }
     jobs.push_back(std::move(j));
@@ -833,12 +840,18 @@ bool text_jobs(const std::string& file, const std::string& spec, double fs, doub
 
 // The run-time part: read, analyse (in parallel), print, write. Exit status.
 int analyze_file(const std::string& file, const std::string& channel_spec, double fs,
-                 double time_unit_s, double lsb, const Declared& d,
+                 double time_unit_s, const std::string& topic, double lsb, const Declared& d,
                  const std::string& json, const std::string& plots, const std::string& yaml) {
   std::string err;
-  if (imu::cli::looks_like_text(file)) {
+  // Text and ROS bags are read as rows (imu/cli/row_source.hpp).
+  const bool bag = imu::cli::looks_like_bag(file);
+  if (!bag && !topic.empty()) {
+    return fail("--topic " + topic + ": " + file + " is not a ROS bag (--topic reads one)",
+                kExitUsage);
+  }
+  if (bag || imu::cli::looks_like_text(file)) {
     std::vector<Job> jobs;
-    if (!text_jobs(file, channel_spec, fs, time_unit_s, lsb, d, jobs, err)) {
+    if (!text_jobs(file, channel_spec, fs, time_unit_s, topic, lsb, d, jobs, err)) {
       return fail(err, read_status(err));
     }
     return finish(file, jobs, lsb, d, json, plots, yaml);
@@ -953,7 +966,7 @@ int cli_main(int argc, char** argv) {
       {"--channel", true},  {"--json", true},      {"--plots", true},     {"--fs", true},
       {"--lsb", true},      {"--yaml", true},      {"--time-unit", true}, {"--acc", true},
       {"--gyro", true},     {"--acc-unit", true},  {"--gyro-unit", true}, {"--acc-lsb", true},
-      {"--gyro-lsb", true}};
+      {"--gyro-lsb", true}, {"--topic", true}};
   if (!a.parse(argc, argv, 1, specs, 1, err)) {
     return fail(err + " (imu-sim analyze --help)", kExitUsage);
   }
@@ -1017,8 +1030,8 @@ int cli_main(int argc, char** argv) {
   // Sizes are bounded by the MAT reader's budget; this is the last line of defence (a machine
   // short of memory): one line, exit 1, no exception escapes.
   try {
-    return analyze_file(a.positional()[0], channel_spec, fs, time_unit_s, lsb, d, a.get("--json"),
-                        a.get("--plots"), a.get("--yaml"));
+    return analyze_file(a.positional()[0], channel_spec, fs, time_unit_s, a.get("--topic"), lsb,
+                        d, a.get("--json"), a.get("--plots"), a.get("--yaml"));
   } catch (const std::bad_alloc&) {
     return fail("out of memory", kExitRuntime);
   }

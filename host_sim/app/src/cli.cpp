@@ -19,6 +19,7 @@
 #include "full_adev.hpp"
 #include "model_json.hpp"
 #include "imu/cli/file_out.hpp"
+#include "imu/cli/rosbag.hpp"
 #include "imu/cli/text_input.hpp"
 #include "imu/error_model.hpp"
 #include "imu/mat/mat_reader.hpp"
@@ -58,7 +59,7 @@ constexpr const char* kUsageModel =
 constexpr const char* kUsageAdev =
     "usage: imu-sim adev FILE [--channel acc_z|all|A,B] [--json OUT] [--csv OUT] [--lsb X]\n"
     "                         [--fs X] [--time-unit s|ms|us|ns] [--estimator online|full]\n"
-    "                         [--plots DIR]\n"
+    "                         [--plots DIR] [--topic NAME]\n"
     "                         [--taus octave|decade|quarter|all]\n"
     "                         [--deviation adev|mdev|hdev|tdev|A,B]\n"
     "  ADEV of a channel, with the time it took. --channel: a variable (NAME, NAME:K column K\n"
@@ -89,7 +90,10 @@ constexpr const char* kUsageAdev =
     "  3 tau <= T; hdev: 3 tau < T), gaps left out as for adev, a 68.3 % interval from the\n"
     "  Greenhall-Riley EDF for white FM (mdev, tdev: of the modified variance). Output: a\n"
     "  table per deviation, the JSON key and the CSV column named by it (several: a CSV\n"
-    "  column deviation, the values in column dev); --plots DIR/KIND_NAME.svg.\n";
+    "  column deviation, the values in column dev); --plots DIR/KIND_NAME.svg.\n"
+    "  A ROS bag (format 2.0; chunks uncompressed or LZ4, BZ2 refused) is read as the columns\n"
+    "  t_ns (header stamps), acc_x..acc_z (m/s^2), gyro_x..gyro_z (rad/s) of its\n"
+    "  sensor_msgs/Imu topic: --topic NAME, needed when it holds several.\n";
 constexpr const char* kUsageRun =
     "usage: imu-sim run FILE [--channel acc_z] [--bus loopback|vcan0|can0] [--rate max|realtime]\n"
     "      [--node inproc|spawn|external] [--out DIR] [--json FILE] [--N --B --Tp [--K]]\n"
@@ -99,8 +103,9 @@ constexpr const char* kUsageRun =
     "  sensor emulator -> bus -> firmware node -> telemetry -> report (text, JSON, CSV, SVG/PNG\n"
     "  plots in DIR, default out/run). --channel: acc_x..gyro_z, or any variable as for adev\n"
     "  (NAME, NAME:K, imu.acc_z), which takes the acc_z slot (gyro*: gyro_z) of the six sent.\n"
-    "  FILE: a MAT-file, or text as adev reads it (its columns on their time grid, written to\n"
-    "  DIR/input.mat, which the run streams; said in a note).\n"
+    "  FILE: a MAT-file, or text or a ROS bag (its only sensor_msgs/Imu topic) as adev reads\n"
+    "  it (the columns on their time grid, written to DIR/input.mat, which the run streams;\n"
+    "  said in a note).\n"
     "  A sample with NaN/Inf in a channel sent is not sent (the\n"
     "  node counts it missing). LSB and rate rules as for adev. Ranges: --T-avg + --T-int at\n"
     "  most the recording, --sim-windows in [1, 1e5] (x window samples <= 2e8), --seed in\n"
@@ -471,6 +476,7 @@ struct AdevOptions {
   double lsb = 0.0;  // 0: the file's or the default
   double fs = 0.0;   // 0: the file's
   double time_unit_s = 0.0;  // --time-unit; 0: the time column's own
+  std::string topic;  // --topic: a ROS bag's sensor_msgs/Imu topic ("": its only one)
 };
 
 bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
@@ -505,6 +511,7 @@ bool parse_adev(const Args& a, AdevOptions& o, std::string& err) {
   }
   o.path = a.positional()[0];
   o.spec = a.get("--channel", "acc_z");
+  o.topic = a.get("--topic");
   return (!a.has("--lsb") || a.number("--lsb", 0.0, 1e-12, 1e6, o.lsb, err)) &&
          (!a.has("--fs") || a.number("--fs", 0.0, kMinFsHz, kMaxFsHz, o.fs, err)) &&
          imu::cli::time_unit_option(a, o.time_unit_s, err);
@@ -543,7 +550,7 @@ int read_text_columns(const AdevOptions& o, const std::vector<std::string>& name
                       std::string& err) {
   cols.assign(names.size(), {});
   imu::cli::TextColumnStream st;
-  if (!st.open(o.path, names, o.fs, err, o.time_unit_s)) {
+  if (!st.open(o.path, names, o.fs, err, o.time_unit_s, o.topic)) {
     const bool usage = err.rfind("no column", 0) == 0;
     err = err.rfind(o.path, 0) == 0 ? err : o.path + ": " + err;
     return usage ? kExitUsage : kExitRuntime;
@@ -599,7 +606,7 @@ int adev_load(const AdevOptions& o, bool text, AdevResult& r) {
       r.sd.fs_hz = r.read_fs_hz;
     } else {
       imu::cli::TextColumnStream probe;
-      if (!probe.open(o.path, r.name, o.fs, r.err, o.time_unit_s)) {
+      if (!probe.open(o.path, r.name, o.fs, r.err, o.time_unit_s, o.topic)) {
         const bool usage = r.err.rfind("no column", 0) == 0;  // like a MAT variable not found
         r.err = r.err.rfind(o.path, 0) == 0 ? r.err : o.path + ": " + r.err;
         return usage ? kExitUsage : kExitRuntime;
@@ -658,7 +665,7 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     return kExitUsage;
   }
   StreamTiming tm;
-  TextChannelSource text_src(o.path, r.name, o.fs, o.time_unit_s, r.read_samples);
+  TextChannelSource text_src(o.path, r.name, o.fs, o.time_unit_s, o.topic, r.read_samples);
   const auto feed = [&](CountSink& sink) {
     int st = text ? stream_counts(text_src, o.path + ": column '" + r.name + "': ", ch, sink, tm,
                                   r.err)
@@ -886,12 +893,13 @@ bool adev_plots(const std::string& dir, const std::vector<AdevResult>& rs, std::
   return true;
 }
 
-// The channels --channel names: from the text file's header or the MAT-file's variables.
+// The channels --channel names: from the text file's header (a ROS bag's columns) or the
+// MAT-file's variables.
 bool adev_channels(const AdevOptions& o, bool text, std::vector<std::string>& names,
                    std::string& err) {
   if (text) {
-    imu::cli::TextRows rows;
-    return rows.open(o.path, err) && imu::cli::text_channels(rows.names(), o.spec, names, err);
+    const auto rows = imu::cli::open_rows(o.path, o.topic, err);
+    return rows != nullptr && imu::cli::text_channels(rows->names(), o.spec, names, err);
   }
   std::vector<std::string> held;
   if (o.spec == "all") {
@@ -918,7 +926,8 @@ int cmd_adev(int argc, char** argv) {
   const std::vector<OptSpec> specs = {{"--channel", true},   {"--json", true}, {"--lsb", true},
                                       {"--fs", true},        {"--csv", true},  {"--taus", true},
                                       {"--estimator", true}, {"--plots", true},
-                                      {"--time-unit", true}, {"--deviation", true}};
+                                      {"--time-unit", true}, {"--deviation", true},
+                                      {"--topic", true}};
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
     return fail(cmd, err, kExitUsage);
   }
@@ -929,9 +938,14 @@ int cmd_adev(int argc, char** argv) {
   if (!parse_adev(a, o, err)) {
     return fail(cmd, err, kExitUsage);
   }
-  // Text input (CSV/TSV/blank-separated with a header; imu/cli/text_input.hpp): streamed, as a
-  // MAT-file is.
-  const bool text = imu::cli::looks_like_text(o.path);
+  // Text input (CSV/TSV/blank-separated with a header; imu/cli/text_input.hpp) and ROS bags
+  // (imu/cli/rosbag.hpp), both read as rows (imu/cli/row_source.hpp): streamed, as a MAT-file is.
+  const bool bag = imu::cli::looks_like_bag(o.path);
+  const bool text = bag || imu::cli::looks_like_text(o.path);
+  if (!bag && !o.topic.empty()) {
+    return fail(cmd, "--topic " + o.topic + ": " + o.path + " is not a ROS bag (--topic reads one)",
+                kExitUsage);
+  }
   std::vector<std::string> names;
   if (!adev_channels(o, text, names, err)) {
     return fail(cmd, err,

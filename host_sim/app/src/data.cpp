@@ -212,7 +212,7 @@ bool TextChannelSource::open(std::string& err) {
     return true;
   }
   stream_ = imu::cli::TextColumnStream{};
-  if (!stream_.open(path_, column_, fs_hz_, err, time_unit_s_)) {
+  if (!stream_.open(path_, column_, fs_hz_, err, time_unit_s_, topic_)) {
     err = err.rfind(path_, 0) == 0 ? err : path_ + ": " + err;
     return false;
   }

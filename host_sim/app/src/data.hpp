@@ -137,16 +137,17 @@ class MatChannelSource final : public ChunkSource {
   std::unique_ptr<mat::ChannelStream> stream_;
 };
 
-/// A text file's column on its regular grid (imu::cli::TextColumnStream): rows are read as
-/// they are needed, never held. samples(): the grid samples the last pass gave.
+/// A text file's column (or a ROS bag topic's, `topic`) on its regular grid
+/// (imu::cli::TextColumnStream): rows are read as they are needed, never held. samples(): the
+/// grid samples the last pass gave.
 /// With `read_samples` (the column already read on its grid, in one pass over the file for
 /// several columns), the passes are over those samples instead of the file.
 class TextChannelSource final : public ChunkSource {
  public:
   TextChannelSource(std::string path, std::string column, double fs_hz, double time_unit_s,
-                    const std::vector<double>* read_samples = nullptr)
+                    std::string topic, const std::vector<double>* read_samples = nullptr)
       : path_(std::move(path)), column_(std::move(column)), fs_hz_(fs_hz),
-        time_unit_s_(time_unit_s), read_samples_(read_samples) {}
+        time_unit_s_(time_unit_s), topic_(std::move(topic)), read_samples_(read_samples) {}
   [[nodiscard]] bool open(std::string& err) override;
   [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err) override;
   [[nodiscard]] double fs_hz() const { return stream_.fs_hz(); }
@@ -157,6 +158,7 @@ class TextChannelSource final : public ChunkSource {
   std::string column_;
   double fs_hz_;
   double time_unit_s_;  // 0: the time column's own
+  std::string topic_;   // a ROS bag's topic ("": its only sensor_msgs/Imu one)
   const std::vector<double>* read_samples_;
   imu::cli::TextColumnStream stream_;
   std::uint64_t samples_ = 0;

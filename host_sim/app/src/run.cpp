@@ -32,6 +32,8 @@
 #include "imu/edf.hpp"
 #include "imu/hal/linux/can_socket.hpp"
 #include "imu/hal/sim/memory_line.hpp"
+#include "imu/cli/row_source.hpp"
+#include "imu/cli/rosbag.hpp"
 #include "imu/cli/text_input.hpp"
 #include "imu/mat/mat_reader.hpp"
 #include "imu/mat/mat_writer.hpp"
@@ -570,18 +572,19 @@ bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& e
 // MAT-file the run streams is written (8 bytes per sample per channel, twice).
 constexpr std::size_t kMaxTextRunSamples = std::size_t{1} << 25U;
 
-// A text input (CSV, TSV; imu::cli::TextColumnStream: the rate from --fs or its time column,
-// missing rows as gaps, the same grid as adev and analyze) becomes DIR/input.mat: the slots'
+// A text input (CSV, TSV) or a ROS bag's only sensor_msgs/Imu topic (imu::cli::open_rows,
+// TextColumnStream: the rate from --fs or its time column, missing rows as gaps, the same grid
+// as adev and analyze) becomes DIR/input.mat: the slots'
 // columns it holds (acc_x..gyro_z, or the column --channel names in its slot) and fs. The run
 // then streams that file like any MAT input; a note says so. False with err (a missing
 // column names the columns; `usage` when --channel named it: exit 2, as for a MAT variable).
 bool text_input_to_mat(RunOptions& o, std::string& note, bool& usage, std::string& err) {
   usage = false;
-  imu::cli::TextRows header;
-  if (!header.open(o.path, err)) {
+  const auto header = imu::cli::open_rows(o.path, "", err);
+  if (header == nullptr) {
     return false;
   }
-  const std::vector<std::string>& names = header.names();
+  const std::vector<std::string>& names = header->names();
   const auto holds = [&names](const std::string& n) {
     return std::find(names.begin(), names.end(), n) != names.end();
   };
@@ -653,7 +656,7 @@ bool text_input_to_mat(RunOptions& o, std::string& note, bool& usage, std::strin
           mat, std::string(w.bytes().begin(), w.bytes().end()), err)) {
     return false;
   }
-  note = "text input: " + std::to_string(cols.size()) + " column(s) at " +
+  note = st.origin() + ": " + std::to_string(cols.size()) + " column(s) at " +
          imu::cli::num_text(st.fs_hz()) + " Hz" +
          (o.fs_opt > 0.0 ? " (--fs)" : " from the time column '" + st.time_name() + "'") +
          (st.time_note().empty() ? "" : "; " + st.time_note()) +
@@ -1450,7 +1453,7 @@ int cmd_run(int argc, char** argv) {
   }
   const double t0 = now_s();
   o.source = o.path;
-  if (imu::cli::looks_like_text(o.path)) {
+  if (imu::cli::looks_like_text(o.path) || imu::cli::looks_like_bag(o.path)) {
     bool usage = false;
     if (!text_input_to_mat(o, o.input_note, usage, err)) {
       return fail(kCmd, err, usage ? kExitUsage : kExitRuntime);

@@ -308,7 +308,8 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t)>& job) {
 bool names_missing_channel(const std::string& err) {
   return err.find("no column '") != std::string::npos ||
          err.find("' not found; ") != std::string::npos ||
-         err.find("does not exist") != std::string::npos;
+         err.find("does not exist") != std::string::npos ||
+         err.find("--topic") != std::string::npos;
 }
 
 }  // namespace imu::cli

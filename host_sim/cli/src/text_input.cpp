@@ -3,6 +3,7 @@
 
 #include "imu/cli/args.hpp"
 #include "imu/cli/json.hpp"
+#include "imu/cli/rosbag.hpp"
 
 #include <sys/stat.h>
 
@@ -594,8 +595,28 @@ bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
 }
 
 bool TextColumnStream::open(const std::string& path, const std::string& name, double fs_hz,
-                            std::string& err, double time_unit_s_given) {
-  return open(path, std::vector<std::string>{name}, fs_hz, err, time_unit_s_given);
+                            std::string& err, double time_unit_s_given, const std::string& topic) {
+  return open(path, std::vector<std::string>{name}, fs_hz, err, time_unit_s_given, topic);
+}
+
+std::unique_ptr<RowSource> open_rows(const std::string& path, const std::string& topic,
+                                     std::string& err) {
+  if (looks_like_bag(path)) {
+    auto bag = std::make_unique<BagRows>();
+    if (!bag->open(path, topic, err)) {
+      return nullptr;
+    }
+    return bag;
+  }
+  if (!topic.empty()) {
+    err = "--topic " + topic + ": " + path + " is not a ROS bag (--topic reads one)";
+    return nullptr;
+  }
+  auto text = std::make_unique<TextRows>();
+  if (!text->open(path, err)) {
+    return nullptr;
+  }
+  return text;
 }
 
 double TextColumnStream::raw_time() {
@@ -604,13 +625,13 @@ double TextColumnStream::raw_time() {
   }
   if (!have_origin_) {
     have_origin_ = true;
-    origin_exact_ = rows_.has_exact();
-    origin_i_ = rows_.exact();
+    origin_exact_ = rows_->has_exact();
+    origin_i_ = rows_->exact();
     origin_ = row_[time_];
   }
   // From the first row: exactly when both are integers (epoch nanoseconds), else in double.
-  return origin_exact_ && rows_.has_exact() ? static_cast<double>(rows_.exact() - origin_i_)
-                                            : row_[time_] - origin_;
+  return origin_exact_ && rows_->has_exact() ? static_cast<double>(rows_->exact() - origin_i_)
+                                             : row_[time_] - origin_;
 }
 
 void TextColumnStream::hold(std::vector<double>& to) {
@@ -621,7 +642,8 @@ void TextColumnStream::hold(std::vector<double>& to) {
 }
 
 bool TextColumnStream::open(const std::string& path, const std::vector<std::string>& names_in,
-                            double fs_hz, std::string& err, double time_unit_s_given) {
+                            double fs_hz, std::string& err, double time_unit_s_given,
+                            const std::string& topic) {
   head_pos_ = 0;
   row_no_ = 0;
   pending_missing_ = 0;
@@ -631,10 +653,12 @@ bool TextColumnStream::open(const std::string& path, const std::vector<std::stri
   unit_s_ = 1.0;
   have_origin_ = false;
   cols_.clear();
-  if (!rows_.open(path, err)) {
+  rows_ = open_rows(path, topic, err);
+  if (rows_ == nullptr) {
     return false;
   }
-  const std::vector<std::string>& names = rows_.names();
+  source_ = rows_->origin();
+  const std::vector<std::string>& names = rows_->names();
   std::string column_err;
   for (const auto& name : names_in) {
     const auto it = std::find(names.begin(), names.end(), name);
@@ -647,11 +671,11 @@ bool TextColumnStream::open(const std::string& path, const std::vector<std::stri
   time_ = time_column(names);
   std::vector<std::size_t> read_cols = cols_;
   read_cols.push_back(time_);
-  rows_.only(read_cols);  // the other columns (a frame name, covariances) are not parsed
-  rows_.exact_integers(time_);
+  rows_->only(read_cols);  // the other columns (a frame name, covariances) are not parsed
+  rows_->exact_integers(time_);
   // A file without data rows is refused as such before its columns are looked at (as
   // read_text_table refuses it before text_channel).
-  const bool first = rows_.next(row_, err);
+  const bool first = rows_->next(row_, err);
   if (!first && err.empty()) {
     err = path + ": no header and data rows (text input: a header row, then one row per sample)";
   }
@@ -676,7 +700,7 @@ bool TextColumnStream::open(const std::string& path, const std::vector<std::stri
   const std::size_t stride = cols_.size() + 1;
   head_.clear();
   hold(head_);
-  while (head_.size() < (kRateRows + 1) * stride && rows_.next(row_, err)) {
+  while (head_.size() < (kRateRows + 1) * stride && rows_->next(row_, err)) {
     hold(head_);
   }
   if (!err.empty()) {
@@ -689,11 +713,15 @@ bool TextColumnStream::open(const std::string& path, const std::vector<std::stri
     for (std::size_t i = 0; i < raw.size(); ++i) {
       raw[i] = head_[i * stride];
     }
-    const double stated = stated_unit(time_name_, rows_.units()[time_], time_unit_s_given);
+    const double stated = stated_unit(time_name_, rows_->units()[time_], time_unit_s_given);
     double t0 = 0.0;  // 0: raw_time() is already from the first row
     if (!head_clock(raw, fs_hz, stated, time_name_, ts, unit_s_, t0, time_note_, err)) {
       return false;
     }
+  }
+  const std::string source_note = rows_->note();
+  if (!source_note.empty()) {
+    time_note_ = source_note + (time_note_.empty() ? "" : "; " + time_note_);
   }
   fs_hz_ = 1.0 / ts;
   grid_ = TimeGrid(ts);
@@ -713,7 +741,7 @@ bool TextColumnStream::next_row(double& t, bool& have, std::string& err) {
     }
     return true;
   }
-  if (head_pos_ > 0 && head_.empty() && rows_.next(row_, err)) {
+  if (head_pos_ > 0 && head_.empty() && rows_->next(row_, err)) {
     t = raw_time() * unit_s_;
     for (std::size_t c = 0; c < k; ++c) {
       values_[c] = row_[cols_[c]];

@@ -73,7 +73,8 @@ struct ChannelSpec {
 };
 
 /// The reader's error names a channel the file does not hold (a variable, struct field, text
-/// column or matrix column): a command-line mistake, exit kExitUsage in every command.
+/// column or matrix column), or a ROS bag topic to be chosen or not held (its message names
+/// --topic): a command-line mistake, exit kExitUsage in every command.
 [[nodiscard]] bool names_missing_channel(const std::string& err);
 
 /// Parse NAME or NAME:K; false with a one-line err when K is not a number in [1, 1e6].

@@ -16,9 +16,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "imu/cli/row_source.hpp"
 
 namespace imu::cli {
 
@@ -45,26 +48,28 @@ inline constexpr std::uint64_t kGapAllowance = std::uint64_t{1} << 20U;
 
 /// The rows of a text table one at a time, the header read by open(): constant memory (one
 /// line). The one parser of text input: read_text_table and TextColumnStream are built on it.
-class TextRows {
+class TextRows final : public RowSource {
  public:
   /// Refused with a one-line err: not a regular file, larger than max_bytes, no header (a
   /// first row of names), more than kMaxColumns columns, a line longer than kMaxLineBytes.
   [[nodiscard]] bool open(const std::string& path, std::string& err,
                           std::uint64_t max_bytes = std::uint64_t{2} << 30U);
-  [[nodiscard]] const std::vector<std::string>& names() const { return names_; }
+  [[nodiscard]] const std::vector<std::string>& names() const override { return names_; }
   /// Each column's unit from its header ("w_RS_S_x [rad s^-1]": "rad s^-1"; "" if none).
-  [[nodiscard]] const std::vector<std::string>& units() const { return units_; }
+  [[nodiscard]] const std::vector<std::string>& units() const override { return units_; }
   /// Parse only these columns in next() (the others come back NaN, whatever they hold).
-  void only(const std::vector<std::size_t>& columns);
+  void only(const std::vector<std::size_t>& columns) override;
   /// Also keep this column's exact value when it is an integer (has_exact(), exact()): epoch
   /// nanoseconds have more digits than a double.
-  void exact_integers(std::size_t column) { exact_column_ = column; }
-  [[nodiscard]] bool has_exact() const { return has_exact_; }
-  [[nodiscard]] long long exact() const { return exact_; }
+  void exact_integers(std::size_t column) override { exact_column_ = column; }
+  [[nodiscard]] bool has_exact() const override { return has_exact_; }
+  [[nodiscard]] long long exact() const override { return exact_; }
   /// The next data row as numbers (names().size() of them; NaN for an empty or nan field).
   /// False at the end (err empty) or on a bad row (err names the line: another number of fields
   /// than the header, a field that is not a number, a line longer than kMaxLineBytes).
-  [[nodiscard]] bool next(std::vector<double>& row, std::string& err);
+  [[nodiscard]] bool next(std::vector<double>& row, std::string& err) override;
+  [[nodiscard]] std::string origin() const override { return "text input"; }
+  [[nodiscard]] std::string note() const override { return std::string(); }
 
  private:
   // The next line into line_ (without its end): 1, 0 at the end, -1 too long (err set).
@@ -160,17 +165,20 @@ struct TextChannel {
 [[nodiscard]] bool text_channel(const TextTable& table, const std::string& name, double fs_hz,
                                 TextChannel& out, std::string& err, double time_unit_s = 0.0);
 
-/// Columns of a text file on the same grid as text_channel gives, read row by row: memory
-/// independent of the number of rows (the first kRateRows rows are held while the rate is
-/// taken from them). Same refusals and messages as TextRows and text_channel. With several
-/// columns a sample is one value per column, interleaved in the order the names were given
-/// (one pass over the file for all of them).
+/// Columns of a text file (or of any RowSource: open_rows(), a ROS bag's topic) on the same
+/// grid as text_channel gives, read row by row: memory independent of the number of rows (the
+/// first kRateRows rows are held while the rate is taken from them). Same refusals and
+/// messages as TextRows and text_channel. With several columns a sample is one value per
+/// column, interleaved in the order the names were given (one pass over the file for all of
+/// them). topic: a ROS bag's sensor_msgs/Imu topic ("": its only one; refused for text).
 class TextColumnStream {
  public:
   [[nodiscard]] bool open(const std::string& path, const std::string& name, double fs_hz,
-                          std::string& err, double time_unit_s = 0.0);
+                          std::string& err, double time_unit_s = 0.0,
+                          const std::string& topic = std::string());
   [[nodiscard]] bool open(const std::string& path, const std::vector<std::string>& names,
-                          double fs_hz, std::string& err, double time_unit_s = 0.0);
+                          double fs_hz, std::string& err, double time_unit_s = 0.0,
+                          const std::string& topic = std::string());
   /// Up to n samples into out (n x columns() values): got samples, 0 at the end. False on a
   /// bad row (err).
   [[nodiscard]] bool read(double* out, std::size_t n, std::size_t& got, std::string& err);
@@ -179,14 +187,17 @@ class TextColumnStream {
   /// Samples inserted for time steps so far (all of them once read() gave 0).
   [[nodiscard]] std::uint64_t time_gap_samples() const { return grid_.gap_samples(); }
   [[nodiscard]] const std::string& time_name() const { return time_name_; }
-  /// How the time column's unit was found, when it was read from the steps ("" otherwise).
+  /// How the time column's unit was found, when it was read from the steps, or how a ROS
+  /// bag's times were taken (RowSource::note()); "" otherwise.
   [[nodiscard]] const std::string& time_note() const { return time_note_; }
+  /// What the rows are (RowSource::origin(): "text input", "ROS bag topic /imu").
+  [[nodiscard]] const std::string& origin() const { return source_; }
 
  private:
   bool next_row(double& t, bool& have, std::string& err);
   void hold(std::vector<double>& to);  // t (raw_time()), then the columns' values of row_
   double raw_time();  // row_'s time from the first row's, in the column's unit
-  TextRows rows_;
+  std::unique_ptr<RowSource> rows_;
   std::vector<double> row_;
   std::vector<double> head_;  // (t, values...) of the rows read for the rate
   std::size_t head_pos_ = 0;  // rows of head_ given out
@@ -194,6 +205,7 @@ class TextColumnStream {
   std::size_t time_ = 0;
   std::string time_name_;
   std::string time_note_;
+  std::string source_;  // RowSource::origin()
   double unit_s_ = 1.0;  // the time column's unit in seconds
   bool have_origin_ = false;  // the first row's time (times are taken from it):
   bool origin_exact_ = false;  //   as an integer (origin_i_) or a double (origin_)
