@@ -112,7 +112,7 @@ TEST_F(AnalyzeCli, WritesCsvPlot) {
   // --plots DIR is created (a missing folder was an error); the CSV has the model's terms.
   const std::string dir = tmp_path("plots/sub");
   ASSERT_EQ(call({"analyze", mat_, "--channel", "acc_x", "--plots", dir}), 0);
-  const std::string csv = slurp(dir + "/acc_x_adev.csv");
+  const std::string csv = slurp(dir + "/analyze_acc_x_adev.csv");
   EXPECT_EQ(csv.rfind("tau_s,adev_raw,", 0), 0U);
   EXPECT_NE(csv.find(",after_white,"), std::string::npos);
   EXPECT_NE(csv.find(",before_GM 1,"), std::string::npos);
@@ -121,11 +121,11 @@ TEST_F(AnalyzeCli, WritesCsvPlot) {
   }
   // SVG and PNG of both figures; the script's paths are absolute (it runs from anywhere), the
   // titles noenhanced (acc_x is no subscript), the axis has the unit.
-  for (const char* f : {"acc_x_before.svg", "acc_x_after.svg", "acc_x_before.png",
-                        "acc_x_after.png"}) {
+  for (const char* f : {"analyze_acc_x_before.svg", "analyze_acc_x_after.svg",
+                        "analyze_acc_x_before.png", "analyze_acc_x_after.png"}) {
     EXPECT_TRUE(std::ifstream(dir + "/" + f).good()) << f;
   }
-  const std::string gp = slurp(dir + "/acc_x_adev.gp");
+  const std::string gp = slurp(dir + "/analyze_acc_x_adev.gp");
   EXPECT_NE(gp.find("plot '/"), std::string::npos) << gp;
   EXPECT_NE(gp.find("noenhanced"), std::string::npos);
   EXPECT_NE(gp.find("Allan deviation [m/s^2]"), std::string::npos);

@@ -388,7 +388,9 @@ std::string gq(const std::string& s) { return imu::cli::gnuplot_str(s); }
 
 bool write_plots(const Report& r, const std::string& dir, const std::string& stem,
                  std::string& message) {
-  const std::string base = absolute(dir) + "/" + imu::cli::safe_component(stem);
+  // One naming rule with adev's plots (adev_NAME, mdev_NAME): what, then the channel, then the
+  // part: analyze_NAME_adev.csv, analyze_NAME_{before,after}.{svg,png}.
+  const std::string base = absolute(dir) + "/analyze_" + imu::cli::safe_component(stem);
   const std::string csv = base + "_adev.csv";
   {
     std::ostringstream f;
