@@ -454,3 +454,33 @@ TEST(SimCli, SynthFromAnAnalysisFollowsItsModel) {
   // The model given twice is a usage error.
   EXPECT_EQ(run({"synth", "--model", a1, "--N", "1e-3", "--out", sim}).status, 2);
 }
+
+// A channel name one typo away from one the file holds gets "did you mean" (adev, analyze, run
+// alike, MAT and text); a name near none gets the list alone.
+TEST(SimCli, AMistypedChannelGetsDidYouMean) {
+  simtest::TempDir dir;
+  const std::string mat = dir.file("s.mat");
+  ASSERT_EQ(run({"synth", "--out", mat, "--duration", "10"}).status, 0);
+  const std::string csv = dir.file("s.csv");
+  {
+    std::ofstream f(csv);
+    f << "t,gyro_z\n";
+    for (int i = 0; i < 100; ++i) {
+      f << i * 0.01 << "," << (i % 7) * 1e-3 << "\n";
+    }
+  }
+  for (const auto& args : std::vector<std::vector<std::string>>{
+           {"adev", mat, "--channel", "acc_zz"},
+           {"analyze", mat, "--channel", "acc_zz"},
+           {"adev", csv, "--channel", "gyro_zz"},
+           {"run", csv, "--channel", "gyro_zz", "--out", dir.file("o")}}) {
+    const auto r = run(args);
+    EXPECT_EQ(r.status, 2) << args[0] << ": " << r.err;
+    EXPECT_NE(r.err.find(args[1] == mat ? "did you mean acc_z?" : "did you mean gyro_z?"),
+              std::string::npos)
+        << args[0] << ": " << r.err;
+    EXPECT_EQ(count_lines(r.err), 1U) << r.err;
+  }
+  const auto r = run({"adev", mat, "--channel", "zzzzzz"});
+  EXPECT_EQ(r.err.find("did you mean"), std::string::npos) << r.err;
+}

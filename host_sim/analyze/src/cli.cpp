@@ -113,7 +113,8 @@ class StreamedFile {
 };
 
 int fail(const std::string& msg, int status) {
-  std::fprintf(stderr, "imu-sim analyze: %s\n", imu::cli::term_safe(msg).c_str());
+  std::fprintf(stderr, "imu-sim analyze: %s\n",
+               imu::cli::term_safe(imu::cli::with_suggestion(msg)).c_str());
   return status;
 }
 

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "imu/cli/args.hpp"
 #include "imu/cli/file_out.hpp"
 
 namespace imu::sim {
@@ -68,7 +69,7 @@ bool write_file(const std::string& path, const std::string& text, std::string& e
 }
 
 int fail(const char* cmd, const std::string& msg, int status) {
-  std::fprintf(stderr, "%s: %s\n", cmd, imu::cli::term_safe(msg).c_str());
+  std::fprintf(stderr, "%s: %s\n", cmd, imu::cli::term_safe(imu::cli::with_suggestion(msg)).c_str());
   return status;
 }
 

@@ -305,6 +305,32 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t)>& job) {
   }
 }
 
+std::string with_suggestion(const std::string& msg) {
+  // The missing name between the first quotes after the marker, the listed names after the
+  // list's colon (comma separated, to the end of the message).
+  for (const char* marker : {"variable '", "no column '"}) {
+    const std::size_t at = msg.find(marker);
+    if (at == std::string::npos) {
+      continue;
+    }
+    const std::size_t start = at + std::char_traits<char>::length(marker);
+    const std::size_t end = msg.find('\'', start);
+    const std::size_t list = end == std::string::npos ? end : msg.find(": ", end);
+    if (list == std::string::npos) {
+      return msg;
+    }
+    std::vector<std::string> names;
+    for (std::size_t p = list + 2; p < msg.size();) {
+      const std::size_t comma = std::min(msg.find(", ", p), msg.size());
+      names.push_back(msg.substr(p, comma - p));
+      p = comma + 2;
+    }
+    const std::string near = closest(msg.substr(start, end - start), names);
+    return near.empty() ? msg : msg + "; did you mean " + near + "?";
+  }
+  return msg;
+}
+
 bool names_missing_channel(const std::string& err) {
   return err.find("no column '") != std::string::npos ||
          err.find("' not found; ") != std::string::npos ||

@@ -26,6 +26,11 @@ namespace imu::cli {
 /// most a third of its length, at least 1); "" if none. For "did you mean" in messages.
 [[nodiscard]] std::string closest(const std::string& word, const std::vector<std::string>& candidates);
 
+/// A message that a name is missing ("variable 'X' not found; variables: A, B", "no column 'X';
+/// the columns: A, B", "no column 'X'; columns: A, B") with "; did you mean Y?" appended when one
+/// of the listed names is closest() to X; any other message unchanged.
+[[nodiscard]] std::string with_suggestion(const std::string& msg);
+
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitRuntime = 1;
 inline constexpr int kExitUsage = 2;
