@@ -326,7 +326,14 @@ std::string with_suggestion(const std::string& msg) {
       p = comma + 2;
     }
     const std::string near = closest(msg.substr(start, end - start), names);
-    return near.empty() ? msg : msg + "; did you mean " + near + "?";
+    if (near.empty()) {
+      return msg;
+    }
+    std::string out = msg;
+    out += "; did you mean ";
+    out += near;
+    out += "?";
+    return out;
   }
   return msg;
 }
