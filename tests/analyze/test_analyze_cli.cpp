@@ -349,6 +349,25 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   EXPECT_FALSE(std::ifstream(json_one).good()) << "--json was written before --yaml was refused";
   // An unknown name in the list is a usage error: exit 2.
   EXPECT_EQ(call({"analyze", mat, "--channel", "acc_x,acc_q"}), 2);
+  // --plots: one figure per sensor with the IEEE 952 lines read off the ADEV's slopes; on this
+  // white + walk IMU the read-off N and K (in the key's titles) are the record's within 15 %
+  // and 35 % (a graphical read-off at one point of the curve).
+  const std::string plots = tmp_path("sensor_plots");
+  ASSERT_EQ(call({"analyze", mat, "--channel", "all", "--plots", plots}), 0);
+  const std::string acc_gp = slurp(plots + "/analyze_accelerometer.gp");
+  const std::string gyro_gp = slurp(plots + "/analyze_gyroscope.gp");
+  const auto title_value = [](const std::string& gp, const std::string& what) {
+    const std::size_t p = gp.find("'" + what + " = ");
+    return p == std::string::npos ? std::nan("")
+                                  : std::strtod(gp.c_str() + p + what.size() + 4, nullptr);
+  };
+  EXPECT_NEAR(title_value(acc_gp, "acc_x N"), 2e-3, 0.15 * 2e-3) << acc_gp;
+  EXPECT_NEAR(title_value(acc_gp, "acc_y N"), 3e-3, 0.15 * 3e-3);
+  EXPECT_NEAR(title_value(gyro_gp, "gyro_x N"), 2e-4, 0.15 * 2e-4) << gyro_gp;
+  EXPECT_NEAR(title_value(acc_gp, "acc_x K"), 2e-4, 0.35 * 2e-4);
+  EXPECT_NEAR(title_value(gyro_gp, "gyro_y K"), 3e-5, 0.35 * 3e-5);
+  EXPECT_NE(slurp(plots + "/analyze_accelerometer.csv").find("axis,tau_s,adev,ci_lo,ci_hi,channel"),
+            std::string::npos);
 }
 
 // A record past 2^22 samples is analysed on block means for the whole record,

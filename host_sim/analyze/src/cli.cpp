@@ -727,6 +727,14 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const De
       }
       std::fprintf(info, "%s\n", imu::cli::term_safe(msg).c_str());
     }
+    // One figure per sensor with its axes and the IEEE 952 lines (the field's figure).
+    std::string msg;
+    if (!write_sensor_plots(reports, plots, msg)) {
+      return fail(msg, kExitRuntime);
+    }
+    if (!msg.empty()) {
+      std::fprintf(info, "%s\n", imu::cli::term_safe(msg).c_str());
+    }
   }
   return kExitOk;
 }

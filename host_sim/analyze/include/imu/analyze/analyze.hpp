@@ -214,6 +214,18 @@ void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, co
 /// failing); message says what was written.
 [[nodiscard]] bool write_plots(const Report& r, const std::string& dir, const std::string& stem,
                                std::string& message);
+/// One figure per sensor (the reports whose `sensor` is accelerometer, then gyroscope), as
+/// MATLAB's allanvar examples and allan_variance_ros draw them: every axis's ADEV with its 68 %
+/// interval and the IEEE Std 952 lines read off it as MATLAB's allanvar example does (the line
+/// of slope -1/2, +1/2 or 0 through the point where the data's log-log slope is nearest it,
+/// within 0.25): N / sqrt(tau) (white noise, N read at tau = 1 s), K sqrt(tau / 3) (rate random
+/// walk, K read at tau = 3 s), the flat 0.664 B (bias instability), each read-off point marked.
+/// These are the plot's graphical read-offs, not the analysis's model (its terms are in
+/// analyze_NAME_after). DIR/analyze_SENSOR.{csv,gp,svg,png};
+/// without gnuplot the CSV and script only. False with message on a failed write or render;
+/// message lists the files.
+[[nodiscard]] bool write_sensor_plots(const std::vector<Report>& reports, const std::string& dir,
+                                      std::string& message);
 /// Kalibr's imu.yaml (accelerometer/gyroscope noise density and random walk, update_rate,
 /// rostopic) from the reports of one IMU's channels (Report::sensor accelerometer and gyroscope, at
 /// least one of each; numbers in SI, as the reading converted them):
