@@ -155,6 +155,16 @@ TEST_F(RosBag, NoOptionsNeededAndTheTimesAreSaid) {
 
 // `run` reads a bag as adev and analyze do: the LZ4 bag and the CSV of the same samples give
 // the node the same record (identical ADEV telemetry), the bag's topic and gap said.
+// --time-unit names a text column's unit; a bag's stamps are ns: refused (exit 2), not applied.
+TEST_F(RosBag, TimeUnitIsRefusedOnABag) {
+  for (const char* cmd : {"adev", "analyze"}) {
+    const auto r = simtest::run({cmd, file("plain.bag"), "--channel", "acc_z", "--time-unit", "s"});
+    EXPECT_EQ(r.status, 2) << cmd << ": " << r.err;
+    EXPECT_NE(r.err.find("is a ROS bag, whose header stamps are in ns"), std::string::npos)
+        << r.err;
+  }
+}
+
 TEST_F(RosBag, RunSendsABagAsItsCsv) {
   std::string json[2];
   for (int k = 0; k < 2; ++k) {

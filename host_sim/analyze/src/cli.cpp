@@ -859,6 +859,9 @@ int analyze_file(const std::string& file, const std::string& channel_spec, doubl
     return fail("--topic " + topic + ": " + file + " is not a ROS bag (--topic reads one)",
                 kExitUsage);
   }
+  if (bag && time_unit_s > 0.0) {
+    return fail("--time-unit: " + file + " is a ROS bag, whose header stamps are in ns", kExitUsage);
+  }
   if (bag || imu::cli::looks_like_text(file)) {
     std::vector<Job> jobs;
     if (!text_jobs(file, channel_spec, fs, time_unit_s, topic, lsb, d, jobs, err)) {

@@ -946,6 +946,10 @@ int cmd_adev(int argc, char** argv) {
     return fail(cmd, "--topic " + o.topic + ": " + o.path + " is not a ROS bag (--topic reads one)",
                 kExitUsage);
   }
+  if (bag && o.time_unit_s > 0.0) {
+    return fail(cmd, "--time-unit: " + o.path + " is a ROS bag, whose header stamps are in ns",
+                kExitUsage);
+  }
   std::vector<std::string> names;
   if (!adev_channels(o, text, names, err)) {
     return fail(cmd, err,
