@@ -399,6 +399,7 @@ TEST(SimCli, VersionAndDidYouMean) {
 // test) within 10 % at taus from Ts to 100 s, and its own analysis finds the same white noise
 // within 5 %.
 TEST(SimCli, SynthFromAnAnalysisFollowsItsModel) {
+  SKIP_IF_EMULATED();  // two analyses of 2e6 samples: minutes under qemu-user
   simtest::TempDir dir;
   const std::string rec = dir.file("rec.mat");
   ASSERT_EQ(run({"synth", "--out", rec, "--duration", "20000", "--seed", "4711", "--K",

@@ -424,10 +424,13 @@ TEST(JsonSchema, EveryCommandsJsonFollowsTheSchemaForOneChannelAndMany) {
   for (Case& c : cases) {
     c.args.insert(c.args.end(), {"--json", c.json});
   }
-  // run: the first channel through the in-process node on the loopback bus.
+  // run: the first channel through the in-process node on the loopback bus (a thread: not
+  // under qemu-user, where a second thread hangs; the native and VM runs cover it).
+#ifndef IMU_EMULATED_TARGET
   cases.push_back({{"run", mat, "--channel", "acc_z", "--no-plots", "--quiet", "--sim-windows", "5",
                     "--out", dir.file("run")},
                    dir.file("run") + "/report.json"});
+#endif
   std::set<std::string> commands;
   for (const Case& c : cases) {
     SCOPED_TRACE(c.args[0] + " " + c.args[2] + " " + c.args[3]);
@@ -446,7 +449,9 @@ TEST(JsonSchema, EveryCommandsJsonFollowsTheSchemaForOneChannelAndMany) {
     // One shape for one channel or many: the channels are always a map of name to object.
     EXPECT_EQ(channels->obj.size(), c.args[3].find(',') == std::string::npos ? 1U : 2U);
   }
+#ifndef IMU_EMULATED_TARGET
   EXPECT_EQ(commands, (std::set<std::string>{"adev", "analyze", "run"}));
+#endif
 }
 
 // The validator itself: documents the schema must refuse are refused (a test that cannot fail
