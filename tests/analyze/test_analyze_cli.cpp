@@ -318,7 +318,11 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   const std::string mat = write_kalibr_imu();
   const std::string json = tmp_path("all.json");
   const std::string yaml = tmp_path("imu.yaml");
-  ASSERT_EQ(call({"analyze", mat, "--channel", "all", "--json", json, "--yaml", yaml}), 0);
+  // --plots in the same run (one analysis: this test runs under qemu-user in the cross build).
+  const std::string plots = tmp_path("sensor_plots");
+  ASSERT_EQ(call({"analyze", mat, "--channel", "all", "--json", json, "--yaml", yaml, "--plots",
+                  plots}),
+            0);
   const std::string j = slurp(json);
   EXPECT_NE(j.find("\"channels\": {"), std::string::npos);
   for (const char* c : {"\"acc_x\": {", "\"acc_y\": {", "\"gyro_x\": {", "\"gyro_y\": {"}) {
@@ -352,8 +356,6 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
   // --plots: one figure per sensor with the IEEE 952 lines read off the ADEV's slopes; on this
   // white + walk IMU the read-off N and K (in the key's titles) are the record's within 15 %
   // and 35 % (a graphical read-off at one point of the curve).
-  const std::string plots = tmp_path("sensor_plots");
-  ASSERT_EQ(call({"analyze", mat, "--channel", "all", "--plots", plots}), 0);
   const std::string acc_gp = slurp(plots + "/analyze_accelerometer.gp");
   const std::string gyro_gp = slurp(plots + "/analyze_gyroscope.gp");
   const auto title_value = [](const std::string& gp, const std::string& what) {
