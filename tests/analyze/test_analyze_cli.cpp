@@ -235,6 +235,8 @@ TEST(AnalyzeInputs, QuantisedRecordWithAnOffsetGetsAReportAndItsStep) {
     std::string err;
     ASSERT_TRUE(imu::analyze::analyze(y, "acc_z", imu::analyze::Options{}, r, err))
         << "q " << q << ": " << err;
+    std::string why;
+    EXPECT_TRUE(imu::analyze::report_consistent(r, why)) << "q " << q << ": " << why;
     EXPECT_NEAR(r.lsb, q, 0.01 * q) << r.lsb_note;
     EXPECT_TRUE(r.effects.empty()) << "q " << q << "\n" << imu::analyze::to_text(r);
   }
@@ -260,6 +262,8 @@ TEST(AnalyzeInputs, FailedFitsFallBackToASimplerModelWithANote) {
   std::string err;
   ASSERT_TRUE(imu::analyze::analyze(y, "acc_z", imu::analyze::Options{}, r, err)) << err;
   EXPECT_TRUE(r.effects.empty()) << imu::analyze::to_text(r);
+  std::string why;
+  EXPECT_TRUE(imu::analyze::report_consistent(r, why)) << why;
   EXPECT_GT(r.model_before.n, 0.0);
   EXPECT_EQ(r.model_before.n_gm, 0U);
   bool noted = false;

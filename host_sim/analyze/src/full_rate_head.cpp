@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "imu/analyze/analyze.hpp"
+#include "effects.hpp"
 
 namespace imu::analyze {
 namespace {
@@ -164,6 +165,7 @@ void take_join(Report& record, const Join& j, const ErrorStats& on_record, const
   }
   const ErrorStats filter = record.error_after;
   record.model_after = j.model;
+  name_extra_gms(record.model_after, record.effects);
   record.error_after = on_record;
   record.error_after.cov_ratio = filter.cov_ratio;
   record.error_after.nis_mean = filter.nis_mean;

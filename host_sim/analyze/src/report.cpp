@@ -1,4 +1,5 @@
 // JSON, text report and plots of the analysis.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -82,6 +83,8 @@ std::string effect_json(const Effect& e) {
   } else if (e.type == "oscillation") {
     s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"sigma\": " << num(e.amplitude)
       << ", \"bandwidth_hz\": " << num(e.bandwidth_hz);
+  } else if (e.type == "gauss_markov") {
+    s << ", \"sigma\": " << num(e.amplitude) << ", \"tb_s\": " << num(e.tb_s);
   } else if (e.type == "bias_step") {
     s << ", \"time_s\": " << num(e.time_s) << ", \"size\": " << num(e.size);
   } else if (e.type == "outliers") {
@@ -136,6 +139,12 @@ std::string effect_text(const Effect& e) {
   } else if (e.type == "bias_instability") {
     std::snprintf(buf, sizeof buf, "effect bias_instability: B = %.4e (ADEV floor %.4e)", e.b,
                   kFlickerAdevFactor * e.b);
+  } else if (e.type == "gauss_markov") {
+    std::snprintf(buf, sizeof buf,
+                  "effect gauss_markov: a second GM term, sigma = %.4e, Tb = %.4g s (ADEV peak "
+                  "%.4e at %.4g s)",
+                  e.amplitude, e.tb_s, kGmPeakAdevFactor * std::sqrt(2.0) * e.amplitude,
+                  kGmPeakTauFactor * e.tb_s);
   } else {
     std::snprintf(buf, sizeof buf, "effect outliers: %llu samples",
                   static_cast<unsigned long long>(e.count));
@@ -196,6 +205,98 @@ std::string to_json(const Report& r) {
     << "},\n  \"timing_s\": {\"total\": " << num(r.seconds) << ", \"cpu\": " << num(r.cpu_seconds)
     << "}\n}\n";
   return s.str();
+}
+
+namespace {
+
+struct NamedTerm {
+  std::string type;
+  double value;
+};
+
+// The terms of a model beyond white noise and its first GM, each with its main parameter.
+std::vector<NamedTerm> terms_beyond_first_order(const ModelParams& m) {
+  std::vector<NamedTerm> t;
+  const auto add = [&t](bool in, const char* type, double v) {
+    if (in) {
+      t.push_back(NamedTerm{type, v});
+    }
+  };
+  add(m.q > 0.0, "quantization", m.q);
+  for (std::size_t i = 1; i < m.n_gm; ++i) {
+    add(true, "gauss_markov", std::sqrt(m.gm[i].sb * m.gm[i].tb_s / 2.0));
+  }
+  add(m.k > 0.0, "rate_random_walk", m.k);
+  add(std::fabs(m.r) > 0.0, "ramp", m.r);
+  add(m.sin_a > 0.0, "sinusoid", m.sin_a);
+  add(m.sin2_a > 0.0, "sinusoid", m.sin2_a);
+  add(m.bi > 0.0, "bias_instability", m.bi);
+  add(m.osc_sigma > 0.0, "oscillation", m.osc_sigma);
+  return t;
+}
+
+double effect_value(const Effect& e) {
+  if (e.type == "quantization") {
+    return e.q;
+  }
+  if (e.type == "rate_random_walk") {
+    return e.k;
+  }
+  if (e.type == "ramp") {
+    return e.r;
+  }
+  if (e.type == "bias_instability") {
+    return e.b;
+  }
+  return e.amplitude;  // sinusoid, oscillation (sigma), gauss_markov (sigma)
+}
+
+}  // namespace
+
+bool report_consistent(const Report& r, std::string& why) {
+  std::vector<NamedTerm> named;
+  for (const auto& e : r.effects) {
+    if (e.type != "bias_step" && e.type != "outliers") {
+      named.push_back(NamedTerm{e.type, effect_value(e)});
+    }
+  }
+  for (const auto& t : terms_beyond_first_order(r.model_after)) {
+    bool found = false;
+    for (auto it = named.begin(); it != named.end(); ++it) {
+      if (it->type == t.type &&
+          std::fabs(it->value - t.value) <= 1e-9 * std::max(std::fabs(t.value), 1e-300)) {
+        named.erase(it);
+        found = true;
+        break;
+      }
+    }
+    if (!found) {
+      why = "model_after holds " + t.type + " = " + num(t.value) +
+            " and no effect names it with that value";
+      return false;
+    }
+  }
+  if (!named.empty()) {
+    why = "effect " + named.front().type + " = " + num(named.front().value) +
+          " is not a term of model_after";
+    return false;
+  }
+  // The text: one "effect " line per effect; "effects: none (...)" only without effects.
+  const std::string text = to_text(r);
+  std::size_t lines = 0;
+  for (std::size_t at = 0; (at = text.find("\neffect ", at)) != std::string::npos; ++at) {
+    ++lines;
+  }
+  if (lines != r.effects.size()) {
+    why = "the text lists " + std::to_string(lines) + " effects, the report " +
+          std::to_string(r.effects.size());
+    return false;
+  }
+  if (r.effects.empty() != (text.find("\neffects: none (") != std::string::npos)) {
+    why = "the text's \"effects: none\" line disagrees with the effect list";
+    return false;
+  }
+  return true;
 }
 
 std::string to_text(const Report& r) {

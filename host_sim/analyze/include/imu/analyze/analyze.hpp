@@ -84,8 +84,10 @@ struct ErrorStats {
 };
 
 struct Effect {
-  /// quantization, rate_random_walk, ramp, sinusoid, bias_step, outliers, bias_instability,
-  /// oscillation (a narrowband random oscillation: error_model.hpp)
+  /// Terms of model_after beyond white noise and its first GM: quantization, rate_random_walk,
+  /// ramp, sinusoid, bias_instability, oscillation (a narrowband random oscillation:
+  /// error_model.hpp), gauss_markov (a second first-order GM). Cleaning of the record, not model
+  /// terms: bias_step, outliers.
   std::string type;
   double b = 0.0;          ///< bias instability B [unit] (ADEV floor 0.664 B)
   double q = 0.0;          ///< quantization Q [unit s]
@@ -94,6 +96,7 @@ struct Effect {
   double freq_hz = 0.0;    ///< sinusoid; oscillation: centre frequency
   double amplitude = 0.0;  ///< sinusoid [unit]; oscillation: the process's std sigma [unit]
   double bandwidth_hz = 0.0;  ///< oscillation: half-power width of its PSD peak (beta / pi)
+  double tb_s = 0.0;       ///< gauss_markov: correlation time Tb [s] (amplitude: its sigma)
   double time_s = 0.0;     ///< bias step: time of the first sample after it
   double size = 0.0;       ///< bias step [unit]
   std::uint64_t count = 0; ///< outliers
@@ -204,6 +207,14 @@ struct Report {
 /// added. Either way `record.head` holds the head's findings and each decision is a note.
 /// Cost: a few model evaluations per ADEV point.
 void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, const Options& o);
+
+/// The report tells one story: every term of model_after beyond white noise and its first GM is
+/// a named effect of that type carrying the model's parameter (a second GM is gauss_markov, with
+/// sigma = sqrt(Sb Tb / 2) and Tb), every named model effect is a term of model_after, and the
+/// text lists exactly the effects (bias_step and outliers are cleaning of the record, not model
+/// terms). False with the first disagreement in `why`. analyze() removes from the model a term
+/// it does not name, so this holds for every report it writes; tests check it.
+[[nodiscard]] bool report_consistent(const Report& r, std::string& why);
 
 [[nodiscard]] std::string to_json(const Report& r);
 [[nodiscard]] std::string to_text(const Report& r);
