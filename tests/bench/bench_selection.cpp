@@ -2,7 +2,8 @@
 // of the terms the analysis can name, and the confusion matrix of named against true terms.
 // Prints a table; not a pass/fail test (the targets are read off its output).
 //
-//   bench_selection [RECORDS [THREADS [FIRST_SEED [MAX_SAMPLES]]]]   (500 2 7100001 4194304)
+//   bench_selection [RECORDS [THREADS [FIRST_SEED [MAX_SAMPLES [RECORDS_CSV]]]]]
+//   (500 2 7100001 4194304; RECORDS_CSV: one line per record, its truth and what was named)
 //
 // Generator (seeds FIRST_SEED.., which no unit test uses): a gyroscope or an accelerometer scale
 // (white N over two decades around 5e-4 rad/s/sqrt(Hz) or 3e-3 m/s^2/sqrt(Hz)), rate 50 to
@@ -332,6 +333,29 @@ int main(int argc, char** argv) {
     std::printf("| %s | %zu | %zu | %s | %s | %zu | %s | %s |\n", kName[t], with, dom,
                 pct(dom_named, dom).c_str(), pct(weak_named, with - dom).c_str(), without,
                 pct(false_named, without).c_str(), pct(est_ok, est).c_str());
+  }
+  if (argc > 5) {
+    FILE* f = std::fopen(argv[5], "w");
+    if (f == nullptr) {
+      std::fprintf(stderr, "cannot write %s\n", argv[5]);
+      return 1;
+    }
+    std::fprintf(f, "seed,fs_hz,samples,gyro,true,dominant,named,second_gm,unexplained\n");
+    for (std::size_t i = 0; i < n_rec; ++i) {
+      std::string has;
+      std::string dom;
+      std::string named;
+      for (std::size_t t = 0; t < kTerms; ++t) {
+        has += recs[i].has[t] ? std::string(kName[t]) + " " : "";
+        dom += recs[i].dominant[t] ? std::string(kName[t]) + " " : "";
+        named += outs[i].named[t] ? std::string(kName[t]) + " " : "";
+      }
+      std::fprintf(f, "%llu,%g,%zu,%d,%s,%s,%s,%d,%d\n",
+                   static_cast<unsigned long long>(recs[i].spec.seed), recs[i].spec.fs_hz,
+                   recs[i].spec.samples, recs[i].gyro ? 1 : 0, has.c_str(), dom.c_str(),
+                   named.c_str(), outs[i].second_gm ? 1 : 0, outs[i].unexplained ? 1 : 0);
+    }
+    std::fclose(f);
   }
   std::printf("\nreports naming a second GM (the truth has one GM): %zu of %zu\n", second_gm, ok);
   std::printf("reports with an unexplained tau run: %zu of %zu\n", unexplained, ok);
