@@ -2642,7 +2642,7 @@ class Analysis {
       }
       if (beyond_bound && std::find(gone.begin(), gone.end(), "gauss_markov") == gone.end()) {
         gone.emplace_back("gauss_markov");
-        trial.notes.push_back("not named: gauss_markov (its ADEV peak lies beyond T/10 / 2: over "
+        trial.notes.emplace_back("not named: gauss_markov (its ADEV peak lies beyond T/10 / 2: over "
                               "the taus fitted it is the same curve as a walk or flicker)");
       }
       if (choice.p.n_gm >= 2 &&
