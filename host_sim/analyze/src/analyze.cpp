@@ -1472,7 +1472,7 @@ ModelParams without(const ModelParams& p, const std::string& type) {
 }
 
 void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr,
-                Report& out) {
+                Report& out, std::vector<std::string>& dominates_nowhere) {
   Points pts;
   const std::vector<double> z = final_z(c, p, pts);
   std::vector<Effect> kept;
@@ -1518,6 +1518,7 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
     }
     std::string why;
     if (dominated == 0) {
+      dominates_nowhere.push_back(e.type);
       out.notes.push_back("not named: " + e.type +
                           " (in the model, but it dominates the model ADEV at no tau)");
       continue;
@@ -1605,15 +1606,6 @@ std::vector<Effect> without_types(const std::vector<Effect>& effects,
 
 std::vector<Effect> without_type(const std::vector<Effect>& effects, const std::string& type) {
   return without_types(effects, {type});
-}
-
-bool has_note(const std::vector<std::string>& notes, const std::string& prefix) {
-  for (const auto& n : notes) {
-    if (n.rfind(prefix, 0) == 0) {
-      return true;
-    }
-  }
-  return false;
 }
 
 // The fit terms of p (and its sinusoids, kSineBit) that no effect of `effects` names.
@@ -2570,6 +2562,120 @@ class Analysis {
     }
   }
 
+  // One story: a term the report does not name leaves the model (a wrong name is worse than
+  // an unexplained range, and a model term without a name contradicts the effect list).
+  // Backward elimination: while the name check withdraws a name, the one of those terms whose
+  // removal costs least (the model refitted without it) leaves, and the check runs again on
+  // the refitted model. withdrawn: the tau ranges of the last check's withdrawn names.
+  void name_terms(const AfterContext& ac, AfterChoice& choice,
+                  std::vector<UnexplainedRun>& withdrawn) {
+    for (int round = 0; round < 8; ++round) {
+      Report trial;
+      trial.effects = out.effects;
+      std::vector<std::string> dominates_nowhere;
+      name_check(ac, choice.p, ramp_bend_lr(y_fit, ts, choice.p, tb_max, step_at), trial,
+                 dominates_nowhere);
+      std::vector<std::string> gone;
+      for (const auto& e : out.effects) {
+        bool kept = false;
+        for (const auto& k : trial.effects) {
+          kept = kept || k.type == e.type;
+        }
+        if (!kept && !needed_beside_larger_terms(ac, choice, e, dominates_nowhere, trial)) {
+          gone.push_back(e.type);
+        }
+      }
+      check_second_gm(ac, choice, trial, gone);
+      trial.effects = without_types(trial.effects, gone);
+      if (gone.empty() || round == 7) {
+        out.effects = std::move(trial.effects);
+        out.notes.insert(out.notes.end(), trial.notes.begin(), trial.notes.end());
+        withdrawn = std::move(trial.unexplained);
+        return;
+      }
+      // The least costly removal, kept as refitted (its effects and its removal note).
+      AfterChoice best;
+      Report best_r;
+      std::string removed;
+      for (const auto& type : gone) {
+        Report r1;
+        r1.effects = without_type(out.effects, type);
+        AfterChoice ch = choice;
+        remove_unnamed_terms(ac, ch, r1);
+        if (removed.empty() || ch.e.cost < best.e.cost) {
+          best = ch;
+          best_r = std::move(r1);
+          removed = type;
+        }
+      }
+      for (const auto& n : trial.notes) {
+        if (n.find("not named: " + removed + " ") == 0) {
+          out.notes.push_back(n);
+        }
+      }
+      out.notes.insert(out.notes.end(), best_r.notes.begin(), best_r.notes.end());
+      out.effects = std::move(best_r.effects);
+      choice = best;
+    }
+  }
+
+  // A term beside larger ones at every tau is still named when the model is worse than the
+  // first-order one without it (the refit cannot do without it): put back into trial, said.
+  bool needed_beside_larger_terms(const AfterContext& ac, const AfterChoice& choice,
+                                  const Effect& e,
+                                  const std::vector<std::string>& dominates_nowhere,
+                                  Report& trial) {
+    if (std::find(dominates_nowhere.begin(), dominates_nowhere.end(), e.type) ==
+        dominates_nowhere.end()) {
+      return false;
+    }
+    AfterChoice ch = choice;
+    Report r1;
+    r1.effects = without_type(out.effects, e.type);
+    remove_unnamed_terms(ac, ch, r1);
+    if (!(not_worse(choice.e, out.error_before) && !not_worse(ch.e, out.error_before))) {
+      return false;
+    }
+    trial.effects.push_back(e);
+    trial.notes.push_back("named: " + e.type + " (it dominates the model ADEV at no tau, "
+                          "but without it the model after is worse than before: RMS " +
+                          fmt("%.3f", ch.e.adev_rms_rel) + " / max " +
+                          fmt("%.3f", ch.e.adev_max_rel) + ")");
+    return true;
+  }
+
+  // A second GM (no mechanism claimed, exempt from the run check) must pass the search's ADEV
+  // cost test backwards: the model refitted without it costs more than cost_thr more. Nor may
+  // it peak where the base GM may not (its ADEV peak and an octave after it inside
+  // [Ts, T/10]): beyond that it is the same curve as a walk or flicker over the range.
+  void check_second_gm(const AfterContext& ac, const AfterChoice& choice, Report& trial,
+                       std::vector<std::string>& gone) {
+    if (choice.p.n_gm < 2 || std::find(gone.begin(), gone.end(), "gauss_markov") != gone.end()) {
+      return;
+    }
+    bool beyond_bound = false;
+    for (std::size_t g = 1; g < choice.p.n_gm; ++g) {
+      beyond_bound = beyond_bound || choice.p.gm[g].tb_s > 1.001 * tb_max;
+    }
+    if (beyond_bound) {
+      gone.emplace_back("gauss_markov");
+      trial.notes.emplace_back("not named: gauss_markov (its ADEV peak lies beyond T/10 / 2: "
+                               "over the taus fitted it is the same curve as a walk or flicker)");
+      return;
+    }
+    AfterChoice ch = choice;
+    Report r1;
+    r1.effects = without_type(trial.effects, "gauss_markov");
+    remove_unnamed_terms(ac, ch, r1);
+    const double rise = ch.e.cost - choice.e.cost;
+    if (!(rise > cost_thr)) {
+      gone.emplace_back("gauss_markov");
+      trial.notes.push_back("not named: gauss_markov (the model refitted without it costs only " +
+                            fmt("%.1f", rise) + " <= " + fmt("%.1f", cost_thr) +
+                            " more in sum z^2)");
+    }
+  }
+
   // The after-model (never worse), the names checked, the remainder said, the filters run.
   void after_model() {
     // ---- after: never worse than before, every named effect real, the remainder said.
@@ -2595,97 +2701,8 @@ class Analysis {
       fill_errors(points_for_model(clean, q), q, o, ts, tau_max, choice.e);
     }
     drop_unmodelled_effects(choice.p, out);
-    // One story: a term the report does not name leaves the model (a wrong name is worse than
-    // an unexplained range, and a model term without a name contradicts the effect list).
-    // Backward elimination: while the name check withdraws a name, the one of those terms whose
-    // removal costs least (the model refitted without it) leaves, and the check runs again on
-    // the refitted model.
     std::vector<UnexplainedRun> withdrawn;
-    for (int round = 0; round < 8; ++round) {
-      Report trial;
-      trial.effects = out.effects;
-      name_check(ac, choice.p, ramp_bend_lr(y_fit, ts, choice.p, tb_max, step_at), trial);
-      std::vector<std::string> gone;
-      for (const auto& e : out.effects) {
-        bool kept = false;
-        for (const auto& k : trial.effects) {
-          kept = kept || k.type == e.type;
-        }
-        if (kept) {
-          continue;
-        }
-        // A term beside larger ones at every tau is still named when the model is worse than
-        // the first-order one without it (the refit cannot do without it).
-        if (has_note(trial.notes, "not named: " + e.type + " (in the model, but it dominates")) {
-          AfterChoice ch = choice;
-          Report r1;
-          r1.effects = without_type(out.effects, e.type);
-          remove_unnamed_terms(ac, ch, r1);
-          if (not_worse(choice.e, out.error_before) && !not_worse(ch.e, out.error_before)) {
-            trial.effects.push_back(e);
-            trial.notes.push_back("named: " + e.type + " (it dominates the model ADEV at no tau, "
-                                  "but without it the model after is worse than before: RMS " +
-                                  fmt("%.3f", ch.e.adev_rms_rel) + " / max " +
-                                  fmt("%.3f", ch.e.adev_max_rel) + ")");
-            continue;
-          }
-        }
-        gone.push_back(e.type);
-      }
-      // A second GM (no mechanism claimed, exempt from the run check) must pass the search's
-      // ADEV cost test backwards: the model refitted without it costs more than cost_thr more.
-      // Nor may it peak where the base GM may not (its ADEV peak and an octave after it inside
-      // [Ts, T/10]): beyond that it is the same curve as a walk or flicker over the range.
-      bool beyond_bound = false;
-      for (std::size_t g = 1; g < choice.p.n_gm; ++g) {
-        beyond_bound = beyond_bound || choice.p.gm[g].tb_s > 1.001 * tb_max;
-      }
-      if (beyond_bound && std::find(gone.begin(), gone.end(), "gauss_markov") == gone.end()) {
-        gone.emplace_back("gauss_markov");
-        trial.notes.emplace_back("not named: gauss_markov (its ADEV peak lies beyond T/10 / 2: over "
-                              "the taus fitted it is the same curve as a walk or flicker)");
-      }
-      if (choice.p.n_gm >= 2 &&
-          std::find(gone.begin(), gone.end(), "gauss_markov") == gone.end()) {
-        AfterChoice ch = choice;
-        Report r1;
-        r1.effects = without_type(trial.effects, "gauss_markov");
-        remove_unnamed_terms(ac, ch, r1);
-        const double rise = ch.e.cost - choice.e.cost;
-        if (!(rise > cost_thr)) {
-          gone.emplace_back("gauss_markov");
-          trial.notes.push_back("not named: gauss_markov (the model refitted without it costs "
-                                "only " + fmt("%.1f", rise) + " <= " + fmt("%.1f", cost_thr) +
-                                " more in sum z^2)");
-        }
-      }
-      trial.effects = without_types(trial.effects, gone);
-      if (gone.empty() || round == 7) {
-        out.effects = std::move(trial.effects);
-        out.notes.insert(out.notes.end(), trial.notes.begin(), trial.notes.end());
-        withdrawn = std::move(trial.unexplained);
-        break;
-      }
-      double least = 0.0;
-      std::string removed;
-      for (const auto& type : gone) {
-        Report r1;
-        r1.effects = without_type(out.effects, type);
-        AfterChoice ch = choice;
-        remove_unnamed_terms(ac, ch, r1);
-        if (removed.empty() || ch.e.cost < least) {
-          least = ch.e.cost;
-          removed = type;
-        }
-      }
-      for (const auto& n : trial.notes) {
-        if (n.find("not named: " + removed + " ") == 0) {
-          out.notes.push_back(n);
-        }
-      }
-      out.effects = without_type(out.effects, removed);
-      remove_unnamed_terms(ac, choice, out);
-    }
+    name_terms(ac, choice, withdrawn);
     drop_degenerate_effects(ts, n_d, out);
     remove_unnamed_terms(ac, choice, out);
     cur_p = choice.p;
