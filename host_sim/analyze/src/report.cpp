@@ -382,18 +382,9 @@ std::string to_text(const Report& r) {
     // never reads as if the model after were the first-order one when it is not.
     const ModelParams& m = r.model_after;
     std::string held;
-    const auto hold = [&held](bool in, const char* name) {
-      if (in) {
-        held += (held.empty() ? "" : ", ") + std::string(name);
-      }
-    };
-    hold(m.n_gm > 1, "a second GM term");
-    hold(m.q > 0.0, "quantization");
-    hold(m.k > 0.0, "rate random walk");
-    hold(std::fabs(m.r) > 0.0, "ramp");
-    hold(std::fabs(m.sin_a) + std::fabs(m.sin2_a) > 0.0, "sinusoid");
-    hold(m.bi > 0.0, "bias instability");
-    hold(m.osc_sigma > 0.0, "narrowband oscillation");
+    for (const auto& t : terms_beyond_first_order(m)) {
+      held += (held.empty() ? "" : ", ") + t.type;
+    }
     s << (held.empty()
               ? (m.n_gm == 0 ? "effects: none (white noise only; see notes)\n"
                              : "effects: none (white noise and one GM term; the model after is "
