@@ -4,6 +4,8 @@
 //
 //   bench_selection [RECORDS [THREADS [FIRST_SEED [MAX_SAMPLES [RECORDS_CSV]]]]]
 //   (500 2 7100001 4194304; RECORDS_CSV: one line per record, its truth and what was named)
+//   With BENCH_SELECTION_TEXT set in the environment each report's text goes to stderr: one
+//   record's diagnosis is `BENCH_SELECTION_TEXT=1 bench_selection 1 1 SEED`.
 //
 // Generator (seeds FIRST_SEED.., which no unit test uses): a gyroscope or an accelerometer scale
 // (white N over two decades around 5e-4 rad/s/sqrt(Hz) or 3e-3 m/s^2/sqrt(Hz)), rate 50 to
@@ -209,6 +211,10 @@ Outcome analyse(const Record& rec) {
     return out;
   }
   out.ok = true;
+  if (std::getenv("BENCH_SELECTION_TEXT") != nullptr) {
+    std::fprintf(stderr, "== seed %llu\n%s\n", static_cast<unsigned long long>(rec.spec.seed),
+                 ia::to_text(r).c_str());
+  }
   out.cpu_s = r.cpu_seconds;
   out.unexplained = !r.unexplained.empty();
   std::string why;

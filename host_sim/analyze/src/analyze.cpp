@@ -2450,33 +2450,23 @@ class Analysis {
   }
 
   // The best candidate, checked against its rivals (ramp against a walk, the long-tau family by
-  // the record's likelihood), is taken if its cost drop passes the test. Returns false when no
-  // candidate is taken (the search ends).
-  bool take_best(const std::vector<Cand>& cands) {
+  // the record's likelihood, a walk against bias instability), is taken if its cost drop passes
+  // the test. Returns false when no candidate is taken (the search ends).
+  bool take_best(const std::vector<Cand>& all) {
+    std::vector<Cand> cands;  // less the terms the record has ruled out (see ruled_out)
+    for (const auto& c : all) {
+      if (std::find(ruled_out.begin(), ruled_out.end(), c.type) == ruled_out.end()) {
+        cands.push_back(c);
+      }
+    }
     const Cand* best = nullptr;
     for (const auto& c : cands) {
       if (best == nullptr || c.cost < best->cost) {
         best = &c;
       }
     }
-    // Ramp or rate random walk: one realisation of a random walk can look like a ramp on the
-    // ADEV. A deterministic ramp leaves no walk once the least-squares line is removed from the
-    // record; a random walk still wanders. So when the ramp wins, the record's likelihood test
-    // (long_memory.hpp) runs on the detrended record and the RRW is preferred if it passes.
-    if (best != nullptr && best->type == "ramp") {
-      const Cand* rrw = nullptr;
-      for (const auto& c : cands) {
-        rrw = c.type == "rate_random_walk" ? &c : rrw;
-      }
-      if (rrw != nullptr && cur_cost - rrw->cost > cost_thr) {
-        const RrwLikelihoodTest lt = test_rrw(y_fit, ts, cur_p, tb_max, true, step_at);
-        if (lt.ok && lt.lr > lr_thr) {
-          out.notes.push_back("ramp rejected for rate_random_walk: after removing the line the "
-                              "record still holds a walk (2 ln LR = " + fmt("%.1f", lt.lr) +
-                              " > " + fmt("%.2f", lr_thr) + ")");
-          best = rrw;
-        }
-      }
+    if (best != nullptr) {
+      ramp_or_walk(cands, best);
     }
     // The long-tau family: bias instability, rate random walk, or a second GM slow enough to be
     // seen in the record's block means. Over the taus up to T/10 a flat stretch bent up at the
@@ -2488,6 +2478,9 @@ class Analysis {
       best = long_tau_choice(LongTauInput{y_fit, ts, tb_max, (terms & kFitRamp) != 0U, step_at,
                                           cur_p, cur_cost, cost_thr},
                              cands, best, out.notes);
+    }
+    if (best != nullptr && !walk_or_flicker(cands, best)) {
+      return take_best(cands);
     }
     if (best == nullptr || cur_cost - best->cost <= cost_thr) {
       if (best != nullptr) {
@@ -2530,16 +2523,150 @@ class Analysis {
     return true;
   }
 
+  [[nodiscard]] const Cand* passing(const std::vector<Cand>& cands, const char* type) const {
+    const Cand* p = nullptr;
+    for (const auto& c : cands) {
+      p = c.type == type && cur_cost - c.cost > cost_thr ? &c : p;
+    }
+    return p;
+  }
+
+  // Ramp or rate random walk: one realisation of a walk can look like a ramp on the ADEV. A
+  // deterministic ramp leaves no walk once the least-squares line is removed from the record; a
+  // walk still wanders. So when the ramp wins and the walk passes the ADEV test too, the
+  // record's likelihood test (long_memory.hpp) runs on the detrended record and the walk is
+  // taken if it passes (the ramp is then ruled out for the rest of the search).
+  void ramp_or_walk(const std::vector<Cand>& cands, const Cand*& best) {
+    const Cand* walk = passing(cands, "rate_random_walk");
+    if (best->type != "ramp" || walk == nullptr) {
+      return;
+    }
+    const RrwLikelihoodTest detrended = test_rrw(y_fit, ts, cur_p, tb_max, true, step_at);
+    if (detrended.ok && detrended.lr > lr_thr) {
+      out.notes.push_back("ramp rejected for rate_random_walk: after removing the line the "
+                          "record still holds a walk (2 ln LR = " + fmt("%.1f", detrended.lr) +
+                          " > " + fmt("%.2f", lr_thr) + ")");
+      ruled_out.emplace_back("ramp");
+      best = walk;
+    }
+  }
+
+  // A walk and bias instability both raise the ADEV at the long taus: over a record that
+  // holds only a few of their time scales either fits the other (a flicker floor whose last
+  // estimates scatter upwards, a walk seen over a decade). Each is taken only if the record's
+  // likelihood needs it beside the other (long_tau_pair; on the detrended record when a ramp
+  // is in the model; ramp_or_walk weighs a trend against the walk). One needed: it
+  // is taken, the other ruled out; neither: the record cannot tell them apart. Then the walk
+  // is ruled out; bias instability, stationary and the lesser claim, is kept where the ADEV
+  // and the family's likelihood put it first, and ruled out with the walk where they put the
+  // walk first (the rise stays unexplained). False when `best` was ruled out.
+  bool walk_or_flicker(const std::vector<Cand>& cands, const Cand* best) {
+    const bool walk = best->type == "rate_random_walk";
+    if ((!walk && best->type != "bias_instability") || !(cur_cost - best->cost > cost_thr)) {
+      return true;
+    }
+    const Cand* other = passing(cands, walk ? "bias_instability" : "rate_random_walk");
+    if (other == nullptr) {
+      return true;  // no rival on the ADEV: its test is the ADEV's (and the walk's likelihood)
+    }
+    const bool detrend = (terms & kFitRamp) != 0U;
+    const LongTauPair lp =
+        long_tau_pair(walk ? (other != nullptr ? &other->p : nullptr) : &best->p, detrend);
+    const double need_best = walk ? lp.k_beside_b : lp.b_beside_k;
+    const double need_other = walk ? lp.b_beside_k : lp.k_beside_b;
+    if (need_best > lr_thr) {
+      return true;
+    }
+    const bool other_needed = other != nullptr && need_other > lr_thr;
+    if (!walk && !other_needed) {
+      out.notes.push_back("bias_instability kept, rate_random_walk ruled out: the" +
+                          std::string(detrend ? " detrended" : "") +
+                          " record cannot tell them apart (2 ln LR of each beside the other " +
+                          fmt("%.1f", need_best) + ", " + fmt("%.1f", need_other) + " <= " +
+                          fmt("%.2f", lr_thr) + ")");
+      ruled_out.emplace_back("rate_random_walk");
+      return true;
+    }
+    out.notes.push_back(
+        "not added: " + best->type + " (the" + (detrend ? " detrended" : "") +
+        " record's likelihood needs it beside " + (walk ? "bias instability" : "a walk") +
+        " by 2 ln LR = " + fmt("%.1f", need_best) + " <= " + fmt("%.2f", lr_thr) + ")" +
+        (other_needed ? "; " + other->type + " is needed beside it (" + fmt("%.1f", need_other) +
+                            ")"
+         : other != nullptr ? "; nor the other beside it (" + fmt("%.1f", need_other) +
+                                  "): the record cannot tell them apart, both are ruled out"
+                            : ""));
+    ruled_out.push_back(best->type);  // the walk, or bias instability where the walk is needed
+    if (!other_needed) {
+      ruled_out.push_back(other->type);  // the walk led and neither is needed: nothing is named
+    }
+    return false;
+  }
+
+  struct LongTauPair {
+    double k_beside_b = 0.0;  // 2 ln LR of a walk against the model with bias instability
+    double b_beside_k = 0.0;  // 2 ln LR of bias instability against the model with a walk
+  };
+  // The record's block-mean likelihoods (long_memory.hpp) of the current model with a walk, with
+  // bias instability, and with both (the flicker bank reaching the record's length). B starts
+  // from `bi_start`'s, else the model's own, else the data's ADEV at T/100 taken as the flicker
+  // floor; B and K are fitted. With `detrend` on the record less its least-squares line. Zeros
+  // where a likelihood cannot be computed.
+  [[nodiscard]] LongTauPair long_tau_pair(const ModelParams* bi_start, bool detrend) const {
+    LongTauPair out_lr;
+    ModelParams h0 = cur_p;
+    h0.k = 0.0;
+    if (bi_start != nullptr && bi_start->bi > 0.0) {
+      h0.bi = bi_start->bi;
+      h0.bi_tau_lo_s = bi_start->bi_tau_lo_s;
+      h0.bi_tau_hi_s = bi_start->bi_tau_hi_s;
+    } else if (!(h0.bi > 0.0)) {
+      for (const auto& pt : adev_y.by_alpha[2]) {
+        h0.bi = pt.tau_s <= t_rec / 100.0 ? pt.adev / kFlickerAdevFactor : h0.bi;
+      }
+      h0.bi_tau_hi_s = 0.1 * t_rec;
+      h0.bi_tau_lo_s = flicker_tau_lo(ts, h0.bi_tau_hi_s, adev_y.by_alpha[2]);
+    }
+    if (!(h0.bi > 0.0)) {
+      return out_lr;
+    }
+    ModelParams no_b = cur_p;
+    no_b.k = 0.0;
+    no_b.bi = 0.0;
+    const RrwLikelihoodTest with_b = test_rrw(y_fit, ts, h0, tb_max, detrend, step_at);
+    const RrwLikelihoodTest without_b = test_rrw(y_fit, ts, no_b, tb_max, detrend, step_at);
+    if (!with_b.ok || !without_b.ok) {
+      return out_lr;
+    }
+    const double l_both = std::max(with_b.h1.loglik, without_b.h1.loglik);
+    out_lr.k_beside_b = std::max(0.0, 2.0 * (l_both - with_b.h0.loglik));
+    out_lr.b_beside_k = std::max(0.0, 2.0 * (l_both - without_b.h1.loglik));
+    return out_lr;
+  }
+
   void rrw_by_likelihood() {
     // ---- rate random walk by the record's likelihood (when the ADEV up to T/10 did not need it).
     // The ADEV of a GM peaking near T/10 is the same curve as an RRW's there; the record itself is
     // not: a walk keeps wandering, a GM with tb <= tb_max reverts many times (long_memory.hpp).
     // H0 = the current model's GMs (tb <= tb_max), H1 = H0 + K (on the detrended record if a ramp
     // was found).
-    if ((terms & kFitRrw) == 0U) {
+    const bool walk_ruled_out = std::find(ruled_out.begin(), ruled_out.end(),
+                                          "rate_random_walk") != ruled_out.end();
+    if (walk_ruled_out && (terms & kFitRrw) == 0U) {
+      out.notes.emplace_back("no rate_random_walk by the record's likelihood: ruled out above");
+    } else if ((terms & kFitRrw) == 0U) {
       const RrwLikelihoodTest lt =
           test_rrw(y_fit, ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
-      if (lt.ok && lt.lr > lr_thr) {
+      const double lr_flicker =
+          lt.ok && lt.lr > lr_thr && (terms & kFitFlicker) != 0U
+              ? long_tau_pair(nullptr, (terms & kFitRamp) != 0U).k_beside_b
+              : lr_thr + 1.0;
+      if (lt.ok && lt.lr > lr_thr && !(lr_flicker > lr_thr)) {
+        out.notes.push_back("no rate_random_walk: the record's likelihood finds one against the "
+                            "model (2 ln LR = " + fmt("%.1f", lt.lr) + ") but not beside bias "
+                            "instability (" + fmt("%.1f", lr_flicker) +
+                            " <= " + fmt("%.2f", lr_thr) + ")");
+      } else if (lt.ok && lt.lr > lr_thr) {
         const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p);
         if (f.status == FitStatus::kOk && f.params.k > 0.0) {
           Effect e;
@@ -2801,6 +2928,9 @@ class Analysis {
   double cur_cost = 0.0;
   double cost_thr = 0.0;  // the ADEV cost drop a term must make
   double lr_thr = 0.0;    // the record likelihood's level (no inflation)
+  // Terms the record's likelihood could not tell from a look-alike (ramp_or_walk,
+  // walk_or_flicker): not proposed again.
+  std::vector<std::string> ruled_out;
   std::vector<double> y_fit;  // y minus the accepted sinusoid
   bool have_sine = false;
   bool have_sine2 = false;

@@ -10,7 +10,30 @@
 namespace imu::analyze {
 namespace {
 
-constexpr std::size_t kMaxStates = kMaxGmTerms + kMaxFlickerGm + 1;
+// The flicker bank of the likelihood: as error_model.hpp's flicker_bank, with members at
+// half-decade spacing (the decade bank's PSD ripple is visible to 2048 block means, and a walk
+// then takes up the slow part of the flicker).
+constexpr double kBankRatio = 3.1622776601683795;
+constexpr std::size_t kMaxBankGm = 2 * kMaxFlickerGm;
+constexpr std::size_t kMaxStates = kMaxGmTerms + kMaxBankGm + 1;
+
+std::size_t likelihood_bank(double b, double tau_lo_s, double tau_hi_s,
+                            GmParam (&out)[kMaxBankGm]) {
+  if (!(b > 0.0) || !(tau_lo_s > 0.0) || !(tau_hi_s > tau_lo_s) || !std::isfinite(tau_hi_s)) {
+    return 0;
+  }
+  const double scale = 2.0 * std::log(kBankRatio) * b * b / 3.14159265358979323846;
+  double tb = tau_lo_s / kFlickerFirstTbDivisor;
+  std::size_t n = 0;
+  while (n < kMaxBankGm) {
+    out[n++] = GmParam{scale / tb, tb};
+    if (tb >= tau_hi_s) {
+      return n;
+    }
+    tb *= kBankRatio;
+  }
+  return 0;
+}
 
 // One independent state of the block model: x' = f x + w, block integral / h = hm x + u,
 // Var(w) = q, Var(u) = ru, Cov(w, u) = s.
@@ -256,8 +279,8 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
     c[n_gm++] = gm_component(m.gm[i].sb, m.gm[i].tb_s, block_s);
   }
   if (m.bi > 0.0) {
-    GmParam bank[kMaxFlickerGm];
-    const std::size_t nb = flicker_bank(m.bi, m.bi_tau_lo_s, m.bi_tau_hi_s, bank);
+    GmParam bank[kMaxBankGm];
+    const std::size_t nb = likelihood_bank(m.bi, m.bi_tau_lo_s, m.bi_tau_hi_s, bank);
     if (nb == 0) {
       return kInvalid;
     }
@@ -454,7 +477,9 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
   BlockModel s0;
   s0.bi = start.bi;
   s0.bi_tau_lo_s = start.bi_tau_lo_s;
-  s0.bi_tau_hi_s = start.bi_tau_hi_s;
+  // Flicker has memory at every scale: over the record's block means the bank reaches the
+  // record's length, not only the taus the ADEV fit saw (else a walk takes up its slow part).
+  s0.bi_tau_hi_s = std::max(start.bi_tau_hi_s, nb * h);
   double white_psd = start.n * start.n + 3.0 * start.q * start.q / h;
   for (std::size_t i = 0; i < start.n_gm; ++i) {
     const GmParam g = start.gm[i];
