@@ -2531,24 +2531,52 @@ class Analysis {
     return p;
   }
 
-  // Ramp or rate random walk: one realisation of a walk can look like a ramp on the ADEV. A
-  // deterministic ramp leaves no walk once the least-squares line is removed from the record; a
-  // walk still wanders. So when the ramp wins and the walk passes the ADEV test too, the
-  // record's likelihood test (long_memory.hpp) runs on the detrended record and the walk is
-  // taken if it passes (the ramp is then ruled out for the rest of the search).
+  // Ramp or rate random walk: over a record that holds few of its time scales a walk looks like
+  // a line on the ADEV, and a line like a walk. When both pass the ADEV test each must be
+  // needed beside the other by the record's likelihood: the walk on the record with the line
+  // removed (a deterministic ramp leaves no walk there), the line as a regressor against the
+  // model with the walk (a walk's increments have no mean). One needed: it is the best, the
+  // other is ruled out; both, or neither (the record cannot tell them apart): the ADEV's best.
   void ramp_or_walk(const std::vector<Cand>& cands, const Cand*& best) {
+    if (best->type != "ramp" && best->type != "rate_random_walk") {
+      return;
+    }
+    const Cand* ramp = passing(cands, "ramp");
     const Cand* walk = passing(cands, "rate_random_walk");
-    if (best->type != "ramp" || walk == nullptr) {
+    if (ramp == nullptr || walk == nullptr) {
       return;
     }
     const RrwLikelihoodTest detrended = test_rrw(y_fit, ts, cur_p, tb_max, true, step_at);
-    if (detrended.ok && detrended.lr > lr_thr) {
-      out.notes.push_back("ramp rejected for rate_random_walk: after removing the line the "
-                          "record still holds a walk (2 ln LR = " + fmt("%.1f", detrended.lr) +
-                          " > " + fmt("%.2f", lr_thr) + ")");
-      ruled_out.emplace_back("ramp");
-      best = walk;
+    const double lr_walk = detrended.ok ? detrended.lr : 0.0;
+    double lr_line = 0.0;
+    RrwLikelihoodTest with_walk = test_rrw(y_fit, ts, cur_p, tb_max, false, step_at);
+    if (with_walk.ok) {
+      with_walk.h0 = with_walk.h1;  // the line against the model with the walk
+      const double nb = static_cast<double>(with_walk.means.size());
+      std::vector<double> u(with_walk.means.size());
+      for (std::size_t k = 0; k < u.size(); ++k) {
+        u[k] = static_cast<double>(k) - 0.5 * (nb - 1.0);
+      }
+      lr_line = regressor_lr(with_walk, u);
     }
+    const bool need_walk = lr_walk > lr_thr;
+    const bool need_line = lr_line > lr_thr;
+    const std::string why = "(the record's likelihood: the walk beside the line 2 ln LR = " +
+                            fmt("%.1f", lr_walk) + ", the line beside the walk " +
+                            fmt("%.1f", lr_line) + ", level " + fmt("%.2f", lr_thr) + ")";
+    if (need_walk == need_line) {
+      if (!need_walk) {
+        out.notes.push_back(best->type + " kept by the ADEV: the record cannot tell a ramp from "
+                            "a walk " + why);
+      }
+      return;
+    }
+    const Cand* keep = need_walk ? walk : ramp;
+    if (keep != best) {
+      out.notes.push_back(best->type + " rejected for " + keep->type + " " + why);
+    }
+    ruled_out.emplace_back(need_walk ? "ramp" : "rate_random_walk");
+    best = keep;
   }
 
   // A walk and bias instability both raise the ADEV at the long taus: over a record that
