@@ -2598,14 +2598,13 @@ class Analysis {
       return true;  // no rival on the ADEV: its test is the ADEV's (and the walk's likelihood)
     }
     const bool detrend = (terms & kFitRamp) != 0U;
-    const LongTauPair lp =
-        long_tau_pair(walk ? (other != nullptr ? &other->p : nullptr) : &best->p, detrend);
+    const LongTauPair lp = long_tau_pair(walk ? &other->p : &best->p, detrend);
     const double need_best = walk ? lp.k_beside_b : lp.b_beside_k;
     const double need_other = walk ? lp.b_beside_k : lp.k_beside_b;
     if (need_best > lr_thr) {
       return true;
     }
-    const bool other_needed = other != nullptr && need_other > lr_thr;
+    const bool other_needed = need_other > lr_thr;
     if (!walk && !other_needed) {
       out.notes.push_back("bias_instability kept, rate_random_walk ruled out: the" +
                           std::string(detrend ? " detrended" : "") +
@@ -2621,9 +2620,8 @@ class Analysis {
         " by 2 ln LR = " + fmt("%.1f", need_best) + " <= " + fmt("%.2f", lr_thr) + ")" +
         (other_needed ? "; " + other->type + " is needed beside it (" + fmt("%.1f", need_other) +
                             ")"
-         : other != nullptr ? "; nor the other beside it (" + fmt("%.1f", need_other) +
-                                  "): the record cannot tell them apart, both are ruled out"
-                            : ""));
+                      : "; nor the other beside it (" + fmt("%.1f", need_other) +
+                            "): the record cannot tell them apart, both are ruled out"));
     ruled_out.push_back(best->type);  // the walk, or bias instability where the walk is needed
     if (!other_needed) {
       ruled_out.push_back(other->type);  // the walk led and neither is needed: nothing is named
@@ -2685,16 +2683,9 @@ class Analysis {
     } else if ((terms & kFitRrw) == 0U) {
       const RrwLikelihoodTest lt =
           test_rrw(y_fit, ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
-      const double lr_flicker =
-          lt.ok && lt.lr > lr_thr && (terms & kFitFlicker) != 0U
-              ? long_tau_pair(nullptr, (terms & kFitRamp) != 0U).k_beside_b
-              : lr_thr + 1.0;
-      if (lt.ok && lt.lr > lr_thr && !(lr_flicker > lr_thr)) {
-        out.notes.push_back("no rate_random_walk: the record's likelihood finds one against the "
-                            "model (2 ln LR = " + fmt("%.1f", lt.lr) + ") but not beside bias "
-                            "instability (" + fmt("%.1f", lr_flicker) +
-                            " <= " + fmt("%.2f", lr_thr) + ")");
-      } else if (lt.ok && lt.lr > lr_thr) {
+      // With bias instability in the model its flicker bank is in H0: lt is already the walk's
+      // test beside it.
+      if (lt.ok && lt.lr > lr_thr) {
         const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p);
         if (f.status == FitStatus::kOk && f.params.k > 0.0) {
           Effect e;
