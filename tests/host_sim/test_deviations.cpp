@@ -106,15 +106,23 @@ std::string input_prefix(simtest::TempDir& tmp, std::size_t n) {
   return path;
 }
 
-void expect_like_allantools(const std::string& grid, const std::string& taus, std::size_t n) {
+// `input`: a file of the directory to read instead of dev_input.csv's first n samples, without
+// --lsb (float values, no grid).
+void expect_like_allantools(const std::string& grid, const std::string& taus, std::size_t n,
+                            const std::string& input = "") {
   SCOPED_TRACE(grid);
   simtest::TempDir tmp;
   const std::string json = tmp.file("d.json");
-  const auto r = simtest::run({"adev", input_prefix(tmp, n), "--channel", "y", "--lsb", "1e-6",
-                               "--taus", taus, "--deviation", "adev,mdev,hdev,tdev", "--json",
-                               json});
+  std::vector<std::string> args = {"adev", input.empty() ? input_prefix(tmp, n) : kDir + "/" + input,
+                                   "--channel", "y", "--taus", taus, "--deviation",
+                                   "adev,mdev,hdev,tdev", "--json", json};
+  if (input.empty()) {
+    args.insert(args.end(), {"--lsb", "1e-6"});
+  }
+  const auto r = simtest::run(args);
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string j = simtest::read_text(json);
+  EXPECT_NE(j.find(input.empty() ? "\"lsb\": 1e-06" : "\"lsb\": null"), std::string::npos) << j;
   const auto gold = golden(grid);
   for (const char* kind : kKinds) {
     SCOPED_TRACE(kind);
@@ -146,6 +154,11 @@ TEST(Deviations, MatchAllantoolsDecade) { expect_like_allantools("decade", "deca
 // Every averaging factor on 60 samples: each deviation's last tau as allantools keeps it (adev
 // 29, mdev and tdev 20, hdev 19).
 TEST(Deviations, MatchAllantoolsAllTaus) { expect_like_allantools("all60", "all", 60); }
+// Float values on no grid (an accelerometer's 9.8 m/s^2 offset, steps of 1e-6 / sqrt(2) plus a
+// uniform fraction) without an LSB: taken as they are, as allantools takes them.
+TEST(Deviations, MatchAllantoolsOnFloatValuesWithoutLsb) {
+  expect_like_allantools("float_octave", "octave", 0, "dev_input_float.csv");
+}
 
 // Frequency samples y (NaN: missing), averaging factor m: the mean of y[i .. i+m-1].
 double ybar(const std::vector<double>& y, std::size_t i, std::size_t m) {

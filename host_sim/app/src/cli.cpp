@@ -75,10 +75,11 @@ constexpr const char* kUsageAdev =
     "  --taus as allantools' keywords (default: full, octave; online, its own grid): octave 1, 2, 4, ..; decade 1, 2, 4, 10, 20, 40, ..; quarter\n"
     "  quarter octaves; all every m (full only; refused when it would sum more than 2e9\n"
     "  terms). The table, JSON and CSV carry the averaging factor af = tau / Ts. NaN/Inf samples\n"
-    "  are gaps (counted: \"gaps\" in the JSON). The LSB (--lsb, else the file's acc_lsb/gyro_lsb,\n"
-    "  else 1e-6 / 1e-7) must fit the data in int32 counts and must not collapse it (refused:\n"
-    "  more than 99 % of the samples in one count while the quantised std is under half the\n"
-    "  data's). --fs (else the file's fs or Fs, else a text file's time column) in [1e-3, 1e6]\n"
+    "  are gaps (counted: \"gaps\" in the JSON). The LSB (--lsb, else the file's acc_lsb/gyro_lsb;\n"
+    "  without either, full takes float values as they are, \"lsb\": null, and online\n"
+    "  quantises to 1e-6 / 1e-7) must fit the data in int32 counts and must not collapse it\n"
+    "  (refused: more than 99 % of the samples in one count while the quantised std is under\n"
+    "  half the data's). --fs (else the file's fs or Fs, else a text file's time column) in [1e-3, 1e6]\n"
     "  Hz. A text file's time column (t, time, timestamp, %time, timestamp_ns ..) is in the\n"
     "  unit its name or header states ([ns]), else --time-unit's, else the one its steps show\n"
     "  (integer times: the first of s, ms, us, ns giving 1 Hz or more; said in a note).\n"
@@ -677,7 +678,10 @@ int adev_compute(const AdevOptions& o, bool text, double t0, AdevResult& r) {
     return st;
   };
   if (o.full) {
-    FullAdevSink sink;
+    // Float data without an LSB (none given, none in the file) needs no grid: its values are
+    // kept as they are, as allantools takes them.
+    ch.no_grid = !ch.lsb_from_option && !ch.lsb_from_file && !ch.integer_counts;
+    FullAdevSink sink(ch.no_grid);
     const int st = feed(sink);
     if (st != kExitOk) {
       return st;
@@ -738,9 +742,14 @@ bool adev_only(const AdevResult& r) {
 
 void print_adev(FILE* out, const std::string& path, const AdevResult& r) {
   const ChannelData& ch = r.sd.ch[r.chan];
-  std::fprintf(out, "%s %s: %zu samples at %g Hz, LSB %g %s%s\n", imu::cli::term_safe(path).c_str(), imu::cli::term_safe(r.name).c_str(),
-              r.sd.n_samples, r.sd.fs_hz, ch.lsb, adev_unit(r.name, r.chan).c_str(),
-              ch.lsb_from_file ? " (from the file)" : "");
+  std::fprintf(out, "%s %s: %zu samples at %g Hz, ", imu::cli::term_safe(path).c_str(),
+               imu::cli::term_safe(r.name).c_str(), r.sd.n_samples, r.sd.fs_hz);
+  if (ch.no_grid) {
+    std::fprintf(out, "values as read (no LSB) %s\n", adev_unit(r.name, r.chan).c_str());
+  } else {
+    std::fprintf(out, "LSB %g %s%s\n", ch.lsb, adev_unit(r.name, r.chan).c_str(),
+                 ch.lsb_from_file ? " (from the file)" : "");
+  }
   const bool plain = adev_only(r);
   for (const DevRows& d : r.devs) {
     if (!plain) {
@@ -771,7 +780,7 @@ std::string adev_members(const AdevResult& r, const std::string& in) {
   j += in + "\"channel\": " + json_str(r.name) + ",\n";
   j += in + "\"unit\": " + json_str(adev_unit(r.name, r.chan)) + ",\n";
   j += in + "\"fs_hz\": " + json_num(r.sd.fs_hz) + ",\n";
-  j += in + "\"lsb\": " + json_num(ch.lsb) + ",\n";
+  j += in + "\"lsb\": " + (ch.no_grid ? std::string("null") : json_num(ch.lsb)) + ",\n";
   j += in + "\"n_samples\": " + std::to_string(r.sd.n_samples) + ",\n";
   j += in + "\"gaps\": {\"samples\": " + std::to_string(ch.non_finite) + "},\n";
   j += in + "\"units\": " + imu::cli::json_units(adev_unit(r.name, r.chan)) + ",\n";

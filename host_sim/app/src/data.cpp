@@ -458,6 +458,53 @@ bool for_each_chunk(ChunkSource& src, const ChannelData& ch, std::vector<double>
   return ok;
 }
 
+// stream_counts() for a sink that takes the values: the finite runs as they are, the gaps
+// between them as for counts.
+int stream_values(ChunkSource& src, const std::string& where, ChannelData& ch, CountSink& sink,
+                  StreamTiming& timing, std::string& err) {
+  std::vector<double> values(8192);
+  std::uint64_t total = 0;
+  std::uint64_t finite = 0;
+  bool started = false;
+  std::uint64_t pending_gap = 0;
+  ch.off_grid = 0;
+  const bool ok = for_each_chunk(src, ch, values, timing.read_s, err, [&](const double* v,
+                                                                          std::size_t n) {
+    const auto t0 = std::chrono::steady_clock::now();
+    total += n;
+    std::size_t i = 0;
+    while (i < n) {
+      std::size_t j = i;
+      const bool fin = std::isfinite(v[i]);
+      while (j < n && std::isfinite(v[j]) == fin) {
+        ++j;
+      }
+      if (!fin) {
+        pending_gap += started ? j - i : 0U;  // leading non-finite samples are not in the series
+      } else {
+        if (pending_gap > 0U) {
+          sink.gap(static_cast<std::size_t>(pending_gap));
+          pending_gap = 0;
+        }
+        sink.push_values(v + i, j - i);
+        finite += j - i;
+        started = true;
+      }
+      i = j;
+    }
+    timing.sink_s += seconds_since(t0);
+  });
+  if (!ok) {
+    return kExitRuntime;
+  }
+  ch.non_finite = total - finite;
+  if (finite == 0) {
+    err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
+    return kExitRuntime;
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, CountSink& sink,
@@ -475,6 +522,9 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
 
 int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch, CountSink& sink,
                   StreamTiming& timing, std::string& err) {
+  if (sink.takes_values()) {
+    return stream_values(src, where, ch, sink, timing, err);
+  }
   constexpr std::size_t kChunk = 8192;
   constexpr double kMaxCounts = 2147483647.0;
   std::vector<double> values(kChunk);

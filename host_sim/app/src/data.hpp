@@ -47,6 +47,7 @@ struct ChannelData {
   std::size_t column = 0;       ///< its column, for a matrix named NAME:K (K - 1)
   double scale = 1.0;           ///< stored x scale: integer counts (int16 ..) x their LSB
   bool integer_counts = false;  ///< the variable is of an integer class
+  bool no_grid = false;         ///< read as values, without an LSB (adev's exact estimator)
 };
 
 /// Any variable of the file in a channel slot (`--channel NAME` or `NAME:K` for column K of a
@@ -105,6 +106,11 @@ class CountSink {
   virtual ~CountSink() = default;
   virtual void push(const std::int32_t* counts, std::size_t n) = 0;
   virtual void gap(std::size_t n) = 0;
+  /// True: stream_counts() delivers the finite samples as they are (push_values), not as counts
+  /// of the LSB: float data without an LSB, for an estimator that needs no grid.
+  [[nodiscard]] virtual bool takes_values() const { return false; }
+  /// The finite samples of a run, in the channel's unit (only when takes_values()).
+  virtual void push_values(const double* /*values*/, std::size_t /*n*/) {}
 };
 
 /// Where a channel's samples come from, pass after pass (stream_counts() may take two): a MAT
@@ -181,6 +187,8 @@ struct StreamTiming {
 [[nodiscard]] int stream_counts(const std::string& path, std::size_t c, ChannelData& ch,
                                 CountSink& sink, StreamTiming& timing, std::string& err);
 /// The same from any source; `where` begins its error messages (e.g. "FILE: variable 'X': ").
+/// A sink that takes_values() gets the finite samples as they are: no LSB, so no quantisation,
+/// int32 or collapse check (ch.off_grid stays 0).
 [[nodiscard]] int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch,
                                 CountSink& sink, StreamTiming& timing, std::string& err);
 

@@ -4,32 +4,61 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <type_traits>
 
 #include "imu/edf.hpp"
 
 namespace imu::sim {
 namespace {
 
-// 128-bit integers (GCC and Clang): the modified sums S_j reach m * 2m * 2^31, beyond int64 for
-// m above 2^15 when the counts span int32.
+// 128-bit integers (GCC and Clang), for the modified sums of counts.
 __extension__ using Int128 = __int128;
 
-// The integer phase x[k] = sum of the first k counts (|x| <= n 2^31: exact in int64) and gx[k],
-// the number of missing samples among them.
+// The phase x[k] = sum of the first k samples and gx[k], the number of missing samples among
+// them. Counts: integers (|x| <= n 2^31: exact in int64), the sums of differences in 128 bits
+// (the modified sums S_j reach m * 2m * 2^31, beyond int64 for m above 2^15 when the counts span
+// int32). Values: the mean-removed samples summed in long double, kept in double.
+template <typename T>
 struct Phase {
-  std::vector<std::int64_t> x;
+  using Sum = std::conditional_t<std::is_integral_v<T>, Int128, long double>;
+  std::vector<T> x;
   std::vector<std::uint32_t> gx;
 };
 
-Phase integer_phase(const FullAdevSink& data) {
+Phase<std::int64_t> integer_phase(const FullAdevSink& data) {
   const std::vector<std::int32_t>& c = data.counts();
   const std::vector<std::uint8_t>& g = data.gaps();
   const std::size_t n = c.size();
-  Phase p;
+  Phase<std::int64_t> p;
   p.x.assign(n + 1, 0);
   p.gx.assign(n + 1, 0);
   for (std::size_t k = 0; k < n; ++k) {
     p.x[k + 1] = p.x[k] + c[k];
+    p.gx[k + 1] = p.gx[k] + g[k];
+  }
+  return p;
+}
+
+// The mean does not change a difference of second (or higher) order; removing it keeps the
+// phase small, so its double rounding stays far below the differences.
+Phase<double> value_phase(const FullAdevSink& data) {
+  const std::vector<double>& v = data.values();
+  const std::vector<std::uint8_t>& g = data.gaps();
+  const std::size_t n = v.size();
+  long double mean = 0.0L;
+  std::size_t present = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    mean += g[k] != 0 ? 0.0L : static_cast<long double>(v[k]);
+    present += g[k] != 0 ? 0U : 1U;
+  }
+  mean /= static_cast<long double>(present > 0 ? present : 1U);
+  Phase<double> p;
+  p.x.assign(n + 1, 0.0);
+  p.gx.assign(n + 1, 0);
+  long double acc = 0.0L;
+  for (std::size_t k = 0; k < n; ++k) {
+    acc += g[k] != 0 ? 0.0L : static_cast<long double>(v[k]) - mean;
+    p.x[k + 1] = static_cast<double>(acc);
     p.gx[k + 1] = p.gx[k] + g[k];
   }
   return p;
@@ -49,13 +78,31 @@ AdevRow deviation_row(std::uint64_t m, double ts_s, double var, double edf, std:
   return r;
 }
 
+// Sum over i of the squared second differences whose 2m samples have no gap.
+template <typename T>
+long double allan_sum(const Phase<T>& p, std::size_t m, std::uint64_t& terms) {
+  const std::vector<T>& x = p.x;
+  long double sum = 0.0L;
+  terms = 0;
+  for (std::size_t i = 0; i + 2 * m < x.size(); ++i) {
+    if (p.gx[i + 2 * m] != p.gx[i]) {
+      continue;
+    }
+    const auto d = static_cast<long double>(x[i + 2 * m] - 2 * x[i + m] + x[i]);
+    sum += d * d;
+    ++terms;
+  }
+  return sum;
+}
+
 // Sum over j of S_j^2 (see full_deviation), the terms whose 3m - 1 samples have no gap.
-long double modified_sum(const Phase& p, std::size_t m, std::uint64_t& terms) {
-  const std::vector<std::int64_t>& x = p.x;
+template <typename T>
+long double modified_sum(const Phase<T>& p, std::size_t m, std::uint64_t& terms) {
+  const std::vector<T>& x = p.x;
   const std::size_t last = x.size() - 3 * m;  // j = 0 .. n + 1 - 3m
-  Int128 s = 0;
+  typename Phase<T>::Sum s = 0;
   for (std::size_t i = 0; i < m; ++i) {
-    s += x[i + 2 * m] - 2 * x[i + m] + x[i];
+    s += static_cast<typename Phase<T>::Sum>(x[i + 2 * m] - 2 * x[i + m] + x[i]);
   }
   long double sum = 0.0L;
   terms = 0;
@@ -68,26 +115,73 @@ long double modified_sum(const Phase& p, std::size_t m, std::uint64_t& terms) {
     if (j == last) {
       break;
     }
-    s += x[j + 3 * m] - 3 * x[j + 2 * m] + 3 * x[j + m] - x[j];
+    s += static_cast<typename Phase<T>::Sum>(x[j + 3 * m] - 3 * x[j + 2 * m] + 3 * x[j + m] - x[j]);
   }
   return sum;
 }
 
 // Sum over j of the squared third differences whose 3m samples have no gap.
-long double hadamard_sum(const Phase& p, std::size_t m, std::uint64_t& terms) {
-  const std::vector<std::int64_t>& x = p.x;
+template <typename T>
+long double hadamard_sum(const Phase<T>& p, std::size_t m, std::uint64_t& terms) {
+  const std::vector<T>& x = p.x;
   long double sum = 0.0L;
   terms = 0;
   for (std::size_t j = 0; j + 3 * m < x.size(); ++j) {
     if (p.gx[j + 3 * m] != p.gx[j]) {
       continue;
     }
-    const std::int64_t h = x[j + 3 * m] - 3 * x[j + 2 * m] + 3 * x[j + m] - x[j];
-    const auto v = static_cast<long double>(h);
+    const auto v = static_cast<long double>(x[j + 3 * m] - 3 * x[j + 2 * m] + 3 * x[j + m] - x[j]);
     sum += v * v;
     ++terms;
   }
   return sum;
+}
+
+// The deviation d at each m of the grid up to m_max, from the phase p; `scale` the unit of one
+// phase step (the LSB for counts, 1 for values).
+template <typename T>
+std::vector<AdevRow> deviation_rows(const Phase<T>& p, Deviation d,
+                                    const std::vector<std::uint64_t>& m, std::uint64_t m_max,
+                                    double ts_s, double scale) {
+  std::vector<AdevRow> rows;
+  for (const std::uint64_t mm : m) {
+    if (mm == 0 || mm > m_max) {
+      continue;
+    }
+    const auto mi = static_cast<std::size_t>(mm);
+    const double md = static_cast<double>(mm);
+    std::uint64_t terms = 0;
+    const long double sum = d == Deviation::kAdev   ? allan_sum(p, mi, terms)
+                            : d == Deviation::kHdev ? hadamard_sum(p, mi, terms)
+                                                    : modified_sum(p, mi, terms);
+    if (terms == 0) {
+      continue;
+    }
+    const double mean_sq = static_cast<double>(sum / static_cast<long double>(terms)) * scale * scale;
+    if (d == Deviation::kAdev) {
+      // stride 1: S = m
+      rows.push_back(deviation_row(mm, ts_s, mean_sq / (2.0 * md * md),
+                                   edf_greenhall(0, 2, md, md, static_cast<double>(terms)),
+                                   terms));
+      continue;
+    }
+    if (d == Deviation::kHdev) {
+      rows.push_back(deviation_row(mm, ts_s, mean_sq / (6.0 * md * md),
+                                   edf_greenhall(0, 3, md, md, static_cast<double>(terms)),
+                                   terms));
+      continue;
+    }
+    const double edf = edf_greenhall_modified(0, 2, md, md, static_cast<double>(terms));
+    AdevRow r = deviation_row(mm, ts_s, mean_sq / (2.0 * md * md * md * md), edf, terms);
+    if (d == Deviation::kTdev) {
+      const double k = r.tau_s / std::sqrt(3.0);  // TVAR = tau^2 MVAR / 3 (SP 1065 eqn. 15)
+      r.adev *= k;
+      r.ci_lo *= k;
+      r.ci_hi *= k;
+    }
+    rows.push_back(r);
+  }
+  return rows;
 }
 
 }  // namespace
@@ -98,8 +192,17 @@ void FullAdevSink::push(const std::int32_t* counts, std::size_t n) {
 }
 
 void FullAdevSink::gap(std::size_t n) {
-  counts_.insert(counts_.end(), n, 0);
+  if (values_mode_) {
+    values_.insert(values_.end(), n, 0.0);
+  } else {
+    counts_.insert(counts_.end(), n, 0);
+  }
   gaps_.insert(gaps_.end(), n, 1);
+}
+
+void FullAdevSink::push_values(const double* values, std::size_t n) {
+  values_.insert(values_.end(), values, values + n);
+  gaps_.insert(gaps_.end(), n, 0);
 }
 
 bool tau_grid(const std::string& kind, std::uint64_t n, std::vector<std::uint64_t>& m) {
@@ -147,38 +250,7 @@ double full_adev_cost(std::uint64_t n, const std::vector<std::uint64_t>& m) {
 
 std::vector<AdevRow> full_adev(const FullAdevSink& data, const std::vector<std::uint64_t>& m,
                                double ts_s, double lsb) {
-  const Phase p = integer_phase(data);
-  const std::vector<std::int64_t>& x = p.x;
-  const std::vector<std::uint32_t>& gx = p.gx;
-  const std::size_t n = data.counts().size();
-  std::vector<AdevRow> rows;
-  for (const std::uint64_t mm : m) {
-    const auto mi = static_cast<std::size_t>(mm);
-    if (mi == 0 || 2 * mi >= n + 1) {
-      continue;
-    }
-    long double sum = 0.0L;
-    std::uint64_t terms = 0;
-    for (std::size_t i = 0; i + 2 * mi <= n; ++i) {
-      if (gx[i + 2 * mi] != gx[i]) {
-        continue;
-      }
-      const std::int64_t d = x[i + 2 * mi] - 2 * x[i + mi] + x[i];
-      const auto dd = static_cast<long double>(d);
-      sum += dd * dd;
-      ++terms;
-    }
-    if (terms == 0) {
-      continue;
-    }
-    const double md = static_cast<double>(mm);
-    const double avar = static_cast<double>(sum / static_cast<long double>(terms)) /
-                        (2.0 * md * md) * lsb * lsb;
-    // stride 1: S = m
-    rows.push_back(deviation_row(mm, ts_s, avar,
-                                 edf_greenhall(0, 2, md, md, static_cast<double>(terms)), terms));
-  }
-  return rows;
+  return full_deviation(data, Deviation::kAdev, m, ts_s, lsb);
 }
 
 const char* deviation_name(Deviation d) {
@@ -230,48 +302,12 @@ std::uint64_t deviation_max_af(Deviation d, std::uint64_t n) {
 
 std::vector<AdevRow> full_deviation(const FullAdevSink& data, Deviation d,
                                     const std::vector<std::uint64_t>& m, double ts_s, double lsb) {
-  if (d == Deviation::kAdev) {
-    return full_adev(data, m, ts_s, lsb);
+  // adev: every m with a term (2m <= n), as full_adev always kept; the others as allantools.
+  const std::uint64_t m_max = d == Deviation::kAdev ? data.size() / 2 : deviation_max_af(d, data.size());
+  if (data.takes_values()) {
+    return deviation_rows(value_phase(data), d, m, m_max, ts_s, 1.0);
   }
-  const Phase p = integer_phase(data);
-  const std::uint64_t m_max = deviation_max_af(d, data.counts().size());
-  std::vector<AdevRow> rows;
-  for (const std::uint64_t mm : m) {
-    if (mm == 0 || mm > m_max) {
-      continue;
-    }
-    const auto mi = static_cast<std::size_t>(mm);
-    const double md = static_cast<double>(mm);
-    std::uint64_t terms = 0;
-    if (d == Deviation::kHdev) {
-      const long double sum = hadamard_sum(p, mi, terms);
-      if (terms == 0) {
-        continue;
-      }
-      const double hvar = static_cast<double>(sum / static_cast<long double>(terms)) /
-                          (6.0 * md * md) * lsb * lsb;
-      rows.push_back(deviation_row(mm, ts_s, hvar,
-                                   edf_greenhall(0, 3, md, md, static_cast<double>(terms)),
-                                   terms));
-      continue;
-    }
-    const long double sum = modified_sum(p, mi, terms);
-    if (terms == 0) {
-      continue;
-    }
-    const double mvar = static_cast<double>(sum / static_cast<long double>(terms)) /
-                        (2.0 * md * md * md * md) * lsb * lsb;
-    const double edf = edf_greenhall_modified(0, 2, md, md, static_cast<double>(terms));
-    AdevRow r = deviation_row(mm, ts_s, mvar, edf, terms);
-    if (d == Deviation::kTdev) {
-      const double k = r.tau_s / std::sqrt(3.0);  // TVAR = tau^2 MVAR / 3 (SP 1065 eqn. 15)
-      r.adev *= k;
-      r.ci_lo *= k;
-      r.ci_hi *= k;
-    }
-    rows.push_back(r);
-  }
-  return rows;
+  return deviation_rows(integer_phase(data), d, m, m_max, ts_s, lsb);
 }
 
 std::vector<AdevRow> rows_on_grid(const std::vector<AdevRow>& rows,

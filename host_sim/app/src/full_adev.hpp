@@ -1,8 +1,9 @@
 // The fully overlapping Allan deviation of a whole record (`imu-sim adev --estimator full`), for
 // parity with allantools' oadev and Stable32, the modified Allan, overlapping Hadamard and time
 // deviations of `--deviation` (NIST SP 1065, Riley 2008, eqns. 14, 20, 15), and the tau grids of
-// `--taus` (allantools' keywords). Host only: the record's counts are kept (4 bytes per sample + the gap marks);
-// the online estimator (fw OnlineAdev) is the constant-memory one.
+// `--taus` (allantools' keywords). Host only: the record's counts are kept (4 bytes per sample + the
+// gap marks; float data without an LSB: its values, 8 bytes); the online estimator (fw OnlineAdev)
+// is the constant-memory one.
 #ifndef IMU_SIM_FULL_ADEV_HPP
 #define IMU_SIM_FULL_ADEV_HPP
 
@@ -15,17 +16,26 @@
 
 namespace imu::sim {
 
-/// Collects a channel's counts and gaps as stream_counts() delivers them.
+/// Collects a channel's counts (or, with `values`, its samples as they are: float data without
+/// an LSB, no grid) and gaps as stream_counts() delivers them.
 class FullAdevSink final : public CountSink {
  public:
+  explicit FullAdevSink(bool values = false) : values_mode_(values) {}
   void push(const std::int32_t* counts, std::size_t n) override;
   void gap(std::size_t n) override;
+  [[nodiscard]] bool takes_values() const override { return values_mode_; }
+  void push_values(const double* values, std::size_t n) override;
   [[nodiscard]] const std::vector<std::int32_t>& counts() const { return counts_; }
+  [[nodiscard]] const std::vector<double>& values() const { return values_; }
   [[nodiscard]] const std::vector<std::uint8_t>& gaps() const { return gaps_; }
+  /// Samples held, gaps included.
+  [[nodiscard]] std::size_t size() const { return gaps_.size(); }
 
  private:
+  bool values_mode_;
   std::vector<std::int32_t> counts_;
-  std::vector<std::uint8_t> gaps_;  // 1 where a sample is missing (its count is 0)
+  std::vector<double> values_;
+  std::vector<std::uint8_t> gaps_;  // 1 where a sample is missing (its count or value is 0)
 };
 
 /// Averaging factors m of a tau grid for n samples, as allantools' tau_generator: "octave"
@@ -38,7 +48,9 @@ class FullAdevSink final : public CountSink {
 [[nodiscard]] double full_adev_cost(std::uint64_t n, const std::vector<std::uint64_t>& m);
 
 /// Fully overlapping ADEV at each m: sum over every start i of (x[i+2m] - 2 x[i+m] + x[i])^2 /
-/// (2 m^2 terms) with x the integer phase (cumulative counts; exact in int64), times lsb^2;
+/// (2 m^2 terms) with x the integer phase (cumulative counts; exact in int64), times lsb^2
+/// (a sink of values: x the cumulative sum of the mean-removed values, accumulated in long
+/// double, as allantools' phase; lsb unused);
 /// a term whose 2m samples include a gap is left out. EDF: Greenhall-Riley for white FM (the
 /// golden files' assumption), 68.3 % interval. Rows with no term are omitted. O(n) per m.
 [[nodiscard]] std::vector<AdevRow> full_adev(const FullAdevSink& data,

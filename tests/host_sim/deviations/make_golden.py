@@ -5,7 +5,9 @@ Run outside the repository with allantools on the path, e.g.
     cd /tmp && PYTHONPATH=/path/to/allantools /usr/bin/python3 make_golden.py OUTDIR
 (ALLANTOOLS_COMMIT=<hash> names the allantools commit when its folder is not a git checkout.)
 It writes OUTDIR/dev_input.csv (the input, t [s] and y, 3072 samples at 100 Hz, integer counts
-times an LSB of 1e-6) and OUTDIR/allantools_dev.csv (the reference values). Not part of the
+times an LSB of 1e-6), OUTDIR/dev_input_float.csv (float values on no grid: an accelerometer's
+gravity offset, the same counts scaled by an irrational step, plus a uniform fraction) and
+OUTDIR/allantools_dev.csv (the reference values). Not part of the
 build or of CI: the two files are committed next to this script.
 
 Deviations, all with data_type="freq", rate=100:
@@ -16,7 +18,7 @@ Deviations, all with data_type="freq", rate=100:
 EDF: allantools.ci.edf_greenhall (Greenhall & Riley 2003), white FM (alpha = 0), fully
 overlapping; modified for mdev and tdev. Interval: allantools.ci.confidence_interval at 0.683.
 Grids: "octave" and "decade" on the 3072 samples, "all" on the first 60 (every averaging
-factor up to each deviation's last one).
+factor up to each deviation's last one); the float values on "octave" (label float_octave).
 """
 import os
 import subprocess
@@ -50,6 +52,25 @@ def counts():
     return out
 
 
+def float_values(c):
+    """Values no LSB grid holds: 9.80665 + (count - 1000) x 1e-6 / sqrt(2) + u x 3e-7, u in [0, 1)
+    from the same generator with another seed."""
+    state = 987654321
+    out = []
+    for k in c:
+        state = (6364136223846793005 * state + 1442695040888963407) % (1 << 64)
+        u = (state >> 11) / float(1 << 53)
+        out.append(9.80665 + (k - 1000) * 1e-6 / 2.0 ** 0.5 + u * 3e-7)
+    return out
+
+
+def write_input(path, values):
+    with open(path, "w") as f:
+        f.write("t,y\n")
+        for k, v in enumerate(values):
+            f.write("%r,%s\n" % (k / RATE_HZ, v))
+
+
 def rows(y, grid, label):
     n_phase = len(y) + 1
     out = []
@@ -75,11 +96,11 @@ def main():
     outdir = sys.argv[1] if len(sys.argv) > 1 else "."
     c = counts()
     values = [repr(v * LSB) for v in c]
-    with open(os.path.join(outdir, "dev_input.csv"), "w") as f:
-        f.write("t,y\n")
-        for k, v in enumerate(values):
-            f.write("%r,%s\n" % (k / RATE_HZ, v))
+    write_input(os.path.join(outdir, "dev_input.csv"), values)
     y = np.array([float(v) for v in values])
+    fvalues = [repr(v) for v in float_values(c)]
+    write_input(os.path.join(outdir, "dev_input_float.csv"), fvalues)
+    yf = np.array([float(v) for v in fvalues])
     commit = os.environ.get("ALLANTOOLS_COMMIT", "unknown")
     try:
         commit = subprocess.check_output(
@@ -99,6 +120,7 @@ def main():
     lines += rows(y, "octave", "octave")
     lines += rows(y, "decade", "decade")
     lines += rows(y[:N_PREFIX], "all", "all60")
+    lines += rows(yf, "octave", "float_octave")
     with open(os.path.join(outdir, "allantools_dev.csv"), "w") as f:
         f.write("\n".join(lines) + "\n")
 
