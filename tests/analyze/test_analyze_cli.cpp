@@ -507,6 +507,17 @@ TEST(AnalyzeSensors, MatrixInGAndDegPerSecondGivesAnSiImuYamlWithItsUnitsSaid) {
   // The GM drive's PSD is in unit^2/s, not unit.
   EXPECT_NE(j.find("\"sb\": \"(m/s^2)^2/s\""), std::string::npos);
   EXPECT_NE(j.find("\"sb\": \"(rad/s)^2/s\""), std::string::npos);
+  // Nothing declared but the channels: the norm says g, and the gyroscope beside it is taken
+  // as deg/s, said in its note; the imu.yaml is the same as with --gyro-unit deg/s.
+  ASSERT_EQ(call({"analyze", mat, "--acc", "data:1,data:2,data:3", "--gyro",
+                  "data:4,data:5,data:6", "--json", json, "--yaml", yaml}),
+            0);
+  EXPECT_NEAR(yaml_number(slurp(yaml), "gyroscope_noise_density"), n_dps * kPi / 180.0,
+              0.1 * n_dps * kPi / 180.0);
+  EXPECT_EQ(count_of(slurp(json), "taken as deg/s, the unit that goes with an accelerometer in "
+                                  "g (--gyro-unit rad/s|deg/s|deg/h declares it); analysed in "
+                                  "rad/s"),
+            3U);
   // The same columns in m/s^2 (scaled by the test): the norm says m/s^2, nothing is scaled.
   for (std::size_t i = 0; i < 3 * kSamples; ++i) {
     data[i] *= 9.80665;
@@ -525,7 +536,7 @@ TEST(AnalyzeSensors, MatrixInGAndDegPerSecondGivesAnSiImuYamlWithItsUnitsSaid) {
   const std::string y2 = slurp(yaml);
   EXPECT_NEAR(yaml_number(y2, "accelerometer_noise_density"), n_g * 9.80665,
               0.1 * n_g * 9.80665);
-  // Undeclared gyroscope: taken as rad/s, and said.
+  // Undeclared gyroscope beside an accelerometer in m/s^2: taken as rad/s, and said.
   EXPECT_NEAR(yaml_number(y2, "gyroscope_noise_density"), n_dps, 0.1 * n_dps);
   const std::string j2 = slurp(json);
   EXPECT_EQ(count_of(j2, "in m/s^2: the mean norm of its three axes is 9.80"), 3U) << j2;

@@ -50,9 +50,9 @@ constexpr const char* kUsage =
     "  Sensors: --acc/--gyro name each sensor's channels (any names, NAME:K columns; instead of\n"
     "  --channel), else a name tells (acc*, a_*, ax..; gyro*, w_*, gx..); --acc-unit/--gyro-unit\n"
     "  their unit, else the accelerometer's is read from its three axes' mean norm (about 1: g,\n"
-    "  about 9.81: m/s^2) and the gyroscope's taken as rad/s, each said in a note; everything is\n"
-    "  analysed and reported in m/s^2 and rad/s. --acc-lsb/--gyro-lsb: a sensor's LSB in its\n"
-    "  unit. --fs (else\n"
+    "  about 9.81: m/s^2) and the gyroscope's taken as deg/s beside an accelerometer in g, else\n"
+    "  as rad/s, each said in a note; everything is analysed and reported in m/s^2 and rad/s.\n"
+    "  --acc-lsb/--gyro-lsb: a sensor's LSB in its unit. --fs (else\n"
     "  the file's fs or Fs, else a text file's time column, in the unit it states or\n"
     "  --time-unit's, else the one its steps show) in [1e-3, 1e6] Hz; --lsb (else the file's <group>_lsb, NAME_lsb or\n"
     "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
@@ -549,7 +549,7 @@ double finite_mean(const std::vector<double>& v) {
 
 // Every job in SI units: the accelerometer's unit declared (--acc-unit), else the one a static
 // triad's mean norm shows (about 1: g, about 9.81: m/s^2), else m/s^2; the gyroscope's
-// declared (--gyro-unit), else rad/s. Samples and LSBs are scaled to SI (a long record's
+// declared (--gyro-unit), else deg/s beside an accelerometer in g, else rad/s. Samples and LSBs are scaled to SI (a long record's
 // full-rate head too); each channel's note says its sensor, its unit and how both were found.
 void apply_units(std::vector<Job>& jobs, const Declared& d) {
   using imu::cli::Sensor;
@@ -591,10 +591,19 @@ void apply_units(std::vector<Job>& jobs, const Declared& d) {
     acc_note = "taken as m/s^2 (--acc-unit g|m/s^2 declares it; with its three axes, the mean "
                "norm checks it)";
   }
-  const double gyro_f = d.gyro_to_si > 0.0 ? d.gyro_to_si : 1.0;
-  const std::string gyro_note = d.gyro_to_si > 0.0
-                                    ? "in " + d.gyro_unit + " (--gyro-unit)"
-                                    : "taken as rad/s (--gyro-unit rad/s|deg/s|deg/h declares it)";
+  // Undeclared, the gyroscope's unit follows the accelerometer's convention: loggers that write
+  // g write deg/s (datasheet units), those that write m/s^2 write rad/s (SI, ROS REP 103).
+  double gyro_f = 1.0;
+  std::string gyro_note = "taken as rad/s (--gyro-unit rad/s|deg/s|deg/h declares it)";
+  if (d.gyro_to_si > 0.0) {
+    gyro_f = d.gyro_to_si;
+    gyro_note = "in " + d.gyro_unit + " (--gyro-unit)";
+  } else if (std::fabs(acc_f - imu::cli::kStandardGravity) < 1e-9) {
+    std::string unit_err;
+    (void)imu::cli::unit_to_si(Sensor::kGyro, "deg/s", gyro_f, unit_err);
+    gyro_note = "taken as deg/s, the unit that goes with an accelerometer in g (--gyro-unit "
+                "rad/s|deg/s|deg/h declares it)";
+  }
   for (Job& j : jobs) {
     if (j.sensor == Sensor::kUnknown) {
       continue;
