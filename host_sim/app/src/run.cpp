@@ -568,14 +568,71 @@ bool check_cov_windows(const RunOptions& o, const SensorData& sd, std::string& e
   return true;
 }
 
-// The most samples per channel a text input is taken to: its channels are held while the
-// MAT-file the run streams is written (8 bytes per sample per channel, twice).
-constexpr std::size_t kMaxTextRunSamples = std::size_t{1} << 25U;
+// The text input's columns `cols` (n samples each on the grid), each in a pass of its own,
+// straight into the MAT-file `mat` under its slot's name, then fs: memory does not grow with the
+// record. Each column is a column_start() and its samples. False with err.
+bool stream_columns_to_mat(const RunOptions& o, const std::vector<std::string>& cols,
+                           const std::vector<std::size_t>& slots, std::uint64_t n, double fs_hz,
+                           const std::string& mat, std::string& err) {
+  imu::mat::MatWriter w;
+  if (!w.add_scalar("fs", fs_hz).ok()) {
+    err = o.path + ": could not convert";
+    return false;
+  }
+  std::vector<std::vector<std::uint8_t>> starts;
+  for (std::size_t k = 0; k < cols.size(); ++k) {
+    // A column's own name may not be a MAT name (w_RS_S_x is, gyro_rad[0] is not): it is written
+    // under its slot's name, which the run then reports.
+    auto start = w.column_start(kChannelNames[slots[k]], n);
+    if (!start.ok()) {
+      err = o.path + ": column '" + cols[k] + "': " + start.error().message;
+      return false;
+    }
+    starts.push_back(std::move(start.value()));
+  }
+  const std::vector<std::uint8_t>& small = w.bytes();
+  constexpr std::size_t kHeader = 128;
+  imu::cli::AtomicFileWriter out;
+  if (!out.open(mat, err) || !out.write(small.data(), kHeader, err)) {
+    return false;
+  }
+  std::vector<double> col(4096);
+  std::vector<std::uint8_t> bytes(8U * col.size());
+  for (std::size_t k = 0; k < cols.size(); ++k) {
+    imu::cli::TextColumnStream one;
+    if (!out.write(starts[k].data(), starts[k].size(), err) ||
+        !one.open(o.path, std::vector<std::string>{cols[k]}, o.fs_opt, err)) {
+      return false;
+    }
+    std::uint64_t written = 0;
+    for (std::size_t got = 1; got > 0;) {
+      if (!one.read(col.data(), col.size(), got, err)) {
+        return false;
+      }
+      written += got;
+      if (written > n) {
+        break;
+      }
+      imu::mat::MatWriter::encode_doubles(col.data(), got, bytes.data());
+      if (!out.write(bytes.data(), 8U * got, err)) {
+        return false;
+      }
+    }
+    if (written != n) {
+      err = o.path + ": column '" + cols[k] + "' gave " + (written > n ? "more than " : "") +
+            std::to_string(std::min(written, n + 1)) + " samples on its own and " +
+            std::to_string(n) + " beside the others";
+      return false;
+    }
+  }
+  return out.write(small.data() + kHeader, small.size() - kHeader, err) && out.commit(err);
+}
 
 // A text input (CSV, TSV) or a ROS bag's only sensor_msgs/Imu topic (imu::cli::open_rows,
 // TextColumnStream: the rate from --fs or its time column, missing rows as gaps, the same grid
 // as adev and analyze) becomes DIR/input.mat: the slots'
-// columns it holds (acc_x..gyro_z, or the column --channel names in its slot) and fs. The run
+// columns it holds (acc_x..gyro_z, or the column --channel names in its slot) and fs, written as
+// they are read (one pass to count, one per column; constant memory at any length). The run
 // then streams that file like any MAT input; a note says so. False with err (a missing
 // column names the columns; `usage` when --channel named it: exit 2, as for a MAT variable).
 bool text_input_to_mat(RunOptions& o, std::string& note, bool& usage, std::string& err) {
@@ -612,48 +669,23 @@ bool text_input_to_mat(RunOptions& o, std::string& note, bool& usage, std::strin
       return false;
     }
   }
+  // Pass 1: every column on the grid, counted (the rate, the time notes and the length).
   imu::cli::TextColumnStream st;
   if (!st.open(o.path, cols, o.fs_opt, err)) {
     return false;
   }
-  std::vector<std::vector<double>> data(cols.size());
-  std::vector<double> buf(4096 * cols.size());
-  for (;;) {
-    std::size_t got = 0;
-    if (!st.read(buf.data(), 4096, got, err)) {
-      return false;
-    }
-    if (got == 0) {
-      break;
-    }
-    if (data[0].size() + got > kMaxTextRunSamples) {
-      err = o.path + ": more than " + std::to_string(kMaxTextRunSamples) +
-            " samples per channel: too long for run from text (adev and analyze read it in "
-            "constant memory)";
-      return false;
-    }
-    for (std::size_t i = 0; i < got; ++i) {
-      for (std::size_t k = 0; k < cols.size(); ++k) {
-        data[k].push_back(buf[i * cols.size() + k]);
+  std::uint64_t n = 0;
+  {
+    std::vector<double> buf(4096 * cols.size());
+    for (std::size_t got = 1; got > 0; n += got) {
+      if (!st.read(buf.data(), 4096, got, err)) {
+        return false;
       }
     }
   }
-  imu::mat::MatWriter w;
-  for (std::size_t k = 0; k < cols.size(); ++k) {
-    // A column's own name may not be a MAT name (w_RS_S_x is, gyro_rad[0] is not): it is written
-    // under its slot's name, which the run then reports.
-    if (!w.add_column(kChannelNames[slots[k]], data[k]).ok()) {
-      err = o.path + ": column '" + cols[k] + "' could not be converted";
-      return false;
-    }
-  }
-  if (!w.add_scalar("fs", st.fs_hz()).ok() || !imu::cli::make_dirs(o.out_dir, err)) {
-    err = err.empty() ? o.path + ": could not convert" : err;
-    return false;
-  }
   const std::string mat = o.out_dir + "/input.mat";
-  if (!imu::cli::write_file_atomic(
-          mat, std::string(w.bytes().begin(), w.bytes().end()), err)) {
+  if (!imu::cli::make_dirs(o.out_dir, err) ||
+      !stream_columns_to_mat(o, cols, slots, n, st.fs_hz(), mat, err)) {
     return false;
   }
   note = st.origin() + ": " + std::to_string(cols.size()) + " column(s) at " +
