@@ -308,6 +308,225 @@ bool inverse(Dense a, std::size_t n, Dense& inv) {
   return true;
 }
 
+// ---------------------------------------------------------------- 95 % intervals
+
+// Every nonzero parameter of m the ADEV sees, by name, as pointers into m.
+std::vector<std::pair<std::string, double*>> free_params(ModelParams& m) {
+  std::vector<std::pair<std::string, double*>> v;
+  const auto add = [&v](const std::string& name, double& x) {
+    if (std::fabs(x) > 0.0) {
+      v.emplace_back(name, &x);
+    }
+  };
+  add("n", m.n);
+  add("q", m.q);
+  for (std::size_t i = 0; i < m.n_gm; ++i) {
+    add("gm" + std::to_string(i) + "_sb", m.gm[i].sb);
+    add("gm" + std::to_string(i) + "_tb_s", m.gm[i].tb_s);
+  }
+  add("k", m.k);
+  add("r", m.r);
+  add("sin_a", m.sin_a);
+  add("sin_f0_hz", m.sin_f0_hz);
+  add("sin2_a", m.sin2_a);
+  add("sin2_f0_hz", m.sin2_f0_hz);
+  add("bi", m.bi);
+  add("osc_sigma", m.osc_sigma);
+  add("osc_f0_hz", m.osc_f0_hz);
+  add("osc_beta_per_s", m.osc_beta_per_s);
+  return v;
+}
+
+// The covariance of m's log-parameters from the ADEV residual over [tau_min, tau_max] (see
+// ParamInterval): central differences of 1 % in each. cov empty: too few points or singular.
+struct LogCov {
+  std::vector<std::string> names;
+  Dense cov;
+};
+
+LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o, double tau_min,
+                      double tau_max) {
+  LogCov lc;
+  ModelParams w = m;
+  const auto params = free_params(w);
+  const std::size_t np = params.size();
+  std::vector<std::size_t> in;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (pts[i].tau_s >= tau_min * (1.0 - 1e-9) && pts[i].tau_s <= tau_max * (1.0 + 1e-9)) {
+      in.push_back(i);
+    }
+  }
+  for (const auto& pr : params) {
+    lc.names.push_back(pr.first);
+  }
+  if (np == 0 || in.size() <= np) {
+    return lc;
+  }
+  constexpr double kH = 0.01;
+  Dense jac(in.size() * np, 0.0);
+  for (std::size_t j = 0; j < np; ++j) {
+    double& x = *params[j].second;
+    const double x0 = x;
+    x = x0 * std::exp(kH);
+    const std::vector<double> zp = residual(pts, w, o, tau_min, tau_max).z;
+    x = x0 * std::exp(-kH);
+    const std::vector<double> zm = residual(pts, w, o, tau_min, tau_max).z;
+    x = x0;
+    for (std::size_t k = 0; k < in.size(); ++k) {
+      jac[k * np + j] = (zp[in[k]] - zm[in[k]]) / (2.0 * kH);
+    }
+  }
+  Dense f(np * np, 0.0);
+  for (std::size_t a = 0; a < np; ++a) {
+    for (std::size_t b = 0; b < np; ++b) {
+      for (std::size_t k = 0; k < in.size(); ++k) {
+        f[a * np + b] += jac[k * np + a] * jac[k * np + b];
+      }
+    }
+  }
+  Dense inv;
+  if (!inverse(f, np, inv)) {
+    return lc;
+  }
+  const Residual r0 = residual(pts, m, o, tau_min, tau_max);
+  const double s2 = std::max(1.0, r0.cost / static_cast<double>(in.size() - np));
+  // Neighbouring overlapping estimates are correlated, which J^T J counts as independent: the
+  // variance is inflated by the long-run factor of the residual sequence, 1 + 2 sum_k w_k
+  // rho_k over the taus (Newey-West, Bartlett weights w_k = 1 - k / (L + 1), L = one octave),
+  // and by no less than the analysis's own allowance, cost_factor.
+  constexpr std::size_t kLags = 12;
+  double c0 = 0.0;
+  for (const std::size_t i : in) {
+    c0 += r0.z[i] * r0.z[i];
+  }
+  double long_run = 1.0;
+  for (std::size_t lag = 1; lag <= kLags && lag < in.size() && c0 > 0.0; ++lag) {
+    double ck = 0.0;
+    for (std::size_t k = lag; k < in.size(); ++k) {
+      ck += r0.z[in[k]] * r0.z[in[k - lag]];
+    }
+    long_run += 2.0 * (1.0 - static_cast<double>(lag) / (kLags + 1.0)) * ck / c0;
+  }
+  const double inflate = std::max(o.cost_factor, long_run) * s2;
+  for (double& v : inv) {
+    v *= inflate;
+  }
+  for (std::size_t j = 0; j < np; ++j) {
+    if (!(inv[j * np + j] > 0.0)) {
+      return lc;
+    }
+  }
+  lc.cov = std::move(inv);
+  return lc;
+}
+
+// The 95 % interval of `value` = exp(sum_i a_i ln p_i) (times a constant) from the log
+// covariance; [0, inf) (or (-inf, 0] for a negative value) when a parameter is not in it.
+ParamInterval log_interval(const LogCov& lc, const std::string& name, double value,
+                           const std::vector<std::pair<std::string, double>>& comb) {
+  ParamInterval iv{name, 0.0, std::numeric_limits<double>::infinity()};
+  const std::size_t np = lc.names.size();
+  std::vector<double> a(np, 0.0);
+  bool all = !lc.cov.empty();
+  for (const auto& [pname, coef] : comb) {
+    const auto it = std::find(lc.names.begin(), lc.names.end(), pname);
+    all = all && it != lc.names.end();
+    if (it != lc.names.end()) {
+      a[static_cast<std::size_t>(it - lc.names.begin())] = coef;
+    }
+  }
+  if (all) {
+    double var = 0.0;
+    for (std::size_t i = 0; i < np; ++i) {
+      for (std::size_t j = 0; j < np; ++j) {
+        var += a[i] * lc.cov[i * np + j] * a[j];
+      }
+    }
+    const double sd = std::sqrt(std::max(var, 0.0));
+    iv.lo = value * std::exp(-1.96 * sd);
+    iv.hi = value * std::exp(1.96 * sd);
+  }
+  if (value < 0.0) {  // value exp(-+1.96 sd) runs downwards: swap; undetermined: (-inf, 0]
+    iv = all ? ParamInterval{name, iv.hi, iv.lo}
+             : ParamInterval{name, -std::numeric_limits<double>::infinity(), 0.0};
+  }
+  return iv;
+}
+
+
+// The index of m's GM whose Tb is closest to tb_s (in log).
+std::size_t gm_index(const ModelParams& m, double tb_s) {
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < m.n_gm; ++i) {
+    if (std::fabs(std::log(m.gm[i].tb_s / tb_s)) < std::fabs(std::log(m.gm[best].tb_s / tb_s))) {
+      best = i;
+    }
+  }
+  return best;
+}
+
+// A GM's sigma = sqrt(Sb Tb / 2) and Tb intervals (GM `g` of the log covariance).
+void gm_intervals(const LogCov& lc, const ModelParams& m, std::size_t g,
+                  std::vector<ParamInterval>& out) {
+  const std::string sb = "gm" + std::to_string(g) + "_sb";
+  const std::string tb = "gm" + std::to_string(g) + "_tb_s";
+  out.push_back(log_interval(lc, "sigma", std::sqrt(m.gm[g].sb * m.gm[g].tb_s / 2.0),
+                             {{sb, 0.5}, {tb, 0.5}}));
+  out.push_back(log_interval(lc, "tb_s", m.gm[g].tb_s, {{tb, 1.0}}));
+}
+
+// Each effect's 95 % intervals and the model after's white noise and first GM (see
+// ParamInterval), from the points the error after is scored on. A parameter whose interval
+// spans more than two decades (or is not determined at all) gets a note.
+void attach_intervals(const Points& pts, const Options& o, double ts, double tau_max,
+                      Report& out) {
+  const ModelParams& m = out.model_after;
+  const LogCov lc = log_covariance(pts, m, o, ts, tau_max);
+  out.model_after_ci95.clear();
+  out.model_after_ci95.push_back(log_interval(lc, "n", m.n, {{"n", 1.0}}));
+  if (m.n_gm > 0) {
+    gm_intervals(lc, m, 0, out.model_after_ci95);
+    out.model_after_ci95[1].name = "gm_sigma";
+    out.model_after_ci95[2].name = "gm_tb_s";
+  }
+  for (Effect& e : out.effects) {
+    std::vector<ParamInterval>& c = e.ci95;
+    c.clear();
+    if (e.type == "quantization") {
+      c.push_back(log_interval(lc, "q", e.q, {{"q", 1.0}}));
+    } else if (e.type == "rate_random_walk") {
+      c.push_back(log_interval(lc, "k", e.k, {{"k", 1.0}}));
+    } else if (e.type == "ramp") {
+      c.push_back(log_interval(lc, "r", e.r, {{"r", 1.0}}));
+    } else if (e.type == "bias_instability") {
+      c.push_back(log_interval(lc, "b", e.b, {{"bi", 1.0}}));
+    } else if (e.type == "sinusoid") {
+      const bool first = std::fabs(e.freq_hz - m.sin_f0_hz) <= std::fabs(e.freq_hz - m.sin2_f0_hz);
+      const std::string w = first ? "sin" : "sin2";
+      c.push_back(log_interval(lc, "amplitude", e.amplitude, {{w + "_a", 1.0}}));
+      c.push_back(log_interval(lc, "freq_hz", e.freq_hz, {{w + "_f0_hz", 1.0}}));
+    } else if (e.type == "oscillation") {
+      c.push_back(log_interval(lc, "sigma", e.amplitude, {{"osc_sigma", 1.0}}));
+      c.push_back(log_interval(lc, "freq_hz", e.freq_hz, {{"osc_f0_hz", 1.0}}));
+      c.push_back(log_interval(lc, "bandwidth_hz", e.bandwidth_hz, {{"osc_beta_per_s", 1.0}}));
+    } else if (e.type == "gauss_markov" && m.n_gm > 0) {
+      gm_intervals(lc, m, gm_index(m, e.tb_s), c);
+    } else if (e.type == "bias_step" && e.statistic > 0.0) {
+      const double half = 1.96 * std::fabs(e.size) / e.statistic;
+      c.push_back(ParamInterval{"size", e.size - half, e.size + half});
+    }
+    for (const ParamInterval& iv : c) {
+      const double lo = std::min(std::fabs(iv.lo), std::fabs(iv.hi));
+      const double hi = std::max(std::fabs(iv.lo), std::fabs(iv.hi));
+      if (e.type != "bias_step" && !(hi <= 100.0 * lo)) {
+        out.notes.push_back(e.type + " " + iv.name + ": not determined by this record (95 % "
+                            "interval " + fmt("%.3g", iv.lo) + " to " + fmt("%.3g", iv.hi) +
+                            "; a longer record narrows it)");
+      }
+    }
+  }
+}
+
 // Steady-state predicted covariance X = Phi X Phi' - Phi X H' (R + H X H')^-1 H X Phi' + Q by
 // the structure-preserving doubling algorithm (Chu, Fan, Lin, Wang, "Structure-preserving
 // algorithms for periodic discrete-time algebraic Riccati equations", Int. J. Control 77(8),
@@ -2855,6 +3074,7 @@ class Analysis {
     out.model_after = cur_p;
     out.error_after = choice.e;
     out.unexplained = unexplained_runs(ac, cur_p);
+    attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
     for (const auto& w : withdrawn) {
       bool covered = false;
       for (const auto& u : out.unexplained) {

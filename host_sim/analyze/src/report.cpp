@@ -67,6 +67,30 @@ std::string error_json(const ErrorStats& e) {
   return s.str();
 }
 
+// {"NAME": [lo, hi], ...} (an unbounded end: null).
+std::string intervals_json(const std::vector<ParamInterval>& ci) {
+  std::ostringstream s;
+  s << "{";
+  for (std::size_t i = 0; i < ci.size(); ++i) {
+    s << (i > 0 ? ", " : "") << quoted(ci[i].name) << ": [" << num(ci[i].lo) << ", "
+      << num(ci[i].hi) << "]";
+  }
+  s << "}";
+  return s.str();
+}
+
+// " (95 %: NAME lo to hi, ...)" for the text; empty without intervals.
+std::string intervals_text(const std::vector<ParamInterval>& ci) {
+  std::string t;
+  char buf[128];
+  for (const ParamInterval& iv : ci) {
+    std::snprintf(buf, sizeof buf, "%s%s %.3g to %.3g", t.empty() ? " (95 %: " : ", ",
+                  iv.name.c_str(), iv.lo, iv.hi);
+    t += buf;
+  }
+  return t.empty() ? t : t + ")";
+}
+
 std::string effect_json(const Effect& e) {
   std::ostringstream s;
   s << "{\"type\": " << quoted(e.type);
@@ -93,6 +117,9 @@ std::string effect_json(const Effect& e) {
       s << (i > 0 ? ", " : "") << num(e.times_s[i]);
     }
     s << "]";
+  }
+  if (!e.ci95.empty()) {
+    s << ", \"ci95\": " << intervals_json(e.ci95);
   }
   s << ", \"statistic\": " << num(e.statistic) << ", \"threshold\": " << num(e.threshold) << "}";
   return s.str();
@@ -149,7 +176,7 @@ std::string effect_text(const Effect& e) {
     std::snprintf(buf, sizeof buf, "effect outliers: %llu samples",
                   static_cast<unsigned long long>(e.count));
   }
-  std::string line = buf;
+  std::string line = buf + intervals_text(e.ci95);
   std::snprintf(buf, sizeof buf, " (statistic %.3g > threshold %.3g)", e.statistic,
                 e.threshold);
   return line + buf;
@@ -184,6 +211,7 @@ std::string to_json(const Report& r) {
     << ",\n  \"error_before\": " << error_json(r.error_before) << ",\n  \"effects\": [";
   s << effects_json(r.effects, "\n    ");
   s << (r.effects.empty() ? "" : "\n  ") << "],\n  \"model_after\": " << model_json(r.model_after)
+    << ",\n  \"model_after_ci95\": " << intervals_json(r.model_after_ci95)
     << ",\n  \"error_after\": " << error_json(r.error_after) << ",\n  \"notes\": [";
   for (std::size_t i = 0; i < r.notes.size(); ++i) {
     s << (i > 0 ? ", " : "") << quoted(r.notes[i]);
@@ -395,6 +423,9 @@ std::string to_text(const Report& r) {
     s << effect_text(e) << "\n";
   }
   model_line("model after (joint fit over [Ts, T/10])", r.model_after);
+  if (!r.model_after_ci95.empty()) {
+    s << "model after, its white noise and GM" << intervals_text(r.model_after_ci95) << "\n";
+  }
   error_line("error after", r.error_after);
   if (r.unexplained.empty()) {
     s << "unexplained: nothing (the model after is inside the intervals, no significant run)\n";

@@ -83,6 +83,17 @@ struct ErrorStats {
   std::size_t filter_states = 0;
 };
 
+/// The 95 % interval of one reported parameter. Model terms: from the ADEV fit's Gauss-Newton
+/// covariance of the log-parameters, c s^2 (J^T J)^-1 (J the Jacobian of the residual z over
+/// [Ts, T/10], s^2 = max(1, sum z^2 / (points - parameters)), c = Options::cost_factor for the
+/// correlation of neighbouring overlapping estimates), lo/hi = value exp(-+1.96 sd). A step's
+/// size: size -+ 1.96 |size| / |z| (its detector's z is the size over its standard error).
+/// hi = +inf: the record does not determine the parameter (a note says so).
+struct ParamInterval {
+  std::string name;  ///< the parameter's JSON key ("k", "freq_hz", "sigma", ...)
+  double lo = 0.0;
+  double hi = 0.0;
+};
 struct Effect {
   /// Terms of model_after beyond white noise and its first GM: quantization, rate_random_walk,
   /// ramp, sinusoid, bias_instability, oscillation (a narrowband random oscillation:
@@ -103,6 +114,7 @@ struct Effect {
   std::vector<double> times_s;  ///< outliers: times of the first 100 [s]
   double statistic = 0.0;  ///< evidence: cost drop (ADEV terms), |z| (step), max |nu| (outliers)
   double threshold = 0.0;  ///< the threshold the statistic passed
+  std::vector<ParamInterval> ci95;  ///< 95 % intervals of its parameters (not outliers)
 };
 
 struct UnexplainedRun {
@@ -144,6 +156,8 @@ struct Report {
   std::vector<AdevPoint> adev_clean;  ///< after removing steps and outliers
   ModelParams model_before{};
   ModelParams model_after{};
+  /// 95 % intervals of model_after's white noise "n" and first GM ("gm_sigma", "gm_tb_s").
+  std::vector<ParamInterval> model_after_ci95;
   ErrorStats error_before{};
   ErrorStats error_after{};
   std::vector<Effect> effects;
