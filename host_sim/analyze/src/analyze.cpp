@@ -465,14 +465,15 @@ std::size_t gm_index(const ModelParams& m, double tb_s) {
   return best;
 }
 
-// A GM's sigma = sqrt(Sb Tb / 2) and Tb intervals (GM `g` of the log covariance).
-void gm_intervals(const LogCov& lc, const ModelParams& m, std::size_t g,
+// A GM's sigma = sqrt(Sb Tb / 2) and Tb intervals (GM `g` of the log covariance), named
+// `prefix` + "sigma" and `prefix` + "tb_s".
+void gm_intervals(const LogCov& lc, const ModelParams& m, std::size_t g, const std::string& prefix,
                   std::vector<ParamInterval>& out) {
   const std::string sb = "gm" + std::to_string(g) + "_sb";
   const std::string tb = "gm" + std::to_string(g) + "_tb_s";
-  out.push_back(log_interval(lc, "sigma", std::sqrt(m.gm[g].sb * m.gm[g].tb_s / 2.0),
+  out.push_back(log_interval(lc, prefix + "sigma", std::sqrt(m.gm[g].sb * m.gm[g].tb_s / 2.0),
                              {{sb, 0.5}, {tb, 0.5}}));
-  out.push_back(log_interval(lc, "tb_s", m.gm[g].tb_s, {{tb, 1.0}}));
+  out.push_back(log_interval(lc, prefix + "tb_s", m.gm[g].tb_s, {{tb, 1.0}}));
 }
 
 // Each effect's 95 % intervals and the model after's white noise and first GM (see
@@ -485,9 +486,7 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
   out.model_after_ci95.clear();
   out.model_after_ci95.push_back(log_interval(lc, "n", m.n, {{"n", 1.0}}));
   if (m.n_gm > 0) {
-    gm_intervals(lc, m, 0, out.model_after_ci95);
-    out.model_after_ci95[1].name = "gm_sigma";
-    out.model_after_ci95[2].name = "gm_tb_s";
+    gm_intervals(lc, m, 0, "gm_", out.model_after_ci95);
   }
   for (Effect& e : out.effects) {
     std::vector<ParamInterval>& c = e.ci95;
@@ -510,7 +509,7 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
       c.push_back(log_interval(lc, "freq_hz", e.freq_hz, {{"osc_f0_hz", 1.0}}));
       c.push_back(log_interval(lc, "bandwidth_hz", e.bandwidth_hz, {{"osc_beta_per_s", 1.0}}));
     } else if (e.type == "gauss_markov" && m.n_gm > 0) {
-      gm_intervals(lc, m, gm_index(m, e.tb_s), c);
+      gm_intervals(lc, m, gm_index(m, e.tb_s), "", c);
     } else if (e.type == "bias_step" && e.statistic > 0.0) {
       const double half = 1.96 * std::fabs(e.size) / e.statistic;
       c.push_back(ParamInterval{"size", e.size - half, e.size + half});

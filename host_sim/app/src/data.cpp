@@ -458,6 +458,47 @@ bool for_each_chunk(ChunkSource& src, const ChannelData& ch, std::vector<double>
   return ok;
 }
 
+// A channel's chunks split into their finite runs for a CountSink, as stream_counts() delivers
+// them: a run of non-finite samples between two finite ones is one gap, held until the next
+// finite run (those before the first finite sample and after the last are not in the series).
+class FiniteRuns {
+ public:
+  // The finite runs of v[0, n) in order, each v[i, j) by push(i, j) after the gap it ends.
+  // Returns the number of finite samples.
+  template <class Push>
+  std::size_t split(const double* v, std::size_t n, CountSink& sink, Push&& push) {
+    std::size_t finite = 0;
+    for (std::size_t i = 0; i < n;) {
+      std::size_t j = i;
+      const bool fin = std::isfinite(v[i]);
+      while (j < n && std::isfinite(v[j]) == fin) {
+        ++j;
+      }
+      if (!fin) {
+        pending_gap_ += started_ ? j - i : 0U;
+      } else {
+        begin_run(sink);
+        push(i, j);
+        finite += j - i;
+      }
+      i = j;
+    }
+    return finite;
+  }
+  // A finite run is pushed next: the gap before it goes first.
+  void begin_run(CountSink& sink) {
+    if (pending_gap_ > 0U) {
+      sink.gap(static_cast<std::size_t>(pending_gap_));
+      pending_gap_ = 0;
+    }
+    started_ = true;
+  }
+
+ private:
+  std::uint64_t pending_gap_ = 0;
+  bool started_ = false;
+};
+
 // stream_counts() for a sink that takes the values: the finite runs as they are, the gaps
 // between them as for counts.
 int stream_values(ChunkSource& src, const std::string& where, ChannelData& ch, CountSink& sink,
@@ -465,33 +506,14 @@ int stream_values(ChunkSource& src, const std::string& where, ChannelData& ch, C
   std::vector<double> values(8192);
   std::uint64_t total = 0;
   std::uint64_t finite = 0;
-  bool started = false;
-  std::uint64_t pending_gap = 0;
+  FiniteRuns runs;
   ch.off_grid = 0;
   const bool ok = for_each_chunk(src, ch, values, timing.read_s, err, [&](const double* v,
                                                                           std::size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
     total += n;
-    std::size_t i = 0;
-    while (i < n) {
-      std::size_t j = i;
-      const bool fin = std::isfinite(v[i]);
-      while (j < n && std::isfinite(v[j]) == fin) {
-        ++j;
-      }
-      if (!fin) {
-        pending_gap += started ? j - i : 0U;  // leading non-finite samples are not in the series
-      } else {
-        if (pending_gap > 0U) {
-          sink.gap(static_cast<std::size_t>(pending_gap));
-          pending_gap = 0;
-        }
-        sink.push_values(v + i, j - i);
-        finite += j - i;
-        started = true;
-      }
-      i = j;
-    }
+    finite += runs.split(v, n, sink,
+                         [&](std::size_t i, std::size_t j) { sink.push_values(v + i, j - i); });
     timing.sink_s += seconds_since(t0);
   });
   if (!ok) {
@@ -537,8 +559,7 @@ int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch, C
   std::uint64_t votes = 0;
   std::uint64_t total = 0;
   bool overflow = false;   // a finite |value| / LSB beyond int32: nothing more is pushed
-  bool started = false;    // a finite sample was pushed
-  std::uint64_t pending_gap = 0;
+  FiniteRuns runs;
   ch.off_grid = 0;
   const double lsb = ch.lsb;
   const bool ok = for_each_chunk(src, ch, values, timing.read_s, err, [&](const double* v,
@@ -596,31 +617,12 @@ int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch, C
     const auto t1 = std::chrono::steady_clock::now();
     timing.quantize_s += std::chrono::duration<double>(t1 - t0).count();
     if (all_finite && !overflow) {
-      if (pending_gap > 0U) {
-        sink.gap(static_cast<std::size_t>(pending_gap));
-        pending_gap = 0;
-      }
+      runs.begin_run(sink);
       sink.push(counts.data(), n);
-      started = true;
-    }
-    std::size_t i = 0;
-    while (!all_finite && i < n && !overflow) {
-      std::size_t j = i;
-      const bool finite = std::isfinite(v[i]);
-      while (j < n && std::isfinite(v[j]) == finite) {
-        ++j;
-      }
-      if (!finite) {
-        pending_gap += started ? j - i : 0U;  // leading non-finite samples are not in the series
-      } else {
-        if (pending_gap > 0U) {
-          sink.gap(static_cast<std::size_t>(pending_gap));
-          pending_gap = 0;
-        }
+    } else if (!overflow) {
+      (void)runs.split(v, n, sink, [&](std::size_t i, std::size_t j) {
         sink.push(counts.data() + i, j - i);
-        started = true;
-      }
-      i = j;
+      });
     }
     timing.sink_s += seconds_since(t1);
   });

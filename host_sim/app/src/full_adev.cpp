@@ -78,21 +78,29 @@ AdevRow deviation_row(std::uint64_t m, double ts_s, double var, double edf, std:
   return r;
 }
 
-// Sum over i of the squared second differences whose 2m samples have no gap.
-template <typename T>
-long double allan_sum(const Phase<T>& p, std::size_t m, std::uint64_t& terms) {
-  const std::vector<T>& x = p.x;
+// Sum over j of diff(j)^2 for the terms whose `span` + 1 phase points (span samples) have no
+// gap: the Allan (second differences, span 2m) and Hadamard (third, span 3m) sums.
+template <typename T, class Diff>
+long double gapless_squared_sum(const Phase<T>& p, std::size_t span, std::uint64_t& terms,
+                                Diff diff) {
   long double sum = 0.0L;
   terms = 0;
-  for (std::size_t i = 0; i + 2 * m < x.size(); ++i) {
-    if (p.gx[i + 2 * m] != p.gx[i]) {
+  for (std::size_t j = 0; j + span < p.x.size(); ++j) {
+    if (p.gx[j + span] != p.gx[j]) {
       continue;
     }
-    const auto d = static_cast<long double>(x[i + 2 * m] - 2 * x[i + m] + x[i]);
-    sum += d * d;
+    const auto v = static_cast<long double>(diff(j));
+    sum += v * v;
     ++terms;
   }
   return sum;
+}
+
+template <typename T>
+long double allan_sum(const Phase<T>& p, std::size_t m, std::uint64_t& terms) {
+  const std::vector<T>& x = p.x;
+  return gapless_squared_sum(p, 2 * m, terms,
+                             [&x, m](std::size_t i) { return x[i + 2 * m] - 2 * x[i + m] + x[i]; });
 }
 
 // Sum over j of S_j^2 (see full_deviation), the terms whose 3m - 1 samples have no gap.
@@ -120,21 +128,12 @@ long double modified_sum(const Phase<T>& p, std::size_t m, std::uint64_t& terms)
   return sum;
 }
 
-// Sum over j of the squared third differences whose 3m samples have no gap.
 template <typename T>
 long double hadamard_sum(const Phase<T>& p, std::size_t m, std::uint64_t& terms) {
   const std::vector<T>& x = p.x;
-  long double sum = 0.0L;
-  terms = 0;
-  for (std::size_t j = 0; j + 3 * m < x.size(); ++j) {
-    if (p.gx[j + 3 * m] != p.gx[j]) {
-      continue;
-    }
-    const auto v = static_cast<long double>(x[j + 3 * m] - 3 * x[j + 2 * m] + 3 * x[j + m] - x[j]);
-    sum += v * v;
-    ++terms;
-  }
-  return sum;
+  return gapless_squared_sum(p, 3 * m, terms, [&x, m](std::size_t j) {
+    return x[j + 3 * m] - 3 * x[j + 2 * m] + 3 * x[j + m] - x[j];
+  });
 }
 
 // The deviation d at each m of the grid up to m_max, from the phase p; `scale` the unit of one
@@ -248,11 +247,6 @@ double full_adev_cost(std::uint64_t n, const std::vector<std::uint64_t>& m) {
   return c;
 }
 
-std::vector<AdevRow> full_adev(const FullAdevSink& data, const std::vector<std::uint64_t>& m,
-                               double ts_s, double lsb) {
-  return full_deviation(data, Deviation::kAdev, m, ts_s, lsb);
-}
-
 const char* deviation_name(Deviation d) {
   switch (d) {
     case Deviation::kAdev: return "adev";
@@ -302,8 +296,7 @@ std::uint64_t deviation_max_af(Deviation d, std::uint64_t n) {
 
 std::vector<AdevRow> full_deviation(const FullAdevSink& data, Deviation d,
                                     const std::vector<std::uint64_t>& m, double ts_s, double lsb) {
-  // adev: every m with a term (2m <= n), as full_adev always kept; the others as allantools.
-  const std::uint64_t m_max = d == Deviation::kAdev ? data.size() / 2 : deviation_max_af(d, data.size());
+  const std::uint64_t m_max = deviation_max_af(d, data.size());
   if (data.takes_values()) {
     return deviation_rows(value_phase(data), d, m, m_max, ts_s, 1.0);
   }

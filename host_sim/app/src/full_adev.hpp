@@ -47,16 +47,6 @@ class FullAdevSink final : public CountSink {
 /// Number of second differences the full estimator sums over the grid (its cost).
 [[nodiscard]] double full_adev_cost(std::uint64_t n, const std::vector<std::uint64_t>& m);
 
-/// Fully overlapping ADEV at each m: sum over every start i of (x[i+2m] - 2 x[i+m] + x[i])^2 /
-/// (2 m^2 terms) with x the integer phase (cumulative counts; exact in int64), times lsb^2
-/// (a sink of values: x the cumulative sum of the mean-removed values, accumulated in long
-/// double, as allantools' phase; lsb unused);
-/// a term whose 2m samples include a gap is left out. EDF: Greenhall-Riley for white FM (the
-/// golden files' assumption), 68.3 % interval. Rows with no term are omitted. O(n) per m.
-[[nodiscard]] std::vector<AdevRow> full_adev(const FullAdevSink& data,
-                                             const std::vector<std::uint64_t>& m, double ts_s,
-                                             double lsb);
-
 /// The deviations of `imu-sim adev --deviation`, all fully overlapping, from frequency data
 /// (NIST SP 1065 section 5.2): adev eqn. 11 (allantools oadev), mdev eqn. 14 (allantools mdev),
 /// hdev the overlapping Hadamard deviation eqn. 20 (allantools ohdev), tdev = tau mdev / sqrt(3)
@@ -76,8 +66,12 @@ enum class Deviation : std::uint8_t { kAdev, kMdev, kHdev, kTdev };
 /// (n - 1) / 3. 0 when none.
 [[nodiscard]] std::uint64_t deviation_max_af(Deviation d, std::uint64_t n);
 
-/// The deviation `d` at each m of the grid that is at most deviation_max_af(d, n) (adev:
-/// full_adev). From the integer phase x (cumulative counts):
+/// The deviation `d` at each m of the grid that is at most deviation_max_af(d, n). From the
+/// integer phase x (cumulative counts; exact in int64), times lsb^2 (a sink of values: x the
+/// cumulative sum of the mean-removed values, accumulated in long double, as allantools' phase;
+/// lsb unused):
+///   adev: AVAR = sum_i (x[i+2m] - 2 x[i+m] + x[i])^2 / (2 m^2 terms), terms = n + 1 - 2m
+///         without gaps; EDF Greenhall-Riley for white FM (d = 2);
 ///   mdev: MVAR = sum_j S_j^2 / (2 m^4 terms) lsb^2, S_j = sum_{i=j}^{j+m-1} (x[i+2m] - 2 x[i+m]
 ///         + x[i]), the S_j by a sliding sum of third differences (exact in 128-bit integers),
 ///         terms = n + 2 - 3m without gaps;
