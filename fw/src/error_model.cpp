@@ -452,11 +452,55 @@ ModelStatus discretize(const ContinuousModel<kMaxStates>& c, double ts_s,
   return ModelStatus::kOk;
 }
 
+template <std::size_t kMaxStates>
+ModelStatus discretize_averaged(const ContinuousModel<kMaxStates>& c, double ts_s,
+                                DiscreteModel<kMaxStates>& out) {
+  const std::size_t n = c.n_states;
+  if (!positive_finite(ts_s) || n == 0) {
+    return ModelStatus::kBadParameter;
+  }
+  if (n + 1 > kMaxStates) {
+    return ModelStatus::kCapacity;
+  }
+  ContinuousModel<kMaxStates> a = c;
+  a.n_states = n + 1;
+  for (std::size_t j = 0; j < n; ++j) {
+    a.f(n, j) = c.h(0, j) / ts_s;  // J' = H x / Ts: J is the mean over the step
+    a.h(0, j) = 0.0;
+  }
+  a.h(0, n) = 1.0;
+  DiscreteModel<kMaxStates> d;
+  const ModelStatus st = discretize(a, ts_s, d);
+  if (st != ModelStatus::kOk) {
+    return st;
+  }
+  d.phi(n, n) = 0.0;  // reset: the next sample's mean starts from zero
+  // P0 = Phi diag(P0, 0) Phi^T + Qd: the state and the first sample's mean after one step.
+  typename DiscreteModel<kMaxStates>::Square p{};
+  for (std::size_t i = 0; i <= n; ++i) {
+    for (std::size_t j = 0; j <= n; ++j) {
+      double s = d.qd(i, j);
+      for (std::size_t k = 0; k < n; ++k) {
+        for (std::size_t l = 0; l < n; ++l) {
+          s += d.phi(i, k) * c.p0(k, l) * d.phi(j, l);
+        }
+      }
+      p(i, j) = s;
+    }
+  }
+  symmetrize(p);
+  d.p0 = p;
+  out = d;
+  return ModelStatus::kOk;
+}
+
 #define IMU_INSTANTIATE_MODEL(N)                                                              \
   template struct ContinuousModel<N>;                                                         \
   template struct DiscreteModel<N>;                                                           \
   template ModelStatus build_model<N>(const ModelParams&, ContinuousModel<N>&);               \
-  template ModelStatus discretize<N>(const ContinuousModel<N>&, double, DiscreteModel<N>&);
+  template ModelStatus discretize<N>(const ContinuousModel<N>&, double, DiscreteModel<N>&); \
+  template ModelStatus discretize_averaged<N>(const ContinuousModel<N>&, double,             \
+                                              DiscreteModel<N>&);
 
 // NOLINTBEGIN(cppcoreguidelines-macro-usage)
 IMU_INSTANTIATE_MODEL(1)
@@ -464,6 +508,7 @@ IMU_INSTANTIATE_MODEL(2)
 IMU_INSTANTIATE_MODEL(4)
 IMU_INSTANTIATE_MODEL(6)
 IMU_INSTANTIATE_MODEL(8)
+IMU_INSTANTIATE_MODEL(9)
 IMU_INSTANTIATE_MODEL(16)
 // NOLINTEND(cppcoreguidelines-macro-usage)
 #undef IMU_INSTANTIATE_MODEL

@@ -345,3 +345,87 @@ TEST(ErrorModel, OscillationIsTwoStatesAndDiscretisesToADampedRotation) {
   EXPECT_EQ(e.add_oscillation(1e-3, -1.0, 1.0), imu::ModelStatus::kBadParameter);
   EXPECT_EQ(e.add_oscillation(std::nan(""), 5.0, 1.0), imu::ModelStatus::kBadParameter);
 }
+
+// Autocovariance c_l = H Phi^l Sigma H^T of the measured sequence (without the white part) of a
+// stationary discrete model, Sigma = Phi Sigma Phi^T + Qd iterated to convergence.
+template <std::size_t N>
+void measured_autocovariance(const imu::DiscreteModel<N>& d, std::size_t lags, double* c) {
+  using Sq = typename imu::DiscreteModel<N>::Square;
+  Sq s = d.qd;
+  for (int it = 0; it < 4000; ++it) {
+    s = d.phi * s * d.phi.transpose() + d.qd;
+  }
+  Sq ps = s;  // Phi^l Sigma
+  for (std::size_t l = 0; l <= lags; ++l) {
+    double v = 0.0;
+    for (std::size_t i = 0; i < d.n_states; ++i) {
+      for (std::size_t j = 0; j < d.n_states; ++j) {
+        v += d.h(0, i) * ps(i, j) * d.h(0, j);
+      }
+    }
+    c[l] = v;
+    ps = d.phi * ps;
+  }
+}
+
+// AVAR at m samples of a stationary sequence with autocovariance c (c[0..2m]):
+// (1 / 2m^2) var(S2 - S1), S1, S2 sums of m consecutive samples.
+double avar_from_autocovariance(const double* c, std::size_t m) {
+  double var_sum = 0.0;  // var(S1)
+  double cov12 = 0.0;    // cov(S1, S2)
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t j = 0; j < m; ++j) {
+      var_sum += c[i > j ? i - j : j - i];
+      cov12 += c[m + j - i];
+    }
+  }
+  return (2.0 * var_sum - 2.0 * cov12) / (2.0 * static_cast<double>(m * m));
+}
+
+TEST(ErrorModel, AveragedSamplingGivesTheGmAveragesAndTheAvarFormula) {
+  // A GM of PSD Sb and time Tb has R(t) = P e^(-|t|/Tb), P = Sb Tb / 2. The mean of each
+  // interval of Ts (a = Ts / Tb, g = Tb / Ts) has, by integrating R over two intervals:
+  //   c_0 = 2 P g^2 (a - 1 + e^-a),  c_l = P g^2 e^(-(l-1) a) (1 - e^-a)^2  (l >= 1),
+  // and its AVAR at tau = m Ts is the continuous-time formula (MODELS.md) exactly.
+  const double ts = 0.01;
+  for (const double tb : {0.25 * ts, 3.0 * ts, 40.0 * ts}) {
+    imu::ContinuousModel<4> c;
+    const double sb = 2.0e-3;
+    ASSERT_EQ(c.add_white(5e-4), imu::ModelStatus::kOk);
+    ASSERT_EQ(c.add_gauss_markov(sb, tb), imu::ModelStatus::kOk);
+    imu::DiscreteModel<4> d;
+    ASSERT_EQ(imu::discretize_averaged(c, ts, d), imu::ModelStatus::kOk);
+    ASSERT_EQ(d.n_states, 2U);
+    EXPECT_EQ(d.phi(1, 1), 0.0);
+    EXPECT_NEAR(d.r_white, 5e-4 * 5e-4 / ts, 1e-15);
+    constexpr std::size_t kLags = 17;
+    double cv[kLags + 1] = {};
+    measured_autocovariance(d, kLags, cv);
+    const double p = sb * tb / 2.0;
+    const double a = ts / tb;
+    const double g = tb / ts;
+    EXPECT_NEAR(cv[0], 2.0 * p * g * g * (a - 1.0 + std::exp(-a)), 1e-9 * cv[0]) << tb;
+    for (std::size_t l = 1; l <= 3; ++l) {
+      const double want = p * g * g * std::exp(-static_cast<double>(l - 1) * a) *
+                          std::pow(1.0 - std::exp(-a), 2.0);
+      EXPECT_NEAR(cv[l], want, 1e-9 * cv[0]) << tb << " lag " << l;
+    }
+    for (const std::size_t m : {1U, 2U, 4U, 8U}) {
+      const double want = imu::avar_gauss_markov(sb, tb, static_cast<double>(m) * ts);
+      EXPECT_NEAR(avar_from_autocovariance(cv, m), want, 1e-8 * want) << tb << " m " << m;
+    }
+    // Point samples of the same GM: lag-1 correlation e^-a, much less than the averages' for
+    // Tb < Ts (0.018 against 0.13 of the GM part at Tb = Ts / 4).
+    imu::DiscreteModel<4> dp;
+    ASSERT_EQ(imu::discretize(c, ts, dp), imu::ModelStatus::kOk);
+    EXPECT_NEAR(dp.phi(0, 0), std::exp(-a), 1e-12);
+  }
+  // No room for the mean, or nothing to average: refused.
+  imu::ContinuousModel<2> full;
+  ASSERT_EQ(full.add_gauss_markov(1e-3, 1.0), imu::ModelStatus::kOk);
+  ASSERT_EQ(full.add_gauss_markov(1e-3, 10.0), imu::ModelStatus::kOk);
+  imu::DiscreteModel<2> dd;
+  EXPECT_EQ(imu::discretize_averaged(full, 0.01, dd), imu::ModelStatus::kCapacity);
+  imu::ContinuousModel<2> empty;
+  EXPECT_EQ(imu::discretize_averaged(empty, 0.01, dd), imu::ModelStatus::kBadParameter);
+}

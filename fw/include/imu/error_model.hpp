@@ -221,6 +221,22 @@ template <std::size_t kMaxStates>
 [[nodiscard]] ModelStatus discretize(const ContinuousModel<kMaxStates>& c, double ts_s,
                                      DiscreteModel<kMaxStates>& out);
 
+/// The same model seen through an averaging sampler: each sample is the mean of H x over its
+/// interval (t - Ts, t], plus the white and quantization noise. A sensor that low-pass filters
+/// and decimates internally (the ADIS16405 averages its 819.2 Hz samples) delivers this, and the
+/// AVAR formulas of every term (model_avar) are exactly the AVAR of this sequence at tau = m Ts:
+/// a filter for a model fitted to the ADEV must observe it this way. Point samples (discretize)
+/// differ where a correlation time is comparable with Ts: a GM of Tb = Ts / 4 next to white
+/// noise, fitted to a gyro's first ADEV points, gives a lag-1 correlation of 0.17 as averages
+/// (the record's is 0.17) and of 0.02 as point samples, and a filter that assumes the latter
+/// leaves its innovations correlated (whiteness and CUSUM fire on a correct model).
+/// The mean is one extra state, appended last: J' = H x / Ts over a step, reset at every sample
+/// (Phi(J, J) = 0); Phi, Qd by Van Loan on the augmented model; H picks J; P0 is the joint
+/// covariance after one step from (P0, J = 0). Needs c.n_states + 1 <= kMaxStates (kCapacity).
+template <std::size_t kMaxStates>
+[[nodiscard]] ModelStatus discretize_averaged(const ContinuousModel<kMaxStates>& c, double ts_s,
+                                              DiscreteModel<kMaxStates>& out);
+
 }  // namespace imu
 
 #endif  // IMU_ERROR_MODEL_HPP

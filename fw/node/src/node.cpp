@@ -77,7 +77,7 @@ bool model_record_valid(const hal::ModelRecord& r, ModelParams& out) {
     }
     states += nb;
   }
-  if (states == 0 || states > kNodeStates) {
+  if (states == 0 || states > kNodeProcessStates) {
     return false;  // no bias state to estimate, or more than the node's filter holds
   }
   out = p;
@@ -88,10 +88,11 @@ bool discretize_pushed(const ModelParams& p, double rate_hz, DiscreteModel<kNode
                        std::size_t& n_states) {
   ContinuousModel<kNodeStates> cm{};
   if (!(rate_hz > 0.0) || build_model(p, cm) != ModelStatus::kOk || cm.n_states == 0 ||
-      discretize(cm, 1.0 / rate_hz, out) != ModelStatus::kOk) {
+      cm.n_states > kNodeProcessStates ||
+      discretize_averaged(cm, 1.0 / rate_hz, out) != ModelStatus::kOk) {
     return false;
   }
-  n_states = out.n_states;
+  n_states = out.n_states - 1;  // the model's states (the echo's n_states); + the sample mean
   // Pad to kNodeStates with inert states: Phi = Qd = P0 = H = 0 keeps them at x = 0, P = 0.
   for (std::size_t i = out.n_states; i < kNodeStates; ++i) {
     for (std::size_t j = 0; j < kNodeStates; ++j) {

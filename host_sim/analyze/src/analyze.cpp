@@ -236,6 +236,17 @@ bool discretize_params(const ModelParams& p, double ts, Model& d) {
   return build_model(p, c) == ModelStatus::kOk && discretize(c, ts, d) == ModelStatus::kOk;
 }
 
+// The filter's model: the node's, each sample the mean of the model over its interval
+// (imu::discretize_averaged; node::discretize_pushed). Only white noise: no state at all.
+bool discretize_filter_model(const ModelParams& p, double ts, Model& d) {
+  ContinuousModel<kStates> c;
+  if (build_model(p, c) != ModelStatus::kOk) {
+    return false;
+  }
+  return c.n_states == 0 ? discretize(c, ts, d) == ModelStatus::kOk
+                         : discretize_averaged(c, ts, d) == ModelStatus::kOk;
+}
+
 // The stochastic part of a model: the deterministic terms (ramp, sinusoids) have no process
 // noise, so a steady-state filter would never learn them; the analysis removes its own
 // least-squares estimates of them from the record before filtering instead.
@@ -589,11 +600,11 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
     out.pred.assign(y.size(), known);
   }
   Model d;
-  if (!discretize_params(stochastic_part(p_full), ts, d)) {
+  if (!discretize_filter_model(stochastic_part(p_full), ts, d)) {
     return out;
   }
   const std::size_t n = d.n_states;
-  out.states = n;
+  out.states = n > 0 ? n - 1 : 0;  // the model's states, without the sample mean
   const double r = d.r_filter();
   Dense x;
   if (!(r > 0.0) || (n > 0 && !steady_state_covariance(d, n, r, x))) {

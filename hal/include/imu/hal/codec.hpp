@@ -225,7 +225,8 @@ inline constexpr std::uint8_t kModelPushed = 1U << 0;  ///< the node runs a push
 struct ModelRecord {
   std::uint8_t version;          ///< kModelVersion
   std::uint8_t channel;          ///< 0..5
-  std::uint8_t n_states;         ///< echo: filter states the node runs (0 in a push)
+  std::uint8_t n_states;         ///< echo: the model's states the node runs (0 in a push);
+                                 ///< its filter has one more, the sample mean
   std::uint8_t flags;            ///< echo: kModelPushed
   float n;                       ///< white N [unit/sqrt(Hz)]
   float q;                       ///< quantization Q [unit s]

@@ -22,7 +22,7 @@
 // forged sequence number 2^31 ahead costs the same as one lost sample (a pushed model: at most
 // kMaxGapSteps predictions).
 // Pushed models (ModelRecord): see on_model in node.cpp and host_sim/README.md; a
-// channel runs either the first-order model (ScalarBiasKf) or its pushed KalmanFilter<float, 8>.
+// channel runs either the first-order model (ScalarBiasKf) or its pushed KalmanFilter<float, 9>.
 // Filter: the known signal of each channel (gravity + initial bias) is the mean of its first
 // init_samples samples; the filter then estimates the bias relative to it, updating only while
 // the static input is active (no input: always static). A channel whose counts have all been 0
@@ -31,7 +31,7 @@
 // status period, not per sample (one GPIO ioctl per period).
 //
 // Memory: sizeof(Node) is the whole state (54.4 kB on x86-64, mostly six OnlineAdev<8,22> and
-// six KalmanFilter<float, 8> of 888 bytes for pushed models); no
+// six KalmanFilter<float, 9> for pushed models); no
 // heap, no exceptions, no OS calls: the library is compiled with fw/src/fw_prelude.hpp. Not
 // re-entrant on one instance. Cost per sample: 6 ADEV pushes (amortised ~12 multiply-adds each)
 // + 6 scalar filter steps + monitors; a full ADEV telemetry set is 6 snapshots (O(96 * 8)) and
@@ -83,10 +83,14 @@ inline constexpr double kMaxTpS = 1e8;
 /// True if every parameter is in the ranges above and the first-order model and its filter
 /// are valid at kMinRateHz and kMaxRateHz. O(1) (two small matrix exponentials).
 [[nodiscard]] bool model_in_range(const ChannelModel& m);
-/// Largest pushed model the node runs: states of its filter (2 GM + RRW + a flicker bank of at
-/// most 5 decades). Filters are KalmanFilter<float, kNodeStates>; a model with fewer states is
-/// padded with inert states (Phi = Qd = P0 = H = 0), so the per-sample cost is that of 8 states.
-inline constexpr std::size_t kNodeStates = 8;
+/// Largest pushed model the node runs: kNodeProcessStates states of its terms (2 GM + RRW + a
+/// flicker bank of at most 5 decades) and one more, the sample's mean over its interval: the
+/// node observes the model through an averaging sampler (imu::discretize_averaged), as the
+/// sensor delivers it and as the fit's AVAR formulas describe it. Filters are
+/// KalmanFilter<float, kNodeStates>; a model with fewer states is padded with inert states
+/// (Phi = Qd = P0 = H = 0), so the per-sample cost is that of kNodeStates states.
+inline constexpr std::size_t kNodeProcessStates = 8;
+inline constexpr std::size_t kNodeStates = kNodeProcessStates + 1;
 /// Accepted ranges of a pushed ModelRecord (both ends included, zero = term absent where noted):
 /// N in 1e-12 .. 1e3 (required: the filter needs measurement noise); Q, K, B in 0 or
 /// 1e-15 .. 1e3; a GM's Sb in 0 or 1e-30 .. 1e6 with Tb in 1e-3 .. 1e8 s; the flicker range
@@ -100,10 +104,10 @@ inline constexpr std::uint64_t kMaxGapSteps = 4096;
 
 /// Validate a pushed model record and build its parameters: every field finite and in the
 /// ranges above, and the model (flicker bank rebuilt by imu::flicker_bank) has at most
-/// kNodeStates states. Does not discretise. O(1).
+/// kNodeProcessStates states. Does not discretise. O(1).
 [[nodiscard]] bool model_record_valid(const hal::ModelRecord& r, ModelParams& out);
-/// Build, discretise at rate_hz (Van Loan) and pad a pushed model to kNodeStates; false if any
-/// step fails. O(kNodeStates^3) (matrix exponential of 2 * kNodeStates).
+/// Build, discretise at rate_hz (Van Loan, averaging sampler) and pad a pushed model to
+/// kNodeStates; false if any step fails. O(kNodeStates^3) (matrix exponential of 2 * kNodeStates).
 [[nodiscard]] bool discretize_pushed(const ModelParams& p, double rate_hz,
                                      DiscreteModel<kNodeStates>& out, std::size_t& n_states);
 
