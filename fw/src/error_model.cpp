@@ -70,6 +70,13 @@ double avar_white(double n, double tau_s) { return n * n / tau_s; }
 
 double avar_quantization(double q, double tau_s) { return 3.0 * q * q / (tau_s * tau_s); }
 
+double avar_white_filtered(double n, double tf_s, double tau_s) {
+  if (!(tf_s > 0.0)) {
+    return avar_white(n, tau_s);
+  }
+  return avar_gauss_markov(n * n / (tf_s * tf_s), tf_s, tau_s);
+}
+
 double avar_gauss_markov(double sb, double tb_s, double tau_s) {
   const double x = tau_s / tb_s;
   double bracket = 0.0;
@@ -182,7 +189,7 @@ double avar_flicker_bank(double b, double tau_lo_s, double tau_hi_s, double tau_
 double model_avar(const ModelParams& p, double tau_s) {
   double v = 0.0;
   if (p.n > 0.0) {
-    v += avar_white(p.n, tau_s);
+    v += avar_white_filtered(p.n, p.n_filter_s, tau_s);
   }
   if (p.q > 0.0) {
     v += avar_quantization(p.q, tau_s);
@@ -220,6 +227,20 @@ ModelStatus ContinuousModel<kMaxStates>::add_white(double n) {
   }
   sn += n * n;
   params.n = std::sqrt(sn);
+  return ModelStatus::kOk;
+}
+
+template <std::size_t kMaxStates>
+ModelStatus ContinuousModel<kMaxStates>::add_filtered_white(double n, double tf_s) {
+  if (!positive_finite(n) || !positive_finite(tf_s) || params.n > 0.0) {
+    return ModelStatus::kBadParameter;  // one white term per model
+  }
+  if (n_states + 1 > kMaxStates) {
+    return ModelStatus::kCapacity;
+  }
+  put_gm_state(*this, n * n / (tf_s * tf_s), tf_s);
+  params.n = n;
+  params.n_filter_s = tf_s;
   return ModelStatus::kOk;
 }
 
@@ -369,7 +390,7 @@ ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out) 
   ContinuousModel<kMaxStates> m;
   ModelStatus st = ModelStatus::kOk;
   if (p.n > 0.0) {
-    st = m.add_white(p.n);
+    st = p.n_filter_s > 0.0 ? m.add_filtered_white(p.n, p.n_filter_s) : m.add_white(p.n);
   }
   if (st == ModelStatus::kOk && p.q > 0.0) {
     st = m.add_quantization(p.q);
@@ -475,6 +496,9 @@ ModelStatus discretize_averaged(const ContinuousModel<kMaxStates>& c, double ts_
     return st;
   }
   d.phi(n, n) = 0.0;  // reset: the next sample's mean starts from zero
+  if (!(d.r_white + d.q > 0.0)) {
+    d.r_white = 1e-4 * d.qd(n, n);
+  }
   // P0 = Phi diag(P0, 0) Phi^T + Qd: the state and the first sample's mean after one step.
   typename DiscreteModel<kMaxStates>::Square p{};
   for (std::size_t i = 0; i <= n; ++i) {

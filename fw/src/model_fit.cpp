@@ -27,12 +27,14 @@ struct Problem {
   double avar[kMaxFitPoints] = {};
   double edf[kMaxFitPoints] = {};
   double w[kMaxFitPoints] = {};
+  double white[kMaxFitPoints] = {};    // white AVAR at N = 1, through the output filter if any
   double flicker[kMaxFitPoints] = {};  // flicker bank AVAR at B = 1 (independent of Tb)
   double osc[kMaxFitPoints] = {};      // oscillation AVAR at sigma = 1 (shape fixed)
   double osc_f0_hz = 0.0;
   double osc_beta_per_s = 0.0;
   double flicker_lo_s = 0.0;
   double flicker_hi_s = 0.0;
+  double white_filter_s = 0.0;
   bool used[kP] = {};
   std::uint32_t evaluations = 0;
 };
@@ -47,8 +49,9 @@ struct Solution {
 
 // Each term's AVAR at unit parameter (the fit is linear in N^2, Q^2, Sb, K^2, R^2, B^2,
 // sigma^2); flicker and oscillation: their AVAR at unit parameter, computed once per point.
-void basis(double tau, double tb1, double tb2, double flicker, double osc, double (&f)[kP]) {
-  f[kSlotWhite] = avar_white(1.0, tau);
+void basis(double tau, double tb1, double tb2, double white, double flicker, double osc,
+           double (&f)[kP]) {
+  f[kSlotWhite] = white;
   f[kSlotQuant] = avar_quantization(1.0, tau);
   f[kSlotGm1] = tb1 > 0.0 ? avar_gauss_markov(1.0, tb1, tau) : 0.0;
   f[kSlotGm2] = tb2 > 0.0 ? avar_gauss_markov(1.0, tb2, tau) : 0.0;
@@ -164,7 +167,7 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
   double h[kP] = {};
   for (std::size_t i = 0; i < pb.n; ++i) {
     double f[kP];
-    basis(pb.tau[i], tb1, tb2, pb.flicker[i], pb.osc[i], f);
+    basis(pb.tau[i], tb1, tb2, pb.white[i], pb.flicker[i], pb.osc[i], f);
     const double w = pb.w[i];
     for (std::size_t a = 0; a < kP; ++a) {
       if (!pb.used[a]) {
@@ -211,7 +214,7 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
   double cost = 0.0;
   for (std::size_t i = 0; i < pb.n; ++i) {
     double f[kP];
-    basis(pb.tau[i], tb1, tb2, pb.flicker[i], pb.osc[i], f);
+    basis(pb.tau[i], tb1, tb2, pb.white[i], pb.flicker[i], pb.osc[i], f);
     double m = 0.0;
     for (std::size_t a = 0; a < kP; ++a) {
       m += s.theta[a] * f[a];
@@ -320,6 +323,7 @@ ModelParams to_params(const Problem& pb, const Solution& s) {
     p.osc_beta_per_s = pb.osc_beta_per_s;
   }
   p.n = std::sqrt(s.theta[kSlotWhite]);
+  p.n_filter_s = p.n > 0.0 ? pb.white_filter_s : 0.0;
   p.q = std::sqrt(s.theta[kSlotQuant]);
   p.k = std::sqrt(s.theta[kSlotRrw]);
   p.r = std::sqrt(s.theta[kSlotRamp]);
@@ -367,6 +371,11 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   pb.used[kSlotRamp] = (o.terms & kFitRamp) != 0;
   pb.used[kSlotFlicker] = (o.terms & kFitFlicker) != 0;
   pb.used[kSlotOsc] = (o.terms & kFitOscillation) != 0;
+  if (!(std::isfinite(o.white_filter_s) && o.white_filter_s >= 0.0)) {
+    res.status = FitStatus::kBadOptions;
+    return res;
+  }
+  pb.white_filter_s = o.white_filter_s;
   pb.osc_f0_hz = o.osc_f0_hz;
   pb.osc_beta_per_s = o.osc_beta_per_s;
   if (pb.used[kSlotOsc] && !(std::isfinite(o.osc_f0_hz) && o.osc_f0_hz >= 0.0 &&
@@ -404,6 +413,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
     const double edf = o.edf_cap > 0.0 && p.edf > o.edf_cap ? o.edf_cap : p.edf;
     pb.edf[pb.n] = edf;
     pb.w[pb.n] = edf / (2.0 * p.avar * p.avar);
+    pb.white[pb.n] = avar_white_filtered(1.0, pb.white_filter_s, p.tau_s);
     pb.flicker[pb.n] = pb.used[kSlotFlicker]
                            ? avar_flicker_bank(1.0, pb.flicker_lo_s, pb.flicker_hi_s, p.tau_s)
                            : 0.0;

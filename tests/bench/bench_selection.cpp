@@ -81,6 +81,7 @@ struct Outcome {
   double n_lo95 = 0.0;       // the white noise N's
   double n_hi95 = 0.0;
   bool second_gm = false;
+  bool output_filter = false;  // the generator's white noise is never filtered: always false
   bool unexplained = false;
   bool consistent = true;
   double cpu_s = 0.0;
@@ -224,6 +225,7 @@ Outcome analyse(const Record& rec) {
   out.unexplained = !r.unexplained.empty();
   std::string why;
   out.consistent = ia::report_consistent(r, why);
+  out.output_filter = r.model_after.n_filter_s > 0.0;
   for (const auto& e : r.effects) {
     out.second_gm = out.second_gm || e.type == "gauss_markov";
     for (std::size_t t = 0; t < kTerms; ++t) {
@@ -297,6 +299,7 @@ int main(int argc, char** argv) {
   std::size_t ok = 0;
   std::size_t inconsistent = 0;
   std::size_t second_gm = 0;
+  std::size_t output_filter = 0;
   std::size_t unexplained = 0;
   double samples = 0.0;
   double cpu = 0.0;
@@ -307,6 +310,7 @@ int main(int argc, char** argv) {
     ++ok;
     inconsistent += outs[i].consistent ? 0U : 1U;
     second_gm += outs[i].second_gm ? 1U : 0U;
+    output_filter += outs[i].output_filter ? 1U : 0U;
     unexplained += outs[i].unexplained ? 1U : 0U;
     samples += static_cast<double>(recs[i].spec.samples);
     cpu += outs[i].cpu_s;
@@ -382,7 +386,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "cannot write %s\n", argv[5]);
       return 1;
     }
-    std::fprintf(f, "seed,fs_hz,samples,gyro,true,dominant,named,second_gm,unexplained\n");
+    std::fprintf(f, "seed,fs_hz,samples,gyro,true,dominant,named,second_gm,output_filter,unexplained\n");
     for (std::size_t i = 0; i < n_rec; ++i) {
       std::string has;
       std::string dom;
@@ -392,14 +396,17 @@ int main(int argc, char** argv) {
         dom += recs[i].dominant[t] ? std::string(kName[t]) + " " : "";
         named += outs[i].named[t] ? std::string(kName[t]) + " " : "";
       }
-      std::fprintf(f, "%llu,%g,%zu,%d,%s,%s,%s,%d,%d\n",
+      std::fprintf(f, "%llu,%g,%zu,%d,%s,%s,%s,%d,%d,%d\n",
                    static_cast<unsigned long long>(recs[i].spec.seed), recs[i].spec.fs_hz,
                    recs[i].spec.samples, recs[i].gyro ? 1 : 0, has.c_str(), dom.c_str(),
-                   named.c_str(), outs[i].second_gm ? 1 : 0, outs[i].unexplained ? 1 : 0);
+                   named.c_str(), outs[i].second_gm ? 1 : 0, outs[i].output_filter ? 1 : 0,
+                   outs[i].unexplained ? 1 : 0);
     }
     std::fclose(f);
   }
   std::printf("\nreports naming a second GM (the truth has one GM): %zu of %zu\n", second_gm, ok);
+  std::printf("reports with an output filter on the white noise (the truth has none): %zu of %zu\n",
+              output_filter, ok);
   std::printf("reports with an unexplained tau run: %zu of %zu\n", unexplained, ok);
   std::printf("reports whose effects and model disagree (report_consistent): %zu of %zu\n",
               inconsistent, ok);

@@ -429,3 +429,50 @@ TEST(ErrorModel, AveragedSamplingGivesTheGmAveragesAndTheAvarFormula) {
   imu::ContinuousModel<2> empty;
   EXPECT_EQ(imu::discretize_averaged(empty, 0.01, dd), imu::ModelStatus::kBadParameter);
 }
+
+TEST(ErrorModel, FilteredWhiteIsAGmWhoseAveragesHaveTheWhiteAvarBentDown) {
+  // White noise N through a first-order low-pass of Tf: a GM of Sb = N^2 / Tf^2, Tb = Tf. Its
+  // AVAR tends to N^2 / tau (the same N at long tau) and lies below it by 1.5 N^2 Tf / tau^2.
+  const double n = 7e-4;
+  const double tf = 2.6e-3;
+  const double ts = 0.01;
+  for (const double tau : {0.01, 0.02, 0.1, 1.0}) {
+    const double v = imu::avar_white_filtered(n, tf, tau);
+    EXPECT_LT(v, n * n / tau);
+    const double x = tau / tf;
+    const double exact = n * n / tau * (1.0 - (3.0 - 4.0 * std::exp(-x) + std::exp(-2.0 * x)) /
+                                                  (2.0 * x));
+    EXPECT_NEAR(v, exact, 1e-12 * exact) << tau;
+    if (x > 30.0) {
+      EXPECT_NEAR(v, n * n / tau - 1.5 * n * n * tf / (tau * tau), 1e-6 * n * n / tau) << tau;
+    }
+  }
+  EXPECT_DOUBLE_EQ(imu::avar_white_filtered(n, 0.0, 0.5), n * n / 0.5);
+  imu::ModelParams p;
+  p.n = n;
+  p.n_filter_s = tf;
+  EXPECT_DOUBLE_EQ(imu::model_avar(p, 0.03), imu::avar_white_filtered(n, tf, 0.03));
+  imu::ContinuousModel<4> c;
+  ASSERT_EQ(imu::build_model(p, c), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.n_states, 1U);
+  EXPECT_EQ(c.sn, 0.0);
+  EXPECT_DOUBLE_EQ(c.params.n, n);
+  EXPECT_DOUBLE_EQ(c.params.n_filter_s, tf);
+  imu::DiscreteModel<4> d;
+  ASSERT_EQ(imu::discretize_averaged(c, ts, d), imu::ModelStatus::kOk);
+  // No white measurement noise left: R is the floor, far below a sample's variance.
+  EXPECT_GT(d.r_filter(), 0.0);
+  EXPECT_LT(d.r_filter(), 1e-3 * n * n / ts);
+  double cv[18] = {};
+  measured_autocovariance(d, 17, cv);
+  for (const std::size_t m : {1U, 2U, 8U}) {
+    const double want = imu::avar_white_filtered(n, tf, static_cast<double>(m) * ts);
+    EXPECT_NEAR(avar_from_autocovariance(cv, m), want, 1e-8 * want) << m;
+  }
+  // The lag-1 correlation of the samples: what the shared gyros show (about 0.17 at Tf = Ts/4).
+  EXPECT_NEAR(cv[1] / cv[0], 0.166, 0.01);
+  // A second white term, or a bad Tf, is refused.
+  EXPECT_EQ(c.add_filtered_white(n, tf), imu::ModelStatus::kBadParameter);
+  imu::ContinuousModel<4> e;
+  EXPECT_EQ(e.add_filtered_white(n, -1.0), imu::ModelStatus::kBadParameter);
+}

@@ -12,6 +12,8 @@
 //      noise and is harmless when Q^2/Ts << N^2 (true for the ADIS16405 and the example).
 // Terms and their states (appended in call order, kMaxStates in total):
 //   white N (no state), quantization Q (no state),
+//   white N through the sensor's first-order output filter of time constant Tf: 1 GM state
+//           (Sb = N^2 / Tf^2, Tb = Tf; observe it with discretize_averaged),
 //   first-order GM (Sb, Tb): 1 state, b' = -b/Tb + w, PSD(w) = Sb, prior Pss = Sb Tb / 2,
 //   rate random walk K: 1 state, r' = w, PSD(w) = K^2, prior variance 0 (starts at 0),
 //   ramp R: 2 states (d, s): d' = s, s' = 0, H picks d; prior var(s) = R^2 so that
@@ -111,6 +113,10 @@ struct GmParam {
 /// Physical parameters of a model (the fit's output). A zero parameter means "term absent".
 struct ModelParams {
   double n = 0.0;  ///< white noise N [unit/sqrt(Hz)], AVAR N^2/tau
+  /// Time constant of the sensor's output filter the white noise is seen through [s] (0: none):
+  /// a first-order low-pass, i.e. N realised as a GM of Tb = n_filter_s, Sb = N^2 / Tb^2 (same
+  /// N at long tau; AVAR avar_white_filtered). Typically below Ts.
+  double n_filter_s = 0.0;
   double q = 0.0;  ///< quantization Q [unit s], AVAR 3 Q^2/tau^2
   std::size_t n_gm = 0;
   GmParam gm[kMaxGmTerms] = {};
@@ -136,6 +142,10 @@ struct ModelParams {
 // AVAR of each term at tau_s > 0 (MODELS.md table).
 [[nodiscard]] double avar_white(double n, double tau_s);
 [[nodiscard]] double avar_quantization(double q, double tau_s);
+/// White noise N seen through a first-order low-pass of time constant tf_s (the sensor's output
+/// filter): a GM of Sb = N^2 / tf^2, Tb = tf, i.e. N^2 / tau (1 - (3 - 4 e^-x + e^-2x) / 2x),
+/// x = tau / tf: N^2 / tau - 1.5 N^2 tf / tau^2 for tau >> tf. tf_s <= 0: avar_white.
+[[nodiscard]] double avar_white_filtered(double n, double tf_s, double tau_s);
 /// First-order GM; accurate for every tau/Tb (series for tau/Tb < 1e-3, expm1 above).
 [[nodiscard]] double avar_gauss_markov(double sb, double tb_s, double tau_s);
 [[nodiscard]] double avar_rrw(double k, double tau_s);
@@ -175,6 +185,11 @@ struct ContinuousModel {
   ModelParams params{};  ///< the same terms as physical parameters (for the analytic AVAR)
 
   [[nodiscard]] ModelStatus add_white(double n);
+  /// White noise N through the sensor's first-order output filter of time constant tf_s: one
+  /// GM state (Sb = N^2 / tf^2, Tb = tf), no measurement white noise. Its sampled AVAR is
+  /// avar_white_filtered only through discretize_averaged (point samples of a filter much
+  /// faster than Ts are nearly uncorrelated, of variance N^2 / 2 tf instead of N^2 / Ts).
+  [[nodiscard]] ModelStatus add_filtered_white(double n, double tf_s);
   [[nodiscard]] ModelStatus add_quantization(double q_units_s);
   [[nodiscard]] ModelStatus add_gauss_markov(double sb, double tb_s);
   /// prior_var: variance of the random-walk state at t = 0 (0: starts at zero).
@@ -190,7 +205,8 @@ struct ContinuousModel {
   [[nodiscard]] double avar(double tau_s) const { return model_avar(params, tau_s); }
 };
 
-/// Build a continuous model from parameters: terms in the order white, quantization, GMs,
+/// Build a continuous model from parameters: terms in the order white (filtered when
+/// n_filter_s > 0), quantization, GMs,
 /// flicker bank, RRW, ramp, sinusoids, oscillation; zero parameters are skipped.
 template <std::size_t kMaxStates>
 [[nodiscard]] ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out);
@@ -233,6 +249,9 @@ template <std::size_t kMaxStates>
 /// The mean is one extra state, appended last: J' = H x / Ts over a step, reset at every sample
 /// (Phi(J, J) = 0); Phi, Qd by Van Loan on the augmented model; H picks J; P0 is the joint
 /// covariance after one step from (P0, J = 0). Needs c.n_states + 1 <= kMaxStates (kCapacity).
+/// A model without white measurement noise (all of it filtered, add_filtered_white) gets
+/// r_white = 1e-4 Qd(J, J): filters need R > 0 (and the analysis' steady-state Riccati
+/// solution a well-conditioned R); it changes the innovation variance by 1e-4.
 template <std::size_t kMaxStates>
 [[nodiscard]] ModelStatus discretize_averaged(const ContinuousModel<kMaxStates>& c, double ts_s,
                                               DiscreteModel<kMaxStates>& out);

@@ -201,8 +201,10 @@ const char* fit_status_text(FitStatus s) {
 // tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max).
 // shape: the oscillation's f0 and beta when terms hold kFitOscillation.
 FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
-                    double tb_max_s = 0.0, const ModelParams* shape = nullptr) {
+                    double tb_max_s = 0.0, const ModelParams* shape = nullptr,
+                    double white_filter_s = 0.0) {
   FitOptions fo;
+  fo.white_filter_s = white_filter_s;
   if (shape != nullptr) {
     fo.osc_f0_hz = shape->osc_f0_hz;
     fo.osc_beta_per_s = shape->osc_beta_per_s;
@@ -246,6 +248,10 @@ bool discretize_filter_model(const ModelParams& p, double ts, Model& d) {
   return c.n_states == 0 ? discretize(c, ts, d) == ModelStatus::kOk
                          : discretize_averaged(c, ts, d) == ModelStatus::kOk;
 }
+
+// The range of the sensor's output filter the analysis searches (Analysis::output_filter_fit).
+constexpr double kMinOutputFilterPerTs = 1.0 / 16.0;
+constexpr double kMaxOutputFilterPerTs = 2.0;
 
 // The stochastic part of a model: the deterministic terms (ramp, sinusoids) have no process
 // noise, so a steady-state filter would never learn them; the analysis removes its own
@@ -1364,6 +1370,7 @@ struct AfterContext {
   const AdevSet& fit_set;  // the same without the sinusoids found (the linear terms' fit)
   const ErrorStats& before;
   double cost_thr;         // the ADEV cost drop a term must make (the search's test)
+  double white_filter_s;   // the sensor's output filter on the white noise (0: none)
 };
 
 struct AfterChoice {
@@ -1417,6 +1424,7 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
         fo.tau_min_s = c.ts;
         fo.tau_max_s = c.tau_max;
         fo.tb_max_s = tb_max;
+        fo.white_filter_s = c.white_filter_s;
         fo.edf_cap = cap;
         fo.flicker_tau_hi_s = c.tau_max;
         fo.flicker_tau_lo_s = flicker_tau_lo(c.ts, c.tau_max, pts);
@@ -2488,9 +2496,9 @@ class Analysis {
     if (cur.status != FitStatus::kOk) {
       cur = base0;
     }
+    cost_thr = o.cost_factor * chi2_quantile(1.0 - o.cost_alpha, 1.0);
     cur_p = cur.params;
     cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
-    cost_thr = o.cost_factor * chi2_quantile(1.0 - o.cost_alpha, 1.0);
     lr_thr = chi2_quantile(1.0 - o.alpha, 1.0);  // record likelihood: no inflation
     y_fit = y;
     for (int round = 0; round < 6; ++round) {
@@ -2519,7 +2527,8 @@ class Analysis {
       if ((terms & own) != 0U) {
         return;
       }
-      const FitResult f = fit_terms(fit_pts, terms | t, ts, tau_max, tb_max, &cur_p);
+      const FitResult f =
+          fit_terms(fit_pts, terms | t, ts, tau_max, tb_max, &cur_p, white_filter_s);
       if (f.status != FitStatus::kOk) {
         return;
       }
@@ -2552,7 +2561,7 @@ class Analysis {
   void add_sine_cand(const char* type, const SineCand& sc, const ModelParams& sines,
                      std::vector<Cand>& cands) {
     const Points dp = in_range(points_for_model(sc.adev, cur_p), tau_max);
-    const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max, &cur_p);
+    const FitResult f = fit_terms(dp, terms, ts, tau_max, tb_max, &cur_p, white_filter_s);
     if (f.status != FitStatus::kOk) {
       return;
     }
@@ -2667,7 +2676,8 @@ class Analysis {
         shape.osc_f0_hz = it->second.f0_hz;
         shape.osc_beta_per_s = it->second.beta_per_s;
         const FitResult f =
-            fit_terms(fit_pts, terms | kFitOscillation, ts, tau_max, tb_max, &shape);
+            fit_terms(fit_pts, terms | kFitOscillation, ts, tau_max, tb_max, &shape,
+                      white_filter_s);
         if (f.status != FitStatus::kOk || !(f.params.osc_sigma > 0.0)) {
           continue;
         }
@@ -2915,7 +2925,8 @@ class Analysis {
       // With bias instability in the model its flicker bank is in H0: lt is already the walk's
       // test beside it.
       if (lt.ok && lt.lr > lr_thr) {
-        const FitResult f = fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p);
+        const FitResult f =
+            fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p, white_filter_s);
         if (f.status == FitStatus::kOk && f.params.k > 0.0) {
           Effect e;
           e.type = "rate_random_walk";
@@ -3052,14 +3063,80 @@ class Analysis {
   }
 
   // The after-model (never worse), the names checked, the remainder said, the filters run.
-  void after_model() {
-    // ---- after: never worse than before, every named effect real, the remainder said.
-    const AdevSet& clean = adev_y;
-    out.adev_clean = clean.by_alpha[2];
-    const AfterContext ac{o, ts, tau_max, tb_max, clean, fit_set, out.error_before, cost_thr};
-    // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
-    // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
-    AfterChoice choice = choose_after(ac, terms, cur_p, out.model_before, out.notes);
+  // The sensor's output filter: a first-order low-pass of time constant Tf on the white noise
+  // (ModelParams::n_filter_s), the shape of the first ADEV points of a sensor that filters and
+  // decimates internally (AVAR N^2 / tau - 1.5 N^2 Tf / tau^2 for tau >> Tf: below the white
+  // line, where quantization lies above it). Tested on the model after once its terms are
+  // chosen: earlier, a narrowband oscillation or a sinusoid bends the same first points and the
+  // filter would imitate it. Tf is searched on a log grid over [Ts / 16, 2 Ts] (shorter, it
+  // moves the first ADEV point by under 10 %: not a filter the record can tell) and refined by
+  // golden section, each trial the fit of the chosen terms. It is kept when it lowers the ADEV
+  // cost by more than the search's test (cost_thr), as a term must: in that fit, in the model
+  // after refitted with it (fit_after), and once the terms are named (settle_terms, run with
+  // and without it: a filter that makes a term unnamed is not kept).
+  // Returns Tf (0: the filter does not pass) and the refitted choice in `choice`; drop: the
+  // smaller of the filter's cost drops in the fit of the chosen terms and in the refit.
+  double output_filter_fit(const AfterContext& ac, AfterChoice& choice, double& drop) {
+    const ModelParams shape = choice.p;
+    const bool keep_sines = shape.sin_a > 0.0;
+    const Points pts =
+        in_range(points_for_model(keep_sines ? ac.fit_set : ac.clean, shape), tau_max);
+    const auto cost_with = [&](double tf) {
+      const FitResult f = fit_terms(pts, choice.terms, ts, tau_max, tb_max, &shape, tf);
+      if (f.status != FitStatus::kOk || !(f.params.n > 0.0)) {
+        return std::numeric_limits<double>::infinity();
+      }
+      const ModelParams q = keep_sines ? with_sines(f.params, shape) : f.params;
+      return residual(in_range(points_for_model(ac.clean, q), tau_max), q, o, ts, tau_max).cost;
+    };
+    const auto cost_at = [&](double ln_tf) { return cost_with(std::exp(ln_tf)); };
+    const double lo = std::log(kMinOutputFilterPerTs * ts);
+    const double hi = std::log(kMaxOutputFilterPerTs * ts);
+    constexpr int kGrid = 8;
+    const double step = (hi - lo) / (kGrid - 1);
+    double best_ln = lo;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < kGrid; ++i) {
+      const double c = cost_at(lo + step * i);
+      if (c < best_cost) {
+        best_cost = c;
+        best_ln = lo + step * i;
+      }
+    }
+    double a = std::max(lo, best_ln - step);
+    double b = std::min(hi, best_ln + step);
+    const double gr = 0.5 * (std::sqrt(5.0) - 1.0);
+    for (int it = 0; it < 10; ++it) {
+      const double x1 = b - gr * (b - a);
+      const double x2 = a + gr * (b - a);
+      if (cost_at(x1) < cost_at(x2)) {
+        b = x2;
+      } else {
+        a = x1;
+      }
+    }
+    const double tf = std::exp(0.5 * (a + b));
+    // The filter's own gain: the same fit with and without it (a refit can also land on another
+    // optimum of the other terms, which is not the filter's doing).
+    drop = cost_with(0.0) - cost_with(tf);
+    if (!(drop > cost_thr)) {
+      return 0.0;
+    }
+    AfterContext trial = ac;
+    trial.white_filter_s = tf;
+    const AfterChoice f = fit_after(trial, choice.terms, shape, keep_sines);
+    drop = std::min(drop, f.ok && f.terms == choice.terms ? choice.e.cost - f.e.cost : 0.0);
+    if (!(drop > cost_thr)) {
+      return 0.0;
+    }
+    choice = f;
+    return tf;
+  }
+
+  // The model after's terms named or removed (walk_only_k, name_terms, remove_unnamed_terms):
+  // changes choice and out's effects and notes.
+  void settle_terms(const AfterContext& ac, AfterChoice& choice,
+                    std::vector<UnexplainedRun>& withdrawn) {
     const WalkOnly walk =
         walk_only_k(ac, y_fit, (terms & kFitRamp) != 0U, step_at, choice.p, out.notes);
     if (walk.k > 0.0) {
@@ -3073,13 +3150,68 @@ class Analysis {
       }
       choice.terms &= q.n_gm < 2 ? ~kFitGm2 : ~0U;
       choice.p = q;
-      fill_errors(points_for_model(clean, q), q, o, ts, tau_max, choice.e);
+      fill_errors(points_for_model(ac.clean, q), q, o, ts, tau_max, choice.e);
     }
     drop_unmodelled_effects(choice.p, out);
-    std::vector<UnexplainedRun> withdrawn;
     name_terms(ac, choice, withdrawn);
     drop_degenerate_effects(ts, n_d, out);
     remove_unnamed_terms(ac, choice, out);
+  }
+
+  // settle_terms on the model after with the output filter (if it passes output_filter_fit)
+  // and without it; the filter stays when the settled model with it is still better by more
+  // than cost_thr. Sets white_filter_s; says which in a note.
+  void settle_terms_and_filter(const AfterContext& ac0, AfterChoice& choice,
+                               std::vector<UnexplainedRun>& withdrawn) {
+    AfterChoice filtered = choice;
+    double drop = 0.0;
+    const double tf = output_filter_fit(ac0, filtered, drop);
+    if (tf > 0.0) {
+      const Report plain_start = out;
+      AfterContext acf = ac0;
+      acf.white_filter_s = tf;
+      std::vector<UnexplainedRun> withdrawn_f;
+      settle_terms(acf, filtered, withdrawn_f);
+      Report with_filter = std::move(out);
+      out = plain_start;
+      settle_terms(ac0, choice, withdrawn);
+      const double settled_drop = choice.e.cost - filtered.e.cost;
+      if (settled_drop > cost_thr) {
+        out = std::move(with_filter);
+        choice = filtered;
+        withdrawn = std::move(withdrawn_f);
+        white_filter_s = tf;
+        out.notes.push_back(
+            "the white noise is seen through the sensor's output filter, a first-order "
+            "low-pass of Tf = " + fmt("%.3g", 1e3 * tf) +
+            " ms (the first ADEV points lie below the white line; cost drop " +
+            fmt("%.1f", settled_drop) + " > " + fmt("%.1f", cost_thr) + ")");
+      } else {
+        out.notes.push_back("not added: an output filter on the white noise of Tf = " +
+                            fmt("%.3g", 1e3 * tf) + " ms (cost drop " + fmt("%.1f", drop) +
+                            " alone, " + fmt("%.1f", settled_drop) +
+                            " once the terms are named, <= " + fmt("%.1f", cost_thr) + ")");
+      }
+    } else {
+      out.notes.push_back("not added: an output filter on the white noise (cost drop " +
+                          fmt("%.1f", drop) + " <= " + fmt("%.1f", cost_thr) + ")");
+      settle_terms(ac0, choice, withdrawn);
+    }
+  }
+
+  void after_model() {
+    // ---- after: never worse than before, every named effect real, the remainder said.
+    const AdevSet& clean = adev_y;
+    out.adev_clean = clean.by_alpha[2];
+    const AfterContext ac0{o, ts, tau_max, tb_max, clean, fit_set, out.error_before, cost_thr,
+                           0.0};
+    // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
+    // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
+    AfterChoice choice = choose_after(ac0, terms, cur_p, out.model_before, out.notes);
+    std::vector<UnexplainedRun> withdrawn;
+    settle_terms_and_filter(ac0, choice, withdrawn);
+    const AfterContext ac{o, ts, tau_max, tb_max, clean, fit_set, out.error_before, cost_thr,
+                          white_filter_s};
     cur_p = choice.p;
     out.model_after = cur_p;
     out.error_after = choice.e;
@@ -3177,6 +3309,7 @@ class Analysis {
   double cur_cost = 0.0;
   double cost_thr = 0.0;  // the ADEV cost drop a term must make
   double lr_thr = 0.0;    // the record likelihood's level (no inflation)
+  double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
   // Terms the record's likelihood could not tell from a look-alike (ramp_or_walk,
   // walk_or_flicker): not proposed again.
   std::vector<std::string> ruled_out;

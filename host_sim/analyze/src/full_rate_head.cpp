@@ -72,6 +72,7 @@ Join join_models(const ModelParams& rec, const ModelParams& hm, const Split& sp,
   j.model = rec;
   ModelParams& c = j.model;
   c.n = hm.n;
+  c.n_filter_s = hm.n_filter_s;  // the sensor's filter is seen at full rate only
   c.q = hm.q;
   const Line head_sines[] = {{hm.sin_a, hm.sin_f0_hz}, {hm.sin2_a, hm.sin2_f0_hz}};
   const Line rec_sines[] = {{rec.sin_a, rec.sin_f0_hz}, {rec.sin2_a, rec.sin2_f0_hz}};

@@ -41,7 +41,7 @@ std::string model_json(const ModelParams& p) {
   GmParam bank[kMaxFlickerGm];
   const std::size_t nb =
       p.bi > 0.0 ? flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank) : 0;
-  s << "{\"n\": " << num(p.n) << ", \"q\": " << num(p.q) << ", \"gm\": " << gm_list(p.gm, p.n_gm)
+  s << "{\"n\": " << num(p.n) << ", \"n_filter_s\": " << num(p.n_filter_s) << ", \"q\": " << num(p.q) << ", \"gm\": " << gm_list(p.gm, p.n_gm)
     << ", \"k\": " << num(p.k) << ", \"r\": " << num(p.r) << ", \"sin_a\": " << num(p.sin_a)
     << ", \"sin_f0_hz\": " << num(p.sin_f0_hz) << ", \"sin2_a\": " << num(p.sin2_a)
     << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"bias_instability\": {\"b\": "
@@ -343,6 +343,10 @@ std::string to_text(const Report& r) {
   const auto model_line = [&](const char* name, const ModelParams& p) {
     std::snprintf(buf, sizeof buf, "%s: N = %.4e", name, p.n);
     s << buf;
+    if (p.n_filter_s > 0.0) {
+      std::snprintf(buf, sizeof buf, " (through an output filter of %.3g ms)", 1e3 * p.n_filter_s);
+      s << buf;
+    }
     if (p.q > 0.0) {
       std::snprintf(buf, sizeof buf, ", Q = %.4e", p.q);
       s << buf;
@@ -413,10 +417,14 @@ std::string to_text(const Report& r) {
     for (const auto& t : terms_beyond_first_order(m)) {
       held += (held.empty() ? "" : ", ") + t.type;
     }
+    // The sensor's output filter is a property of the white noise, not a term: said here.
+    const std::string white = m.n_filter_s > 0.0
+                                  ? "white noise through the sensor's output filter"
+                                  : "white noise";
     s << (held.empty()
-              ? (m.n_gm == 0 ? "effects: none (white noise only; see notes)\n"
-                             : "effects: none (white noise and one GM term; the model after is "
-                               "that model refitted over [Ts, T/10])\n")
+              ? (m.n_gm == 0 ? "effects: none (" + white + " only; see notes)\n"
+                             : "effects: none (" + white + " and one GM term; the model after "
+                               "is that model refitted over [Ts, T/10])\n")
               : "effects: none named; the model after also holds " + held + " (see notes)\n");
   }
   for (const auto& e : r.effects) {
@@ -477,7 +485,7 @@ constexpr const char* kTermNames[] = {"white",       "quantization", "GM 1", "GM
 constexpr std::size_t kTerms = sizeof(kTermNames) / sizeof(kTermNames[0]);
 
 void term_adevs(const ModelParams& p, double tau, double (&out)[kTerms]) {
-  out[0] = p.n > 0.0 ? std::sqrt(avar_white(p.n, tau)) : 0.0;
+  out[0] = p.n > 0.0 ? std::sqrt(avar_white_filtered(p.n, p.n_filter_s, tau)) : 0.0;
   out[1] = p.q > 0.0 ? std::sqrt(avar_quantization(p.q, tau)) : 0.0;
   out[2] = p.n_gm > 0 ? std::sqrt(avar_gauss_markov(p.gm[0].sb, p.gm[0].tb_s, tau)) : 0.0;
   out[3] = p.n_gm > 1 ? std::sqrt(avar_gauss_markov(p.gm[1].sb, p.gm[1].tb_s, tau)) : 0.0;

@@ -50,6 +50,10 @@ std::string format_model_params(const ModelParams& p) {
   std::string s;
   if (p.n > 0.0) {
     appendf(s, "white noise N = %.4e u/sqrt(Hz)\n", p.n);
+    if (p.n_filter_s > 0.0) {
+      appendf(s, "  seen through the sensor's first-order output filter, Tf = %.4e s\n",
+              p.n_filter_s);
+    }
   }
   if (p.q > 0.0) {
     appendf(s, "quantization Q = %.4e u s\n", p.q);
