@@ -193,6 +193,8 @@ std::size_t record_len(RecordKind k) {
     case RecordKind::kModel:
     case RecordKind::kModelEcho: return kModelLen;
     case RecordKind::kChannelMonitor: return kChannelMonitorLen;
+    case RecordKind::kModel2:
+    case RecordKind::kModelEcho2: return kModel2Len;
   }
   return 0;
 }
@@ -209,6 +211,26 @@ std::uint32_t fd_id(RecordKind k) {
     case RecordKind::kModel: return kIdModelFd;
     case RecordKind::kModelEcho: return kIdModelEchoFd;
     case RecordKind::kChannelMonitor: return kIdChannelMonitorFd;
+    case RecordKind::kModel2: return kIdModel2Fd;
+    case RecordKind::kModelEcho2: return kIdModelEcho2Fd;
+  }
+  return 0;
+}
+
+std::uint8_t model_version(RecordKind k) {
+  switch (k) {
+    case RecordKind::kModel:
+    case RecordKind::kModelEcho: return kModelVersion1;
+    case RecordKind::kModel2:
+    case RecordKind::kModelEcho2: return kModelVersion2;
+    case RecordKind::kConfig:
+    case RecordKind::kSample:
+    case RecordKind::kAdev:
+    case RecordKind::kBias:
+    case RecordKind::kMonitor:
+    case RecordKind::kStats:
+    case RecordKind::kRejects:
+    case RecordKind::kChannelMonitor: return 0;
   }
   return 0;
 }
@@ -220,7 +242,8 @@ bool kind_of_id(std::uint32_t can_id, RecordKind& kind, Layout& layout) {
   constexpr RecordKind kAll[] = {RecordKind::kConfig, RecordKind::kSample, RecordKind::kAdev,
                                  RecordKind::kBias,   RecordKind::kMonitor, RecordKind::kStats,
                                  RecordKind::kRejects, RecordKind::kModel,
-                                 RecordKind::kModelEcho, RecordKind::kChannelMonitor};
+                                 RecordKind::kModelEcho, RecordKind::kChannelMonitor,
+                                 RecordKind::kModel2,  RecordKind::kModelEcho2};
   for (const RecordKind k : kAll) {
     const std::uint32_t id = fd_id(k);
     if (can_id == id || can_id == id + 1) {
@@ -348,6 +371,12 @@ void serialize(const ModelRecord& r, std::uint8_t* buf) {
   w.f32(r.bi);
   w.f32(r.bi_tau_lo_s);
   w.f32(r.bi_tau_hi_s);
+  if (r.version == kModelVersion2) {
+    w.f32(r.n_filter_s);
+    w.f32(r.osc_sigma);
+    w.f32(r.osc_f0_hz);
+    w.f32(r.osc_beta_per_s);
+  }
   w.crc();
 }
 
@@ -475,6 +504,11 @@ void parse(const std::uint8_t* buf, ModelRecord& r) {
   r.bi = rd.f32();
   r.bi_tau_lo_s = rd.f32();
   r.bi_tau_hi_s = rd.f32();
+  const bool v2 = r.version == kModelVersion2;  // version 1 has no slot for these: 0
+  r.n_filter_s = v2 ? rd.f32() : 0.0F;
+  r.osc_sigma = v2 ? rd.f32() : 0.0F;
+  r.osc_f0_hz = v2 ? rd.f32() : 0.0F;
+  r.osc_beta_per_s = v2 ? rd.f32() : 0.0F;
 }
 
 void parse(const std::uint8_t* buf, ChannelMonitorRecord& r) {
@@ -543,10 +577,12 @@ void encode(const RejectsRecord& r, Layout layout, std::uint8_t transfer_id,
 
 void encode(const ModelRecord& r, bool echo, Layout layout, std::uint8_t transfer_id,
             EncodedFrames& out) {
-  std::uint8_t buf[kModelLen];
+  const bool v2 = r.version == kModelVersion2;
+  const RecordKind kind = v2 ? (echo ? RecordKind::kModelEcho2 : RecordKind::kModel2)
+                             : (echo ? RecordKind::kModelEcho : RecordKind::kModel);
+  std::uint8_t buf[kModel2Len];
   serialize(r, buf);
-  frame_record(buf, kModelLen, echo ? RecordKind::kModelEcho : RecordKind::kModel, layout,
-               transfer_id, out);
+  frame_record(buf, record_len(kind), kind, layout, transfer_id, out);
 }
 
 void encode(const ChannelMonitorRecord& r, Layout layout, std::uint8_t transfer_id,

@@ -5,7 +5,8 @@
 // --send first sends one config record (cfg_id 1, 100 Hz, ADIS16405 LSBs), then N samples with
 // seq 0..N-1 (except --skip SEQ, to provoke a gap) and counts[c] = seq * (c + 1).
 // --recv ends after N samples + missing, or when idle for timeout-ms; prints RxStats and
-// LinkStats. Exit: 0 ok, 1 runtime error, 2 usage, 3 bus cannot be opened.
+// LinkStats. --print also prints every sample, gap and model record (push or echo, version 1
+// or 2) as it arrives. Exit: 0 ok, 1 runtime error, 2 usage, 3 bus cannot be opened.
 #include <poll.h>
 
 #include <cstdio>
@@ -42,6 +43,10 @@ void print_link(const imu::hal::LinkStats& l) {
       static_cast<unsigned long long>(l.sys_errors));
 }
 
+unsigned long long records(const imu::hal::RxStats& s, imu::hal::RecordKind k) {
+  return static_cast<unsigned long long>(s.records[static_cast<std::size_t>(k)]);
+}
+
 void print_rx(const imu::hal::RxStats& s) {
   unsigned long long err_classes = 0;
   for (const auto c : s.err_class) {
@@ -51,7 +56,7 @@ void print_rx(const imu::hal::RxStats& s) {
       "rx frames=%llu samples=%llu missing=%llu gaps=%llu crc_errors=%llu bad_mtu=%llu "
       "bad_dlc=%llu unknown_id=%llu remote=%llu error_frames=%llu err_class_bits=%llu "
       "duplicates=%llu late=%llu reordered=%llu truncated=%llu orphan_fragments=%llu "
-      "resyncs=%llu configs=%llu\n",
+      "resyncs=%llu configs=%llu models=%llu model_echoes=%llu\n",
       static_cast<unsigned long long>(s.frames), static_cast<unsigned long long>(s.samples),
       static_cast<unsigned long long>(s.missing), static_cast<unsigned long long>(s.gaps),
       static_cast<unsigned long long>(s.crc_errors), static_cast<unsigned long long>(s.bad_mtu),
@@ -62,7 +67,24 @@ void print_rx(const imu::hal::RxStats& s) {
       static_cast<unsigned long long>(s.reordered), static_cast<unsigned long long>(s.truncated),
       static_cast<unsigned long long>(s.orphan_fragments),
       static_cast<unsigned long long>(s.resyncs),
-      static_cast<unsigned long long>(s.records[static_cast<std::size_t>(imu::hal::RecordKind::kConfig)]));
+      static_cast<unsigned long long>(s.records[static_cast<std::size_t>(imu::hal::RecordKind::kConfig)]),
+      records(s, imu::hal::RecordKind::kModel) + records(s, imu::hal::RecordKind::kModel2),
+      records(s, imu::hal::RecordKind::kModelEcho) +
+          records(s, imu::hal::RecordKind::kModelEcho2));
+}
+
+// A model record (push or echo, version 1 or 2) as key=value; version 1 has no filter and no
+// oscillation (0).
+void print_model(const imu::hal::ModelRecord& m, bool echo) {
+  const auto d = [](float v) { return static_cast<double>(v); };
+  std::printf(
+      "%s version=%u channel=%u n_states=%u flags=%u n=%g q=%g gm_sb=%g,%g gm_tb_s=%g,%g k=%g "
+      "bi=%g bi_tau_s=%g,%g n_filter_s=%g osc_sigma=%g osc_f0_hz=%g osc_beta_per_s=%g\n",
+      echo ? "model_echo" : "model", static_cast<unsigned>(m.version),
+      static_cast<unsigned>(m.channel), static_cast<unsigned>(m.n_states),
+      static_cast<unsigned>(m.flags), d(m.n), d(m.q), d(m.gm_sb[0]), d(m.gm_sb[1]),
+      d(m.gm_tb_s[0]), d(m.gm_tb_s[1]), d(m.k), d(m.bi), d(m.bi_tau_lo_s), d(m.bi_tau_hi_s),
+      d(m.n_filter_s), d(m.osc_sigma), d(m.osc_f0_hz), d(m.osc_beta_per_s));
 }
 
 int send_all(imu::hal::CanSocket& bus, long n, imu::hal::Layout layout, double rate_hz, long skip) {
@@ -130,6 +152,9 @@ int recv_all(imu::hal::CanSocket& bus, long count, int timeout_ms, bool print) {
         if (print) {
           std::printf("missing first=%u n=%u\n", e.missing_first_seq, e.missing_count);
         }
+      } else if (print && (e.type == imu::hal::RxEvent::Type::kModel ||
+                           e.type == imu::hal::RxEvent::Type::kModelEcho)) {
+        print_model(e.rec.model, e.type == imu::hal::RxEvent::Type::kModelEcho);
       }
     });
     if (st == IoStatus::kTimeout || (count > 0 && delivered >= count)) {

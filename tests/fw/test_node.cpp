@@ -7,9 +7,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <iterator>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "imu/hal/codec.hpp"
@@ -507,7 +509,7 @@ TEST_F(NodeTest, PushedModelIsValidatedSwappedAndEchoed) {
     push(fr);
   };
   imu::hal::ModelRecord good{};
-  good.version = imu::hal::kModelVersion;
+  good.version = imu::hal::kModelVersion1;
   good.channel = 2;
   good.n = 3.3e-3F;
   good.gm_sb[0] = 2.68e-8F;
@@ -518,6 +520,7 @@ TEST_F(NodeTest, PushedModelIsValidatedSwappedAndEchoed) {
   imu::hal::ModelRecord e = echo_of(ev, 2);
   EXPECT_EQ(e.flags & imu::hal::kModelPushed, imu::hal::kModelPushed);
   EXPECT_EQ(e.n_states, 2U);
+  EXPECT_EQ(e.version, imu::hal::kModelVersion1) << "a version 1 push is echoed in version 1";
   EXPECT_EQ(node_->stats().model_rejected, 0U);
   EXPECT_EQ(echo_of(ev, 1).n_states, 1U) << "other channels keep the first-order one-state model";
   EXPECT_EQ(echo_of(ev, 1).flags, 0U);
@@ -555,4 +558,228 @@ TEST_F(NodeTest, PushedModelIsValidatedSwappedAndEchoed) {
   std::printf("RAM: sizeof(KalmanFilter<float, %zu>) = %zu bytes per channel, sizeof(Node) = %zu\n",
               imu::node::kNodeStates, sizeof(imu::KalmanFilter<float, imu::node::kNodeStates>),
               sizeof(Node));
+}
+
+namespace {
+
+std::uint32_t fbits(float v) {
+  std::uint32_t b = 0;
+  std::memcpy(&b, &v, sizeof b);
+  return b;
+}
+
+// Every field of two model records, bit for bit (n_states and flags aside).
+void expect_same_model(const imu::hal::ModelRecord& a, const imu::hal::ModelRecord& b) {
+  const float fa[] = {a.n, a.q, a.gm_sb[0], a.gm_tb_s[0], a.gm_sb[1], a.gm_tb_s[1], a.k, a.bi,
+                      a.bi_tau_lo_s, a.bi_tau_hi_s, a.n_filter_s, a.osc_sigma, a.osc_f0_hz,
+                      a.osc_beta_per_s};
+  const float fb[] = {b.n, b.q, b.gm_sb[0], b.gm_tb_s[0], b.gm_sb[1], b.gm_tb_s[1], b.k, b.bi,
+                      b.bi_tau_lo_s, b.bi_tau_hi_s, b.n_filter_s, b.osc_sigma, b.osc_f0_hz,
+                      b.osc_beta_per_s};
+  for (std::size_t i = 0; i < std::size(fa); ++i) {
+    EXPECT_EQ(fbits(fa[i]), fbits(fb[i])) << "field " << i;
+  }
+  EXPECT_EQ(a.version, b.version);
+  EXPECT_EQ(a.channel, b.channel);
+}
+
+// The version 2 model of the tests: white noise through a 2 ms output filter (1 state), one GM
+// (1), a 6 Hz oscillation 0.5 Hz wide (2): 4 states.
+imu::hal::ModelRecord model_v2(std::uint8_t channel) {
+  imu::hal::ModelRecord m{};
+  m.version = imu::hal::kModelVersion2;
+  m.channel = channel;
+  m.n = 3.3e-3F;
+  m.gm_sb[0] = 2.68e-8F;
+  m.gm_tb_s[0] = 158.7F;
+  m.n_filter_s = 2e-3F;
+  m.osc_sigma = 0.02F;
+  m.osc_f0_hz = 6.0F;
+  m.osc_beta_per_s = 1.57F;
+  return m;
+}
+
+}  // namespace
+
+// A version 2 push with the output filter and the oscillation runs: the node validates and
+// discretises it, echoes it in version 2 (0x252) with every field bit for bit and the states
+// it runs (GM 1 + filter 1 + oscillation 2), and the filter runs on samples. A version 1 push
+// after it is echoed in version 1 again; channels never pushed are echoed in version 1.
+TEST_F(NodeTest, PushedModelVersion2RunsTheOutputFilterAndTheOscillation) {
+  send_config(100.0, 1e-4);
+  const imu::hal::ModelRecord m = model_v2(2);
+  EncodedFrames fr{};
+  imu::hal::encode(m, false, imu::hal::Layout::kClassic, 3, fr);  // 10 classic frames
+  ASSERT_EQ(fr.count, 10U);
+  push(fr);
+  EXPECT_EQ(node_->stats().model_rejected, 0U);
+  EXPECT_EQ(node_->stats().models_accepted, 1U);
+  bool v2_frame = false;
+  for (const CanFrame& f : sink_.frames) {
+    v2_frame = v2_frame || f.can_id == imu::hal::kIdModelEcho2Fd;
+  }
+  EXPECT_TRUE(v2_frame) << "the echo of a version 2 push is a version 2 record";
+  auto ev = sink_.events();
+  const imu::hal::ModelRecord e = echo_of(ev, 2);
+  EXPECT_EQ(e.flags, imu::hal::kModelPushed);
+  EXPECT_EQ(e.n_states, 4U);
+  expect_same_model(e, m);
+  EXPECT_EQ(node_->model_echo(2).n_states, 4U);
+  EXPECT_EQ(echo_of(ev, 1).version, imu::hal::kModelVersion1) << "channel 1 was never pushed";
+  imu::ModelParams p{};
+  ASSERT_TRUE(imu::node::model_record_valid(m, p));
+  EXPECT_DOUBLE_EQ(p.n_filter_s, static_cast<double>(m.n_filter_s));
+  EXPECT_DOUBLE_EQ(p.osc_sigma, static_cast<double>(m.osc_sigma));
+  EXPECT_DOUBLE_EQ(p.osc_f0_hz, static_cast<double>(m.osc_f0_hz));
+  EXPECT_DOUBLE_EQ(p.osc_beta_per_s, static_cast<double>(m.osc_beta_per_s));
+
+  // The filter runs: white noise plus a 6 Hz tone give a finite bias and a positive variance.
+  imu::GaussianRng rng(9);
+  for (std::uint32_t k = 0; k < 2000; ++k) {
+    const double x = 0.033 * rng.normal() + 0.02 * std::sin(2.0 * 3.141592653589793 * 6.0 * k / 100.0);
+    const std::int32_t c[6] = {0, 0, static_cast<std::int32_t>(std::lround(x / 1e-4)), 0, 0, 0};
+    send_sample(k, c);
+  }
+  EXPECT_TRUE(std::isfinite(node_->bias(2)));
+  EXPECT_GT(node_->bias_var(2), 0.0F);
+  EXPECT_GT(node_->monitors(2).cusum.updates(), 1000U);  // the updates after the first 100
+
+  // A new rate rebuilds it (the oscillation and the filter at 1 kHz) and keeps it.
+  send_config(1000.0, 1e-4, 2);
+  EXPECT_EQ(node_->stats().model_rejected, 0U);
+  EXPECT_EQ(node_->model_echo(2).n_states, 4U);
+
+  // A version 1 push on the same channel: echoed in version 1, the new terms gone.
+  imu::hal::ModelRecord v1{};
+  v1.version = imu::hal::kModelVersion1;
+  v1.channel = 2;
+  v1.n = 3.3e-3F;
+  v1.k = 1.4e-4F;
+  imu::hal::encode(v1, false, imu::hal::Layout::kFd, 0, fr);
+  (void)sink_.events();
+  push(fr);
+  const imu::hal::ModelRecord e1 = echo_of(sink_.events(), 2);
+  EXPECT_EQ(e1.version, imu::hal::kModelVersion1);
+  EXPECT_EQ(e1.n_states, 1U);
+  EXPECT_EQ(fbits(e1.osc_sigma) | fbits(e1.n_filter_s), 0U);
+}
+
+// Each version 2 field out of its range, one at a time, is refused and counted; the model
+// running (the version 2 one) stays and is echoed unchanged.
+TEST_F(NodeTest, PushedModelVersion2RangesAreEnforced) {
+  send_config(100.0, 1e-4);
+  const imu::hal::ModelRecord good = model_v2(2);
+  auto push_model = [this](const imu::hal::ModelRecord& m) {
+    EncodedFrames fr{};
+    imu::hal::encode(m, false, imu::hal::Layout::kFd, 0, fr);
+    push(fr);
+  };
+  push_model(good);
+  ASSERT_EQ(node_->stats().model_rejected, 0U);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  struct Bad {
+    const char* what;
+    float imu::hal::ModelRecord::*field;
+    float value;
+  };
+  using R = imu::hal::ModelRecord;
+  const Bad bad[] = {
+      {"n_filter_s NaN", &R::n_filter_s, nan},
+      {"n_filter_s inf", &R::n_filter_s, inf},
+      {"n_filter_s < 0", &R::n_filter_s, -2e-3F},
+      {"n_filter_s < 1e-6", &R::n_filter_s, 5e-7F},
+      {"n_filter_s > 1e3", &R::n_filter_s, 2e3F},
+      {"osc_sigma NaN", &R::osc_sigma, nan},
+      {"osc_sigma < 0", &R::osc_sigma, -0.02F},
+      {"osc_sigma < 1e-15", &R::osc_sigma, 5e-16F},
+      {"osc_sigma > 1e3", &R::osc_sigma, 2e3F},
+      {"osc_f0_hz NaN", &R::osc_f0_hz, nan},
+      {"osc_f0_hz < 0", &R::osc_f0_hz, -1.0F},
+      {"osc_f0_hz > 5e4", &R::osc_f0_hz, 6e4F},
+      {"osc_beta_per_s inf", &R::osc_beta_per_s, inf},
+      {"osc_beta_per_s 0", &R::osc_beta_per_s, 0.0F},
+      {"osc_beta_per_s < 1e-6", &R::osc_beta_per_s, 5e-7F},
+      {"osc_beta_per_s > 1e6", &R::osc_beta_per_s, 2e6F},
+  };
+  std::uint64_t refused = 0;
+  const auto expect_refused = [&](const imu::hal::ModelRecord& m, const char* what) {
+    push_model(m);
+    ++refused;
+    EXPECT_EQ(node_->stats().model_rejected, refused) << what;
+    const imu::hal::ModelRecord e = echo_of(sink_.events(), 2);
+    EXPECT_EQ(e.n_states, 4U) << what << ": the old model stays";
+    expect_same_model(e, good);
+    EXPECT_EQ(node_->stats().models_accepted, 1U) << what;
+  };
+  for (const Bad& b : bad) {
+    imu::hal::ModelRecord m = good;
+    m.*b.field = b.value;
+    expect_refused(m, b.what);
+  }
+  // An absent oscillation (sigma 0) must have f0 = beta = 0.
+  for (const bool f0 : {true, false}) {
+    imu::hal::ModelRecord m = good;
+    m.osc_sigma = 0.0F;
+    m.osc_f0_hz = f0 ? 6.0F : 0.0F;
+    m.osc_beta_per_s = f0 ? 0.0F : 1.57F;
+    expect_refused(m, f0 ? "f0 without an oscillation" : "beta without an oscillation");
+  }
+  // N is still required with an output filter (it is the white noise's density).
+  imu::hal::ModelRecord no_n = good;
+  no_n.n = 0.0F;
+  expect_refused(no_n, "no white noise");
+  // The edges of the ranges are accepted (both ends included).
+  for (const auto& edge : {std::pair<float R::*, float>{&R::n_filter_s, 1e-6F},
+                           std::pair<float R::*, float>{&R::osc_f0_hz, 0.0F}}) {
+    imu::hal::ModelRecord m = good;
+    m.*edge.first = edge.second;
+    imu::ModelParams p{};
+    EXPECT_TRUE(imu::node::model_record_valid(m, p));
+  }
+  // In memory only (a version 1 record has no slot for them on the wire): version 1 with a
+  // filter or an oscillation is not valid.
+  imu::hal::ModelRecord v1 = good;
+  v1.version = imu::hal::kModelVersion1;
+  imu::ModelParams p{};
+  EXPECT_FALSE(imu::node::model_record_valid(v1, p));
+  v1.n_filter_s = 0.0F;
+  v1.osc_sigma = v1.osc_f0_hz = v1.osc_beta_per_s = 0.0F;
+  EXPECT_TRUE(imu::node::model_record_valid(v1, p));
+}
+
+// The state count with the version 2 terms: the filter 1, the oscillation 2, so 2 GM + RRW +
+// filter + oscillation = 6 leaves room for a flicker bank of 2 members (8 states) and no more.
+TEST_F(NodeTest, PushedModelVersion2StatesAreCountedAgainstTheFilter) {
+  imu::hal::ModelRecord m = model_v2(1);
+  m.gm_sb[1] = 1e-6F;
+  m.gm_tb_s[1] = 0.2F;
+  m.k = 1.4e-4F;
+  m.bi = 1e-3F;
+  m.bi_tau_lo_s = 1.0F;
+  bool saw_8 = false;
+  bool saw_9 = false;
+  for (const float hi : {1.5F, 3.0F, 10.0F, 30.0F, 100.0F, 1e3F}) {
+    m.bi_tau_hi_s = hi;
+    imu::GmParam bank[imu::kMaxFlickerGm] = {};
+    const std::size_t nb = imu::flicker_bank(1e-3, 1.0, static_cast<double>(hi), bank);
+    ASSERT_GT(nb, 0U);
+    imu::ModelParams p{};
+    EXPECT_EQ(imu::node::model_record_valid(m, p), 6 + nb <= imu::node::kNodeProcessStates)
+        << "flicker bank of " << nb;
+    saw_8 = saw_8 || 6 + nb == 8;
+    saw_9 = saw_9 || 6 + nb == 9;
+  }
+  EXPECT_TRUE(saw_8 && saw_9) << "the ranges tried reach both sides of the limit";
+  // Over the wire: a 9-state model is refused and counted, the channel keeps its default.
+  send_config(100.0, 1e-4);
+  m.bi_tau_hi_s = 1e3F;
+  EncodedFrames fr{};
+  imu::hal::encode(m, false, imu::hal::Layout::kFd, 0, fr);
+  push(fr);
+  EXPECT_EQ(node_->stats().model_rejected, 1U);
+  const imu::hal::ModelRecord e = echo_of(sink_.events(), 1);
+  EXPECT_EQ(e.flags, 0U);
+  EXPECT_EQ(e.n_states, 1U);
+  EXPECT_EQ(e.version, imu::hal::kModelVersion2) << "answered in the version pushed";
 }

@@ -340,12 +340,12 @@ TEST(Codec, FineLsbAddsLessThanOnePercentOfWhiteNoise) {
 
 }  // namespace
 
-// ModelRecord: 48 bytes, 0x090/0x091 as a push and 0x250/0x251 as the node's echo,
-// every field back bit-exact in both layouts; a wrong version or a channel >= 6 is refused as
-// bad_record even with a valid CRC.
+// ModelRecord version 1: 48 bytes, 0x090/0x091 as a push and 0x250/0x251 as the node's echo,
+// every field back bit-exact in both layouts; an unknown version or a channel >= 6 is refused
+// as bad_record even with a valid CRC.
 TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {
   imu::hal::ModelRecord r{};
-  r.version = imu::hal::kModelVersion;
+  r.version = imu::hal::kModelVersion1;
   r.channel = 5;
   r.n_states = 7;
   r.flags = imu::hal::kModelPushed;
@@ -380,7 +380,7 @@ TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {
   for (const int bad : {0, 1}) {
     imu::hal::ModelRecord b = r;
     if (bad == 0) {
-      b.version = 2;
+      b.version = 3;  // no such version: written in the version 1 layout, refused
     } else {
       b.channel = 6;
     }
@@ -388,6 +388,247 @@ TEST(Codec, ModelRecordRoundTripsAndRefusesBadVersionOrChannel) {
     imu::hal::encode(b, false, Layout::kFd, 0, out);
     expect_refused(out);
   }
+}
+
+namespace {
+
+// A version 2 model record with every field distinct (the new four included).
+imu::hal::ModelRecord model_v2() {
+  imu::hal::ModelRecord r{};
+  r.version = imu::hal::kModelVersion2;
+  r.channel = 4;
+  r.n_states = 8;
+  r.flags = imu::hal::kModelPushed;
+  float* const fields[] = {&r.n,          &r.q,          &r.gm_sb[0], &r.gm_tb_s[0],
+                           &r.gm_sb[1],   &r.gm_tb_s[1], &r.k,        &r.bi,
+                           &r.bi_tau_lo_s, &r.bi_tau_hi_s, &r.n_filter_s, &r.osc_sigma,
+                           &r.osc_f0_hz,  &r.osc_beta_per_s};
+  float v = 7.5e-4F;
+  for (float* f : fields) {
+    *f = v;
+    v *= 2.75F;
+  }
+  return r;
+}
+
+// Little-endian writer of a record written out by hand from hal/README.md (not by the codec).
+struct Bytes {
+  std::vector<std::uint8_t> b;
+  void u8(std::uint8_t v) { b.push_back(v); }
+  void u32(std::uint32_t v) {
+    for (int i = 0; i < 4; ++i) {
+      b.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
+    }
+  }
+  void f32(float v) { u32(bits(v)); }
+  void crc() { u32(imu::hal::crc32c(b.data(), b.size())); }
+};
+
+// One FD frame carrying `rec` on `id`, len = the record's length (48 and 64 are FD lengths).
+EncodedFrames fd_frame(std::uint32_t id, const std::vector<std::uint8_t>& rec) {
+  EncodedFrames out{};
+  CanFrame& f = out.frame[0];
+  f.can_id = id;
+  f.len = static_cast<std::uint8_t>(rec.size());
+  f.flags = imu::hal::kCanFdFdf | imu::hal::kCanFdBrs;
+  std::memcpy(f.data, rec.data(), rec.size());
+  out.count = 1;
+  return out;
+}
+
+}  // namespace
+
+// ModelRecord version 2: 64 bytes (the version 1 fields, then n_filter_s, osc_sigma, osc_f0_hz,
+// osc_beta_per_s, then the CRC), 0x092/0x093 as a push and 0x252/0x253 as the echo; one FD
+// frame of len 64 or 10 classic frames; every field back bit for bit, arriving as the same
+// kModel / kModelEcho events as version 1 with version 2.
+TEST(Codec, ModelRecordVersion2RoundTripsInBothLayouts) {
+  const imu::hal::ModelRecord r = model_v2();
+  for (const bool echo : {false, true}) {
+    for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+      EncodedFrames out{};
+      imu::hal::encode(r, echo, layout, 11, out);
+      const std::uint32_t id = (echo ? 0x252U : 0x092U) + (layout == Layout::kFd ? 0U : 1U);
+      ASSERT_EQ(out.count, layout == Layout::kFd ? 1U : 10U);  // ceil(64 / 7)
+      for (std::size_t i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.frame[i].can_id, id);
+        EXPECT_EQ(out.frame[i].len, layout == Layout::kFd ? 64U : 8U);
+      }
+      const auto ev = decode(out);
+      ASSERT_EQ(ev.size(), 1U);
+      const imu::hal::RxEvent& e = ev[0];
+      ASSERT_EQ(e.type, echo ? imu::hal::RxEvent::Type::kModelEcho : imu::hal::RxEvent::Type::kModel);
+      const imu::hal::ModelRecord& m = e.rec.model;
+      EXPECT_EQ(m.version, imu::hal::kModelVersion2);
+      EXPECT_EQ(m.channel, 4U);
+      EXPECT_EQ(m.n_states, 8U);
+      EXPECT_EQ(bits(m.n_filter_s), bits(r.n_filter_s));
+      EXPECT_EQ(bits(m.osc_sigma), bits(r.osc_sigma));
+      EXPECT_EQ(bits(m.osc_f0_hz), bits(r.osc_f0_hz));
+      EXPECT_EQ(bits(m.osc_beta_per_s), bits(r.osc_beta_per_s));
+      std::uint8_t a[imu::hal::kModel2Len];
+      std::uint8_t b[imu::hal::kModel2Len];
+      imu::hal::serialize(m, a);
+      imu::hal::serialize(r, b);
+      EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
+    }
+  }
+  // The wire bytes, offset by offset, against the layout written out by hand.
+  Bytes want;
+  want.u8(2);
+  want.u8(4);
+  want.u8(8);
+  want.u8(imu::hal::kModelPushed);
+  for (const float v : {r.n, r.q, r.gm_sb[0], r.gm_tb_s[0], r.gm_sb[1], r.gm_tb_s[1], r.k, r.bi,
+                        r.bi_tau_lo_s, r.bi_tau_hi_s, r.n_filter_s, r.osc_sigma, r.osc_f0_hz,
+                        r.osc_beta_per_s}) {
+    want.f32(v);
+  }
+  want.crc();
+  ASSERT_EQ(want.b.size(), imu::hal::kModel2Len);
+  std::uint8_t got[imu::hal::kModel2Len];
+  imu::hal::serialize(r, got);
+  EXPECT_EQ(std::memcmp(got, want.b.data(), want.b.size()), 0);
+  EXPECT_EQ(le32(got + 60), imu::hal::crc32c(got, 60));
+}
+
+// A 48-byte version 1 record as old host tools and recorded candumps have it (bytes written by
+// hand) still parses, in both layouts, with the version 2 fields 0; the codec writes the
+// version 1 layout unchanged.
+TEST(Codec, ModelRecordVersion1BytesStillParse) {
+  Bytes v1;
+  v1.u8(1);
+  v1.u8(3);
+  v1.u8(0);
+  v1.u8(0);
+  const float vals[] = {3.3e-3F, 1e-5F, 2.68e-8F, 158.7F, 0.0F, 0.0F, 1.4e-4F, 0.0F, 0.0F, 0.0F};
+  for (const float v : vals) {
+    v1.f32(v);
+  }
+  v1.crc();
+  ASSERT_EQ(v1.b.size(), imu::hal::kModelLen);
+  // FD as recorded, and the classic fragments (7 bytes each, counter 5) built by hand too.
+  std::vector<EncodedFrames> as_sent{fd_frame(0x090, v1.b)};
+  EncodedFrames classic{};
+  classic.count = 7;
+  for (std::size_t k = 0; k < 7; ++k) {
+    CanFrame& f = classic.frame[k];
+    f.can_id = 0x091;
+    f.len = 8;
+    f.data[0] = static_cast<std::uint8_t>((5U << 4) | k);
+    for (std::size_t i = 0; i < 7; ++i) {
+      f.data[1 + i] = 7 * k + i < v1.b.size() ? v1.b[7 * k + i] : 0;
+    }
+  }
+  as_sent.push_back(classic);
+  for (const EncodedFrames& frames : as_sent) {
+    const auto ev = decode(frames);
+    ASSERT_EQ(ev.size(), 1U);
+    ASSERT_EQ(ev[0].type, imu::hal::RxEvent::Type::kModel);
+    const imu::hal::ModelRecord& m = ev[0].rec.model;
+    EXPECT_EQ(m.version, imu::hal::kModelVersion1);
+    EXPECT_EQ(m.channel, 3U);
+    EXPECT_EQ(bits(m.n), bits(3.3e-3F));
+    EXPECT_EQ(bits(m.gm_tb_s[0]), bits(158.7F));
+    EXPECT_EQ(bits(m.k), bits(1.4e-4F));
+    EXPECT_EQ(bits(m.n_filter_s), 0U);
+    EXPECT_EQ(bits(m.osc_sigma), 0U);
+    EXPECT_EQ(bits(m.osc_f0_hz), 0U);
+    EXPECT_EQ(bits(m.osc_beta_per_s), 0U);
+  }
+  // parse() clears the version 2 fields of a version 1 record whatever the struct held.
+  imu::hal::ModelRecord m = model_v2();
+  imu::hal::parse(v1.b.data(), m);
+  EXPECT_EQ(m.version, 1U);
+  EXPECT_EQ(bits(m.n_filter_s) | bits(m.osc_sigma) | bits(m.osc_f0_hz) | bits(m.osc_beta_per_s),
+            0U);
+  // Writing it again gives the same 48 bytes, in both layouts.
+  std::uint8_t again[imu::hal::kModelLen];
+  imu::hal::serialize(m, again);
+  EXPECT_EQ(std::memcmp(again, v1.b.data(), sizeof again), 0);
+  EncodedFrames out{};
+  imu::hal::encode(m, false, Layout::kFd, 0, out);
+  EXPECT_EQ(out.frame[0].can_id, 0x090U);
+  EXPECT_EQ(out.frame[0].len, 48U);
+  imu::hal::encode(m, false, Layout::kClassic, 5, out);
+  ASSERT_EQ(out.count, 7U);
+  for (std::size_t k = 0; k < 7; ++k) {
+    EXPECT_EQ(std::memcmp(&out.frame[k], &classic.frame[k], imu::hal::kCanMtu), 0) << k;
+  }
+}
+
+// Refusals of version 2 records, each counted: a CRC error (a flipped bit, FD and classic); a
+// version byte that is not the identifier's (2 on the version 1 ids, 1 on the version 2 ids, 3),
+// a channel >= 6 (bad_record, CRC valid); a 48-byte frame on the 64-byte identifier (bad_dlc).
+TEST(Codec, ModelRecordVersion2ErrorsAreRefusedAndCounted) {
+  const imu::hal::ModelRecord r = model_v2();
+  for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+    for (const std::size_t byte : {0U, 41U, 52U, 63U}) {  // version, a v1 field, a v2 field, CRC
+      EncodedFrames out{};
+      imu::hal::encode(r, true, layout, 2, out);
+      if (layout == Layout::kFd) {
+        out.frame[0].data[byte] ^= 0x10U;
+      } else {
+        out.frame[byte / 7].data[1 + byte % 7] ^= 0x10U;
+      }
+      imu::hal::Receiver<8> rx;
+      std::size_t got = 0;
+      for (std::size_t i = 0; i < out.count; ++i) {
+        (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
+                            [&got](const imu::hal::RxEvent&) { ++got; });
+      }
+      EXPECT_EQ(got, 0U) << byte;
+      EXPECT_EQ(rx.stats().crc_errors, 1U) << byte;
+      EXPECT_EQ(rx.stats().records[static_cast<std::size_t>(imu::hal::RecordKind::kModelEcho2)],
+                0U);
+    }
+  }
+  // Version 2 bytes with the version byte 1 on 0x092, version 1 bytes with 2 on 0x090: CRC
+  // recomputed, so only the version check can refuse them.
+  std::uint8_t v2[imu::hal::kModel2Len];
+  imu::hal::serialize(r, v2);
+  v2[0] = 1;
+  std::vector<std::uint8_t> w2(v2, v2 + 60);
+  Bytes b2{w2};
+  b2.crc();
+  expect_refused(fd_frame(0x092, b2.b));
+  imu::hal::ModelRecord r1 = r;
+  r1.version = imu::hal::kModelVersion1;
+  std::uint8_t v1[imu::hal::kModelLen];
+  imu::hal::serialize(r1, v1);
+  v1[0] = 2;
+  Bytes b1{std::vector<std::uint8_t>(v1, v1 + 44)};
+  b1.crc();
+  expect_refused(fd_frame(0x090, b1.b));
+  for (const int bad : {0, 1}) {
+    imu::hal::ModelRecord b = r;
+    if (bad == 0) {
+      b.channel = 6;
+    } else {
+      b.version = 3;
+    }
+    EncodedFrames out{};
+    imu::hal::encode(b, false, Layout::kFd, 0, out);
+    expect_refused(out);
+  }
+  // A version 2 id with a 48-byte FD frame: the id fixes the length.
+  imu::hal::Receiver<8> rx;
+  EncodedFrames short_frame = fd_frame(0x092, std::vector<std::uint8_t>(v2, v2 + 48));
+  EXPECT_EQ(rx.push(short_frame.frame[0], imu::hal::kCanFdMtu, 0), imu::hal::FrameVerdict::kBadDlc);
+  EXPECT_EQ(rx.stats().bad_dlc, 1U);
+  // The identifiers: both new kinds, FD and classic.
+  imu::hal::RecordKind k{};
+  Layout l{};
+  ASSERT_TRUE(imu::hal::kind_of_id(0x093, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kModel2);
+  EXPECT_EQ(l, Layout::kClassic);
+  ASSERT_TRUE(imu::hal::kind_of_id(0x252, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kModelEcho2);
+  EXPECT_EQ(l, Layout::kFd);
+  EXPECT_EQ(imu::hal::record_len(imu::hal::RecordKind::kModel2), 64U);
+  EXPECT_EQ(imu::hal::model_version(imu::hal::RecordKind::kModelEcho), 1U);
+  EXPECT_EQ(imu::hal::model_version(imu::hal::RecordKind::kModelEcho2), 2U);
+  EXPECT_EQ(imu::hal::model_version(imu::hal::RecordKind::kSample), 0U);
 }
 
 TEST(Codec, ChannelMonitorRecordRoundTripsAndRefusesABadChannel) {

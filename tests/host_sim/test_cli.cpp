@@ -318,9 +318,48 @@ TEST(SimCli, FirstOrderModelAlarmsAndPushedAnalysisModelIsQuietOnTheDemoData) {
   EXPECT_GE(simtest::json_number_in(push_json, "node", "n_states"), 1.0);
 }
 
-/// The model record (v1) has no slot for the narrowband oscillation: `run --model` gives its
-/// variance to the white noise (N'^2 = N^2 + sigma^2 / fs), says so, and the node runs N'.
-TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
+/// `run --model` sends the white noise's output filter and the narrowband oscillation as filter
+/// states (a version 2 model record) and the node runs them: its echo in the run JSON carries
+/// them (float of the JSON's numbers), N unchanged, GM + filter + oscillation = 4 states.
+TEST(SimCli, RunModelSendsTheOutputFilterAndTheOscillation) {
+  SKIP_IF_EMULATED();
+  simtest::TempDir dir;
+  const std::string mat = dir.file("synth.mat");
+  auto r = run({"synth", "--out", mat, "--duration", "200"});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string f = dir.file("osc.json");
+  std::ofstream(f) << "{\"channel\": \"acc_z\", \"fs_hz\": 100, \"model_after\": {\"n\": 3.3e-3, "
+                      "\"n_filter_s\": 2e-3, \"q\": 0, \"gm\": [{\"sb\": 5.7e-9, \"tb_s\": 158.7}], "
+                      "\"k\": 0, \"r\": 0, \"sin_a\": 0, \"sin_f0_hz\": 0, \"sin2_a\": 0, "
+                      "\"sin2_f0_hz\": 0, \"bias_instability\": {\"b\": 0, \"tau_lo_s\": 0, "
+                      "\"tau_hi_s\": 0}, \"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, "
+                      "\"beta_per_s\": 1.57}}}";
+  r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--sim-windows", "10", "--out",
+           dir.file("o")});
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string report = simtest::read_text(dir.file("o") + "/report.txt");
+  EXPECT_EQ(report.find("oscillation of model_after"), std::string::npos) << report;
+  EXPECT_EQ(report.find("output filter of model_after"), std::string::npos) << report;
+  const std::string json = simtest::read_text(dir.file("o") + "/report.json");
+  const std::string node = json.substr(json.find("\"node\": {"));
+  // The echo's floats, printed with 10 digits (enough to give the float back): the float of
+  // each number of the file.
+  const auto echoed = [&node](const char* group, const char* key) {
+    return static_cast<float>(simtest::json_number_in(node, group, key));
+  };
+  EXPECT_EQ(echoed("model", "n"), 3.3e-3F);
+  EXPECT_EQ(echoed("model", "n_filter_s"), 2e-3F);
+  EXPECT_EQ(echoed("oscillation", "sigma"), 0.02F);
+  EXPECT_EQ(echoed("oscillation", "f0_hz"), 6.0F);
+  EXPECT_EQ(echoed("oscillation", "beta_per_s"), 1.57F);
+  EXPECT_EQ(simtest::json_number_in(node, "model", "n_states"), 4.0);
+  EXPECT_EQ(simtest::json_number_in(node, "node", "model_rejected"), 0.0);
+}
+
+/// A model with more states than the node's filter holds once the oscillation is added (2 GM +
+/// RRW + a 5-member flicker bank = 8): `run --model` gives the oscillation's variance to the
+/// white noise (N'^2 = N^2 + sigma^2 / fs at the recording's rate), says so, and the node runs N'.
+TEST(SimCli, RunModelFoldsAnOscillationTheNodeCannotHold) {
   SKIP_IF_EMULATED();
   simtest::TempDir dir;
   const std::string mat = dir.file("synth.mat");
@@ -328,9 +367,9 @@ TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string model =
       "\"model_after\": {\"n\": 3.3e-3, "
-      "\"q\": 0, \"gm\": [{\"sb\": 5.7e-9, \"tb_s\": 158.7}], \"k\": 0, \"r\": 0, "
-      "\"sin_a\": 0, \"sin_f0_hz\": 0, \"sin2_a\": 0, \"sin2_f0_hz\": 0, "
-      "\"bias_instability\": {\"b\": 0, \"tau_lo_s\": 0, \"tau_hi_s\": 0}, "
+      "\"q\": 0, \"gm\": [{\"sb\": 5.7e-9, \"tb_s\": 158.7}, {\"sb\": 1e-6, \"tb_s\": 0.2}], "
+      "\"k\": 1e-5, \"r\": 0, \"sin_a\": 0, \"sin_f0_hz\": 0, \"sin2_a\": 0, \"sin2_f0_hz\": 0, "
+      "\"bias_instability\": {\"b\": 1e-4, \"tau_lo_s\": 1, \"tau_hi_s\": 1000}, "
       "\"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, \"beta_per_s\": 1.57}}";
   // A 100 Hz record's report, and a long record's (analysed on means of 4 at 25 Hz, its head at
   // the recording's 100 Hz): the node samples at 100 Hz in both (not the long one at the
@@ -352,6 +391,8 @@ TEST(SimCli, RunModelFoldsTheOscillationIntoTheWhiteNoise) {
     const std::string node = json.substr(json.find("\"node\": {"));
     const double n_node = simtest::json_number_in(node, "model", "n");
     EXPECT_NEAR(n_node, std::sqrt(3.3e-3 * 3.3e-3 + 0.02 * 0.02 / 100.0), 1e-6) << head;
+    EXPECT_EQ(simtest::json_number_in(node, "oscillation", "sigma"), 0.0);
+    EXPECT_EQ(simtest::json_number_in(node, "model", "n_states"), 8.0);
   }
 }
 

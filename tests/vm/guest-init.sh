@@ -357,9 +357,10 @@ t_imu_realtime() {
 
 # A model push over the real kernel's vcan0. imu-sim analyze fits a model to a
 # synthetic record; imu-sim run --model sends it to imu-fw (external node) as a ModelRecord over
-# vcan0 and reads the node's echo (0x250) back from the bus: the run's JSON must report the
-# pushed model as the one the node runs (origin "pushed", model_pushed true, none rejected) with
-# the white noise N that analyze wrote (float32 on the wire: 1e-6 relative).
+# vcan0 and reads the node's echo (0x252, model record version 2) back from the bus: the run's
+# JSON must report the pushed model as the one the node runs (origin "pushed", model_pushed
+# true, none rejected) with the white noise N that analyze wrote (float32 on the wire: 1e-6
+# relative).
 t_imu_model_push() {
   have imu-sim && have imu-fw || { result imu_model_push SKIP "imu-sim/imu-fw not built"; return; }
   imu-sim synth --out /tmp/push.mat --duration 300 >/dev/null 2>&1 ||

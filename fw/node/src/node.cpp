@@ -26,28 +26,49 @@ bool same_values(const hal::ConfigRecord& a, const hal::ConfigRecord& b) {
 }
 
 bool finite_f(float v) { return std::isfinite(v); }
+// Exactly 0 (finite inputs: neither below nor above).
+bool is_zero(float v) { return !(v < 0.0F) && !(v > 0.0F); }
 // 0 (term absent) or in [lo, hi].
 bool zero_or(float v, float lo, float hi) { return !(v > 0.0F) ? !(v < 0.0F) : (v >= lo && v <= hi); }
 
 }  // namespace
 
 bool model_record_valid(const hal::ModelRecord& r, ModelParams& out) {
-  const float vals[] = {r.n, r.q, r.gm_sb[0], r.gm_tb_s[0], r.gm_sb[1], r.gm_tb_s[1],
-                        r.k, r.bi, r.bi_tau_lo_s, r.bi_tau_hi_s};
+  const float vals[] = {r.n,          r.q,         r.gm_sb[0],   r.gm_tb_s[0],    r.gm_sb[1],
+                        r.gm_tb_s[1], r.k,         r.bi,         r.bi_tau_lo_s,   r.bi_tau_hi_s,
+                        r.n_filter_s, r.osc_sigma, r.osc_f0_hz,  r.osc_beta_per_s};
   for (const float v : vals) {
     if (!finite_f(v)) {
       return false;
     }
   }
-  if (r.version != hal::kModelVersion || r.channel >= kChannels ||
+  const bool v1 = r.version == hal::kModelVersion1;
+  if ((!v1 && r.version != hal::kModelVersion2) || r.channel >= kChannels ||
       !(r.n >= 1e-12F && r.n <= 1e3F) || !zero_or(r.q, 1e-15F, 1e3F) ||
       !zero_or(r.k, 1e-15F, 1e3F) || !zero_or(r.bi, 1e-15F, 1e3F)) {
     return false;
+  }
+  // Version 2's terms. A version 1 record has no slot for them on the wire (parsed as 0).
+  const bool filter = r.n_filter_s > 0.0F;
+  const bool osc = r.osc_sigma > 0.0F;
+  if (!zero_or(r.n_filter_s, kMinPushedFilterS, kMaxPushedFilterS) ||
+      !zero_or(r.osc_sigma, 1e-15F, 1e3F) || (v1 && (filter || osc))) {
+    return false;
+  }
+  if (osc ? !(r.osc_f0_hz >= 0.0F && r.osc_f0_hz <= kMaxPushedOscF0Hz &&
+              r.osc_beta_per_s >= kMinPushedOscBetaPerS &&
+              r.osc_beta_per_s <= kMaxPushedOscBetaPerS)
+          : !(is_zero(r.osc_f0_hz) && is_zero(r.osc_beta_per_s))) {
+    return false;  // an absent oscillation has f0 = beta = 0
   }
   ModelParams p{};
   p.n = static_cast<double>(r.n);
   p.q = static_cast<double>(r.q);
   p.k = static_cast<double>(r.k);
+  p.n_filter_s = static_cast<double>(r.n_filter_s);
+  p.osc_sigma = static_cast<double>(r.osc_sigma);
+  p.osc_f0_hz = static_cast<double>(r.osc_f0_hz);
+  p.osc_beta_per_s = static_cast<double>(r.osc_beta_per_s);
   for (std::size_t i = 0; i < 2; ++i) {
     if (!zero_or(r.gm_sb[i], 1e-30F, 1e6F)) {
       return false;
@@ -61,7 +82,9 @@ bool model_record_valid(const hal::ModelRecord& r, ModelParams& out) {
       ++p.n_gm;
     }
   }
-  std::size_t states = p.n_gm + (r.k > 0.0F ? 1U : 0U);
+  // States as build_model makes them: a GM, RRW and the filtered white noise 1 each, the
+  // oscillation 2, the flicker bank 1 per member.
+  std::size_t states = p.n_gm + (r.k > 0.0F ? 1U : 0U) + (filter ? 1U : 0U) + (osc ? 2U : 0U);
   if (r.bi > 0.0F) {
     if (!(r.bi_tau_lo_s >= kMinPushedTbS && r.bi_tau_hi_s <= kMaxPushedTbS &&
           r.bi_tau_lo_s < r.bi_tau_hi_s)) {
@@ -282,6 +305,9 @@ bool Node::build_pushed(std::size_t c) {
 }
 
 void Node::on_model(const hal::ModelRecord& r) {
+  if (r.channel < kChannels) {  // the receiver refused any other
+    echo_v2_[r.channel] = r.version == hal::kModelVersion2;  // answer in the version pushed
+  }
   ModelParams p{};
   if (!model_record_valid(r, p)) {
     ++stats_.model_rejected;
@@ -330,7 +356,10 @@ hal::ModelRecord Node::model_echo(std::size_t c) const {
     e.gm_tb_s[0] = to_f32(gm.tb_s);
     e.n_states = 1;
   }
-  e.version = hal::kModelVersion;
+  // The version of the channel's last push (the host that sent it reads it), and version 2
+  // whenever the model it runs came in version 2 (version 1 may not hold it).
+  const bool v2 = echo_v2_[c] || (pushed_[c] && model_rec_[c].version == hal::kModelVersion2);
+  e.version = v2 ? hal::kModelVersion2 : hal::kModelVersion1;
   e.channel = static_cast<std::uint8_t>(c);
   return e;
 }

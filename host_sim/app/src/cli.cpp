@@ -45,9 +45,9 @@ constexpr const char* kUsageSynth =
     "       imu-sim synth --model A.json [--out FILE] [--duration 3600] [--fs HZ] [--seed 1]\n"
     "                     [--lsb X]\n"
     "  --model: every channel acc_x..gyro_z of an analyze JSON (--channel all) simulated from\n"
-    "  its model_after (white, quantization, GM terms, rate random walk, bias instability; at\n"
-    "  most 8 states, as the node runs it: ramp and sinusoids left out, said) at the analysis's\n"
-    "  rate, one MAT-file.\n"
+    "  its model_after (white, quantization, GM terms, rate random walk, bias instability,\n"
+    "  narrowband oscillation; at most 8 states, as the node runs it: ramp, sinusoids and the\n"
+    "  output filter left out, said) at the analysis's rate, one MAT-file.\n"
     "  synthetic recording (MAT-file: channel, fs, acc_lsb/gyro_lsb, source) from the example's\n"
     "  error model plus rate random walk. Ranges: --N --B in [1e-12, 1e3], --K in [0, 1e3],\n"
     "  --Tp in [1e-6, 1e9] s, --fs in [1e-3, 1e6] Hz, --duration x --fs in [16, 2^25] samples,\n"
@@ -291,6 +291,16 @@ int synth_from_model(const Args& a, const char* cmd) {
     mp.bi = d(rec.bi);
     mp.bi_tau_lo_s = d(rec.bi_tau_lo_s);
     mp.bi_tau_hi_s = d(rec.bi_tau_hi_s);
+    mp.osc_sigma = d(rec.osc_sigma);
+    mp.osc_f0_hz = d(rec.osc_f0_hz);
+    mp.osc_beta_per_s = d(rec.osc_beta_per_s);
+    // The output filter is not simulated: the node sees the white noise through its averaging
+    // sampler, where the filter changes a sample's variance by about 1.5 n_filter_s / Ts, but
+    // this simulator takes point samples, whose variance through the filter is N^2 / (2 tf).
+    if (rec.n_filter_s > 0.0F) {
+      dropped += std::string(dropped.empty() ? "" : "; ") + "output filter (" +
+                 imu::cli::num_text(d(rec.n_filter_s)) + " s) not simulated: white N";
+    }
     ContinuousModel<8> cm;
     DiscreteModel<8> dm;
     ModelSimulator<8> sim;
@@ -321,7 +331,12 @@ int synth_from_model(const Args& a, const char* cmd) {
     for (std::size_t g = 0; g < mp.n_gm; ++g) {
       appendf(source, " GM(Sb=%.4g,Tb=%.4g s)", mp.gm[g].sb, mp.gm[g].tb_s);
     }
-    appendf(source, " K=%.4g B=%.4g LSB=%.4g;", mp.k, mp.bi, lsb);
+    appendf(source, " K=%.4g B=%.4g", mp.k, mp.bi);
+    if (mp.osc_sigma > 0.0) {
+      appendf(source, " OSC(sigma=%.4g,f0=%.4g Hz,beta=%.4g/s)", mp.osc_sigma, mp.osc_f0_hz,
+              mp.osc_beta_per_s);
+    }
+    appendf(source, " LSB=%.4g;", lsb);
     if (!dropped.empty()) {
       std::printf("note: %s: simulated as the node runs it: %s\n", name.c_str(),
                   imu::cli::term_safe(dropped).c_str());

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <limits>
 
+#include "imu/node/node.hpp"
+
 namespace imu::sim {
 namespace {
 
@@ -131,6 +133,67 @@ bool string_member_is(const std::string& s, std::size_t obj, const std::string& 
          s.compare(v + 1, v_end - v - 2, value) == 0;
 }
 
+// A record the node would refuse only for its version 2 terms (more states than its filter
+// holds, or a term out of its ranges) loses what the node can do without, and the rest is sent
+// as the node runs it: first the output filter (the white noise unfiltered changes a sample's
+// variance by about 1.5 n_filter_s / Ts), then the oscillation, whose variance goes to the
+// white noise per sample (N'^2 = N^2 + sigma^2 / fs: innovations of the right variance, NIS ~ 1,
+// though not of its colour, which the whiteness monitor still sees). A record refused for
+// another reason is sent as it is: the node refuses and counts it. n: model_after's N; root:
+// the channel's object (its fs_hz, or its full-rate head's). Notes go to `dropped`.
+bool fit_to_node(const std::string& json, std::size_t root, double n, hal::ModelRecord& rec,
+                 std::string& dropped, std::string& err) {
+  const auto runs = [](const hal::ModelRecord& m) {
+    ModelParams p{};
+    return node::model_record_valid(m, p);
+  };
+  const auto note = [&dropped](const std::string& t) {
+    dropped += (dropped.empty() ? "" : "; ") + t;
+  };
+  hal::ModelRecord unfiltered = rec;
+  unfiltered.n_filter_s = 0.0F;
+  hal::ModelRecord no_osc = rec;
+  no_osc.osc_sigma = 0.0F;
+  no_osc.osc_f0_hz = 0.0F;
+  no_osc.osc_beta_per_s = 0.0F;
+  hal::ModelRecord base = no_osc;
+  base.n_filter_s = 0.0F;
+  if (runs(rec) || !runs(base)) {
+    return true;
+  }
+  const std::string why = " (the model with it is not one the node runs: more than " +
+                          std::to_string(node::kNodeProcessStates) +
+                          " states, or out of its ranges)";
+  if (rec.n_filter_s > 0.0F && (runs(unfiltered) || !runs(no_osc))) {
+    note("output filter of model_after (" + num_text(static_cast<double>(rec.n_filter_s)) +
+         " s) not sent" + why + ": the white noise goes unfiltered");
+    rec = unfiltered;
+    if (runs(rec)) {
+      return true;
+    }
+  }
+  // Only the oscillation is left to go. A long record's report is at its block means' rate; the
+  // node samples at the recording's, which its full-rate head carries.
+  const std::size_t head = member(json, root, "full_rate_head");
+  const std::size_t rate = member(json, head != std::string::npos ? head : root, "fs_hz");
+  double fs_hz = 0.0;
+  if (!number_at(json, rate, fs_hz) || !(fs_hz > 0.0)) {
+    err = "model_after has an oscillation the node cannot run as states, and the JSON no valid "
+          "fs_hz to add its variance to the white noise";
+    return false;
+  }
+  const auto sigma = static_cast<double>(rec.osc_sigma);
+  const double n_eff = std::sqrt(n * n + sigma * sigma / fs_hz);
+  rec.n = static_cast<float>(n_eff);
+  rec.osc_sigma = 0.0F;
+  rec.osc_f0_hz = 0.0F;
+  rec.osc_beta_per_s = 0.0F;
+  note("oscillation of model_after (sigma " + num_text(sigma) + ") not sent as states" + why +
+       ": its variance is added to the white noise (N " + std::to_string(n) + " -> " +
+       std::to_string(n_eff) + ")");
+  return true;
+}
+
 }  // namespace
 
 bool analysis_holds_channel(const std::string& json, const std::string& channel_name) {
@@ -179,8 +242,14 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
       !get_number(json, m, "sin_a", sin_a, err) || !get_number(json, m, "sin2_a", sin2_a, err)) {
     return false;
   }
+  // The output filter of the white noise: absent in an analysis that does not fit one (0).
+  double n_filter_s = 0.0;
+  if (member(json, m, "n_filter_s") != std::string::npos &&
+      !get_number(json, m, "n_filter_s", n_filter_s, err)) {
+    return false;
+  }
   hal::ModelRecord rec{};
-  rec.version = hal::kModelVersion;
+  rec.version = hal::kModelVersion2;
   rec.channel = static_cast<std::uint8_t>(channel_index);
   rec.n = static_cast<float>(n);
   rec.q = static_cast<float>(q);
@@ -227,31 +296,25 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
   if (r > 0.0 || sin_a > 0.0 || sin2_a > 0.0) {
     dropped = "ramp/sinusoid of model_after not sent: deterministic, not filter states";
   }
-  // The narrowband oscillation (2 filter states) has no slot in the model record (version 1).
-  // Its variance goes to the white noise instead, per sample (N'^2 = N^2 + sigma^2 Ts): the
-  // node's innovations then have the right variance (NIS ~ 1) though not its 20 Hz colour (the
-  // whiteness monitor still sees it). Said in `dropped`.
+  rec.n_filter_s = static_cast<float>(n_filter_s);
+  // The narrowband oscillation (2 filter states): sigma absent or 0 means none.
   const std::size_t osc = member(json, m, "oscillation");
   double osc_sigma = 0.0;
-  double fs_hz = 0.0;
   if (osc != std::string::npos && get_number(json, osc, "sigma", osc_sigma, err) &&
       osc_sigma > 0.0) {
-    // A long record's report is at its block means' rate; the node samples at the recording's,
-    // which its full-rate head carries.
-    const std::size_t head = member(json, root, "full_rate_head");
-    const std::size_t rate =
-        member(json, head != std::string::npos ? head : root, "fs_hz");
-    if (!number_at(json, rate, fs_hz) || !(fs_hz > 0.0)) {
-      err = "model_after has an oscillation but the JSON has no valid fs_hz";
+    double f0 = 0.0;
+    double beta = 0.0;
+    if (!get_number(json, osc, "f0_hz", f0, err) ||
+        !get_number(json, osc, "beta_per_s", beta, err)) {
+      err = "model_after.oscillation {sigma, f0_hz, beta_per_s} malformed";
       return false;
     }
-    const double n_eff = std::sqrt(n * n + osc_sigma * osc_sigma / fs_hz);
-    rec.n = static_cast<float>(n_eff);
-    dropped += std::string(dropped.empty() ? "" : "; ") +
-               "oscillation of model_after (sigma " + num_text(osc_sigma) +
-               ") not sent as states: the model record (v1) has no slot for it; its variance "
-               "is added to the white noise (N " + std::to_string(n) + " -> " +
-               std::to_string(n_eff) + ")";
+    rec.osc_sigma = static_cast<float>(osc_sigma);
+    rec.osc_f0_hz = static_cast<float>(f0);
+    rec.osc_beta_per_s = static_cast<float>(beta);
+  }
+  if (!fit_to_node(json, root, n, rec, dropped, err)) {
+    return false;
   }
   err.clear();
   out = rec;

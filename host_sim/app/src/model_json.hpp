@@ -8,10 +8,15 @@
 
 namespace imu::sim {
 
-/// Read `model_after` of the analysis JSON text into a ModelRecord for channel_index. The
+/// Read `model_after` of the analysis JSON text into a version 2 ModelRecord for channel_index:
+/// N, Q, up to two GMs, K, the bias instability, the white noise's output filter (`n_filter_s`;
+/// absent: none) and the narrowband oscillation (`oscillation.{sigma, f0_hz, beta_per_s}`). The
 /// file's top-level "channel" must equal channel_name. Ramp and sinusoids are deterministic and
-/// not sent (noted in `dropped`). A third GM or more would not fit the record: an error. Returns
-/// false with a one-line err (missing key, malformed number, wrong channel). O(text length).
+/// not sent (noted in `dropped`). A model the node would refuse only for its output filter or
+/// oscillation (more states than kNodeProcessStates, a term out of its ranges) is sent without
+/// the filter, then with the oscillation's variance in the white noise (noted in `dropped`). A
+/// third GM or more would not fit the record: an error. Returns false with a one-line err
+/// (missing key, malformed number, wrong channel). O(text length).
 [[nodiscard]] bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
                                             std::size_t channel_index, hal::ModelRecord& out,
                                             std::string& dropped, std::string& err);

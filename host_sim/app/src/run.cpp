@@ -1359,7 +1359,10 @@ std::string node_json(const RunOptions& o, const Telemetry& tel, const Verdicts&
       }
     }
     j += "], \"k\": " + f(m.k) + ", \"bias_instability\": {\"b\": " + f(m.bi) +
-         ", \"tau_lo_s\": " + f(m.bi_tau_lo_s) + ", \"tau_hi_s\": " + f(m.bi_tau_hi_s) + "}}";
+         ", \"tau_lo_s\": " + f(m.bi_tau_lo_s) + ", \"tau_hi_s\": " + f(m.bi_tau_hi_s) +
+         "}, \"n_filter_s\": " + f(m.n_filter_s) + ", \"oscillation\": {\"sigma\": " +
+         f(m.osc_sigma) + ", \"f0_hz\": " + f(m.osc_f0_hz) + ", \"beta_per_s\": " +
+         f(m.osc_beta_per_s) + "}}";
   } else {
     j += "null";
   }

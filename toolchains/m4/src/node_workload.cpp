@@ -76,7 +76,7 @@ bool append(const hal::EncodedFrames& fr, std::size_t& n) {
 /// units/sqrt(Hz)).
 hal::ModelRecord largest_model(std::uint8_t channel) {
   hal::ModelRecord m{};
-  m.version = hal::kModelVersion;
+  m.version = hal::kModelVersion1;
   m.channel = channel;
   m.n = 1.85F;
   m.gm_sb[0] = 1e-4F;

@@ -71,10 +71,18 @@ enum class Layout : std::uint8_t { kFd, kClassic };
 /// unknown_id and loses nothing else (no existing layout or identifier changed).
 /// kModel (host -> node), kModelEcho and kChannelMonitor (node -> host) came later in the same
 /// way.
+/// kModel2 / kModelEcho2 carry the model record version 2 (kModelVersion2, 64 bytes: version 1's
+/// fields, then the white noise's output filter and the narrowband oscillation). They are kinds
+/// of their own rather than a second length on the version 1 identifiers: every identifier keeps
+/// one record length, which the receiver checks against the FD `len` and counts classic fragments
+/// by before the version byte is readable, and a receiver that knows only version 1 counts them
+/// as unknown_id instead of bad_dlc or bad_fragment. Both parse into ModelRecord and arrive as
+/// RxEvent kModel / kModelEcho; ModelRecord::version tells which.
 enum class RecordKind : std::uint8_t {
-  kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho, kChannelMonitor
+  kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho, kChannelMonitor,
+  kModel2, kModelEcho2
 };
-inline constexpr std::size_t kRecordKinds = 10;
+inline constexpr std::size_t kRecordKinds = 12;
 
 inline constexpr std::uint32_t kIdConfigFd = 0x080;
 inline constexpr std::uint32_t kIdSampleFd = 0x100;
@@ -84,7 +92,9 @@ inline constexpr std::uint32_t kIdMonitorFd = 0x220;
 inline constexpr std::uint32_t kIdStatsFd = 0x230;
 inline constexpr std::uint32_t kIdRejectsFd = 0x240;
 inline constexpr std::uint32_t kIdModelFd = 0x090;      ///< after config, before samples
+inline constexpr std::uint32_t kIdModel2Fd = 0x092;     ///< next to kIdModelFd (classic 0x093)
 inline constexpr std::uint32_t kIdModelEchoFd = 0x250;
+inline constexpr std::uint32_t kIdModelEcho2Fd = 0x252; ///< next to kIdModelEchoFd (classic 0x253)
 inline constexpr std::uint32_t kIdChannelMonitorFd = 0x260;
 
 inline constexpr std::size_t kChannels = 6;  ///< ax, ay, az (accelerometer), gx, gy, gz (gyro)
@@ -211,19 +221,22 @@ struct RejectsRecord {
   std::uint32_t telemetry_failures;     ///< telemetry frames the link refused
   std::uint32_t gpio_errors;            ///< static input / alarm output failures
   std::uint32_t peer_refused;           ///< loopback peers refused (other user id)
-  std::uint32_t bad_record;             ///< CRC-valid records refused (Config channel count)
+  std::uint32_t bad_record;             ///< CRC-valid records refused (RxStats::bad_record)
 };
 
-/// ModelRecord::version this code writes and accepts (others: RxStats::bad_record).
-inline constexpr std::uint8_t kModelVersion = 1;
+/// ModelRecord::version: it selects the layout and the record kinds.
+inline constexpr std::uint8_t kModelVersion1 = 1;  ///< 48 bytes, kModel / kModelEcho
+inline constexpr std::uint8_t kModelVersion2 = 2;  ///< 64 bytes, kModel2 / kModelEcho2
 /// ModelRecord::flags bits (echo only).
 inline constexpr std::uint8_t kModelPushed = 1U << 0;  ///< the node runs a pushed model (else its default first-order)
 /// Stochastic error model of one channel (imu::ModelParams without the deterministic terms:
-/// ramp and sinusoids are not filter states on the node). 48 bytes. Sent by the host as kModel
-/// (n_states and flags 0); echoed by the node as kModelEcho with what it runs. A zero parameter
-/// means the term is absent; gm_sb = 0 drops that GM; bi = 0 drops the flicker bank.
+/// ramp and sinusoids are not filter states on the node). 48 bytes (version 1) or 64 bytes
+/// (version 2: the last four fields; a version 1 record has no slot for them and parses them as
+/// 0). Sent by the host as kModel / kModel2 (n_states and flags 0); echoed by the node as
+/// kModelEcho / kModelEcho2 with what it runs. A zero parameter means the term is absent;
+/// gm_sb = 0 drops that GM; bi = 0 drops the flicker bank; osc_sigma = 0 drops the oscillation.
 struct ModelRecord {
-  std::uint8_t version;          ///< kModelVersion
+  std::uint8_t version;          ///< kModelVersion1 or kModelVersion2
   std::uint8_t channel;          ///< 0..5
   std::uint8_t n_states;         ///< echo: the model's states the node runs (0 in a push);
                                  ///< its filter has one more, the sample mean
@@ -236,6 +249,11 @@ struct ModelRecord {
   float bi;                      ///< bias instability B [unit] (node rebuilds the flicker bank)
   float bi_tau_lo_s;
   float bi_tau_hi_s;
+  float n_filter_s;              ///< v2: time constant of the sensor's first-order output filter
+                                 ///< the white noise is seen through [s] (0: none; 1 state)
+  float osc_sigma;               ///< v2: narrowband oscillation, std [unit] (0: absent; 2 states)
+  float osc_f0_hz;               ///< v2: its centre frequency [Hz]
+  float osc_beta_per_s;          ///< v2: its damping rate [1/s]
 };
 
 /// Record lengths in bytes on the wire, CRC included.
@@ -246,12 +264,16 @@ inline constexpr std::size_t kBiasLen = 60;
 inline constexpr std::size_t kMonitorLen = 20;
 inline constexpr std::size_t kStatsLen = 44;
 inline constexpr std::size_t kRejectsLen = 64;
-inline constexpr std::size_t kModelLen = 48;
+inline constexpr std::size_t kModelLen = 48;   ///< version 1
+inline constexpr std::size_t kModel2Len = 64;  ///< version 2
 inline constexpr std::size_t kChannelMonitorLen = 44;
 
 /// Wire length of a record kind; FD identifier of a kind. Constant time.
 [[nodiscard]] std::size_t record_len(RecordKind k);
 [[nodiscard]] std::uint32_t fd_id(RecordKind k);
+/// The ModelRecord version a kind carries: kModelVersion1 (kModel, kModelEcho), kModelVersion2
+/// (kModel2, kModelEcho2), 0 for the other kinds. Constant time.
+[[nodiscard]] std::uint8_t model_version(RecordKind k);
 /// Kind of an identifier (FD or classic), false if the id is not part of the protocol.
 [[nodiscard]] bool kind_of_id(std::uint32_t can_id, RecordKind& kind, Layout& layout);
 
@@ -273,7 +295,8 @@ void encode(const BiasRecord& r, Layout layout, std::uint8_t transfer_id, Encode
 void encode(const MonitorRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
 void encode(const StatsRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
 void encode(const RejectsRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out);
-/// echo = true: kModelEcho (node telemetry), else kModel (host -> node).
+/// echo = true: kModelEcho (node telemetry), else kModel (host -> node); kModelEcho2 / kModel2
+/// when r.version is kModelVersion2 (any other version: the version 1 layout and kinds).
 void encode(const ModelRecord& r, bool echo, Layout layout, std::uint8_t transfer_id,
             EncodedFrames& out);
 void encode(const ChannelMonitorRecord& r, Layout layout, std::uint8_t transfer_id,
@@ -281,7 +304,8 @@ void encode(const ChannelMonitorRecord& r, Layout layout, std::uint8_t transfer_
 
 // ---- Record serialisation (used by the encoders and by Receiver) ------------------------------
 
-/// Write a record's wire bytes, CRC included, into buf (at least record_len bytes).
+/// Write a record's wire bytes, CRC included, into buf (at least record_len bytes; a
+/// ModelRecord: kModel2Len bytes if its version is kModelVersion2, else kModelLen).
 void serialize(const ConfigRecord& r, std::uint8_t* buf);
 void serialize(const SampleRecord& r, std::uint8_t* buf);
 void serialize(const AdevRecord& r, std::uint8_t* buf);
@@ -295,7 +319,9 @@ void serialize(const ChannelMonitorRecord& r, std::uint8_t* buf);
 /// True if the last 4 bytes of buf[0, len) are the CRC-32C of the bytes before them.
 [[nodiscard]] bool crc_ok(const std::uint8_t* buf, std::size_t len);
 
-/// Parse wire bytes (CRC already checked by the caller). Constant time.
+/// Parse wire bytes (CRC already checked by the caller). Constant time. A ModelRecord's layout
+/// is chosen by its version byte (buf[0]), as serialize chose it; the caller has checked that
+/// the byte matches the record kind (Receiver does).
 void parse(const std::uint8_t* buf, ConfigRecord& r);
 void parse(const std::uint8_t* buf, SampleRecord& r);
 void parse(const std::uint8_t* buf, AdevRecord& r);

@@ -37,7 +37,10 @@ struct RxStats {
   std::uint64_t truncated = 0;         ///< classic transfer abandoned before its last fragment
   std::uint64_t orphan_fragments = 0;  ///< classic fragment whose transfer start was not seen
   std::uint64_t bad_record = 0;        ///< CRC-valid record this version refuses: a Config
-                                       ///< record whose channel count is not kChannels
+                                       ///< record whose channel count is not kChannels, a
+                                       ///< Model record whose version byte is not its kind's
+                                       ///< or whose channel is not below kChannels, a
+                                       ///< ChannelMonitor record's channel likewise
   std::uint64_t records[kRecordKinds] = {};
   std::uint64_t samples = 0;           ///< samples released (Sample events)
   std::uint64_t duplicates = 0;        ///< sample with a sequence number already received
@@ -86,7 +89,7 @@ struct RxEvent {
     MonitorRecord monitor;
     StatsRecord stats;
     RejectsRecord rejects;
-    ModelRecord model;                ///< kModel and kModelEcho
+    ModelRecord model;                ///< kModel and kModelEcho, record version 1 or 2
     ChannelMonitorRecord channel_monitor;
   } rec;
 };
@@ -366,8 +369,8 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
     ++stats_.bad_record;  // counts[] and lsb[] would not mean what they say
     return FrameVerdict::kBadRecord;
   }
-  if ((k == RecordKind::kModel || k == RecordKind::kModelEcho) &&
-      (buf[0] != kModelVersion || buf[1] >= kChannels)) {  // bytes 0, 1: version, channel
+  if (model_version(k) != 0 &&
+      (buf[0] != model_version(k) || buf[1] >= kChannels)) {  // bytes 0, 1: version, channel
     ++stats_.bad_record;
     return FrameVerdict::kBadRecord;
   }
@@ -404,9 +407,11 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
       parse(buf, enqueue(RxEvent::Type::kRejects, rx_time_ns).rec.rejects);
       break;
     case RecordKind::kModel:
+    case RecordKind::kModel2:  // both versions: one event, ModelRecord::version tells which
       parse(buf, enqueue(RxEvent::Type::kModel, rx_time_ns).rec.model);
       break;
     case RecordKind::kModelEcho:
+    case RecordKind::kModelEcho2:
       parse(buf, enqueue(RxEvent::Type::kModelEcho, rx_time_ns).rec.model);
       break;
     case RecordKind::kChannelMonitor:

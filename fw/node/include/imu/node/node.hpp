@@ -30,7 +30,7 @@
 // is never exactly zero, a channel absent from a recording is. The static input is read once per
 // status period, not per sample (one GPIO ioctl per period).
 //
-// Memory: sizeof(Node) is the whole state (54.4 kB on x86-64, mostly six OnlineAdev<8,22> and
+// Memory: sizeof(Node) is the whole state (62.8 kB on x86-64, mostly six OnlineAdev<8,22> and
 // six KalmanFilter<float, 9> for pushed models); no
 // heap, no exceptions, no OS calls: the library is compiled with fw/src/fw_prelude.hpp. Not
 // re-entrant on one instance. Cost per sample: 6 ADEV pushes (amortised ~12 multiply-adds each)
@@ -92,19 +92,28 @@ inline constexpr double kMaxTpS = 1e8;
 inline constexpr std::size_t kNodeProcessStates = 8;
 inline constexpr std::size_t kNodeStates = kNodeProcessStates + 1;
 /// Accepted ranges of a pushed ModelRecord (both ends included, zero = term absent where noted):
-/// N in 1e-12 .. 1e3 (required: the filter needs measurement noise); Q, K, B in 0 or
+/// N in 1e-12 .. 1e3 (required: the filter needs measurement noise, and with an output filter N
+/// is still the white noise's density, the filter only shapes it); Q, K, B in 0 or
 /// 1e-15 .. 1e3; a GM's Sb in 0 or 1e-30 .. 1e6 with Tb in 1e-3 .. 1e8 s; the flicker range
-/// 1e-3 .. 1e8 s with lo < hi. Ramp and sinusoids are deterministic and are not filter states
-/// (the record has no field for them).
+/// 1e-3 .. 1e8 s with lo < hi. Version 2 only (0 in version 1): the output filter's time
+/// constant in 0 or 1e-6 .. 1e3 s; the oscillation absent (sigma, f0 and beta all 0) or sigma
+/// in 1e-15 .. 1e3, f0 in 0 .. 5e4 Hz, beta in 1e-6 .. 1e6 per s. Ramp and sinusoids are
+/// deterministic and are not filter states (the record has no field for them).
 inline constexpr float kMaxPushedTbS = 1e8F;
 inline constexpr float kMinPushedTbS = 1e-3F;
+inline constexpr float kMinPushedFilterS = 1e-6F;
+inline constexpr float kMaxPushedFilterS = 1e3F;
+inline constexpr float kMaxPushedOscF0Hz = 5e4F;
+inline constexpr float kMinPushedOscBetaPerS = 1e-6F;
+inline constexpr float kMaxPushedOscBetaPerS = 1e6F;
 /// Missing samples beyond this are predicted as this many steps (the GM states have forgotten
 /// everything long before; RRW variance is capped by the filter): a 2^31 jump stays O(1).
 inline constexpr std::uint64_t kMaxGapSteps = 4096;
 
-/// Validate a pushed model record and build its parameters: every field finite and in the
-/// ranges above, and the model (flicker bank rebuilt by imu::flicker_bank) has at most
-/// kNodeProcessStates states. Does not discretise. O(1).
+/// Validate a pushed model record (version 1 or 2) and build its parameters: every field finite
+/// and in the ranges above, and the model (flicker bank rebuilt by imu::flicker_bank; the
+/// output filter 1 state, the oscillation 2) has at most kNodeProcessStates states. Does not
+/// discretise. O(1).
 [[nodiscard]] bool model_record_valid(const hal::ModelRecord& r, ModelParams& out);
 /// Build, discretise at rate_hz (Van Loan, averaging sampler) and pad a pushed model to
 /// kNodeStates; false if any step fails. O(kNodeStates^3) (matrix exponential of 2 * kNodeStates).
@@ -203,6 +212,8 @@ class Node {
     return pushed_[c] ? kfn_[c].bias_variance() : kf_[c].variance();
   }
   /// What channel c runs: the first-order one-state model (flags 0, n_states 1) or a pushed one.
+  /// In the version of the channel's last push (version 1 before any), and in version 2
+  /// whenever the model it runs was pushed in version 2 (version 1 may not describe it).
   [[nodiscard]] hal::ModelRecord model_echo(std::size_t c) const;
   [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
   [[nodiscard]] const ResidualMonitors<4>& monitors(std::size_t c) const { return mon_[c]; }
@@ -244,6 +255,7 @@ class Node {
   ModelParams model_par_[kChannels] = {};
   std::size_t model_states_[kChannels] = {};
   bool pushed_[kChannels] = {};
+  bool echo_v2_[kChannels] = {};  // the channel's last push was version 2: echo in version 2
   DiscreteModel<kNodeStates> scratch_dm_{};  // discretisation workspace (not on the stack)
   ResidualMonitors<4> mon_[kChannels];
   float known_[kChannels] = {};
