@@ -233,14 +233,11 @@ struct FilterRun {
 constexpr std::size_t kStates = kModelMaxStates;
 using Model = DiscreteModel<kStates>;
 
+// A model as the node observes it: each sample the mean of the model over its interval
+// (imu::discretize_averaged; node::discretize_pushed), so that the filters and the covariance
+// check see the samples the AVAR formulas describe (a filtered white noise's point samples
+// would have the wrong variance). Only white noise: no state at all.
 bool discretize_params(const ModelParams& p, double ts, Model& d) {
-  ContinuousModel<kStates> c;
-  return build_model(p, c) == ModelStatus::kOk && discretize(c, ts, d) == ModelStatus::kOk;
-}
-
-// The filter's model: the node's, each sample the mean of the model over its interval
-// (imu::discretize_averaged; node::discretize_pushed). Only white noise: no state at all.
-bool discretize_filter_model(const ModelParams& p, double ts, Model& d) {
   ContinuousModel<kStates> c;
   if (build_model(p, c) != ModelStatus::kOk) {
     return false;
@@ -606,7 +603,7 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
     out.pred.assign(y.size(), known);
   }
   Model d;
-  if (!discretize_filter_model(stochastic_part(p_full), ts, d)) {
+  if (!discretize_params(stochastic_part(p_full), ts, d)) {
     return out;
   }
   const std::size_t n = d.n_states;
@@ -782,6 +779,33 @@ double mean_of(const std::vector<double>& v) {
 
 
 // |DTFT|^2 of Hann-windowed x at frequency f (cycles per sample).
+// Golden-section search for the minimum of a unimodal f on [lo, hi]: `iterations` steps, one
+// evaluation each (the interior point kept is reused); the final bracket's midpoint.
+template <typename F>
+double golden_min(const F& f, double lo, double hi, int iterations) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double c = hi - g * (hi - lo);
+  double d = lo + g * (hi - lo);
+  double fc = f(c);
+  double fd = f(d);
+  for (int it = 0; it < iterations; ++it) {
+    if (fc < fd) {
+      hi = d;
+      d = c;
+      fd = fc;
+      c = hi - g * (hi - lo);
+      fc = f(c);
+    } else {
+      lo = c;
+      c = d;
+      fc = fd;
+      d = lo + g * (hi - lo);
+      fd = f(d);
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
 double dtft_power(const std::vector<double>& xw, double f) {
   double re = 0.0;
   double im = 0.0;
@@ -934,29 +958,11 @@ SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c,
       centre += std::clamp(0.5 * (l0 - l2) / den, -0.5, 0.5);
     }
   }
-  double lo = (centre - 0.3) * df / fsd;
-  double hi = (centre + 0.3) * df / fsd;
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  double c = hi - g * (hi - lo);
-  double d = lo + g * (hi - lo);
-  double pc = dtft_power(x, c);
-  double pd = dtft_power(x, d);
-  for (int it = 0; it < 16; ++it) {  // 0.6 bin * 0.618^16 = 2.8e-4 bin
-    if (pc > pd) {
-      hi = d;
-      d = c;
-      pd = pc;
-      c = hi - g * (hi - lo);
-      pc = dtft_power(x, c);
-    } else {
-      lo = c;
-      c = d;
-      pc = pd;
-      d = lo + g * (hi - lo);
-      pd = dtft_power(x, d);
-    }
-  }
-  const double f_hz = 0.5 * (lo + hi) * fsd;
+  // 0.6 bin * 0.618^16 = 2.8e-4 bin
+  const double f_norm =
+      golden_min([&](double f) { return -dtft_power(x, f); }, (centre - 0.3) * df / fsd,
+                 (centre + 0.3) * df / fsd, 16);
+  const double f_hz = f_norm * fsd;
   return sine_ls(y, ts, f_hz);
 }
 
@@ -3103,19 +3109,8 @@ class Analysis {
         best_ln = lo + step * i;
       }
     }
-    double a = std::max(lo, best_ln - step);
-    double b = std::min(hi, best_ln + step);
-    const double gr = 0.5 * (std::sqrt(5.0) - 1.0);
-    for (int it = 0; it < 10; ++it) {
-      const double x1 = b - gr * (b - a);
-      const double x2 = a + gr * (b - a);
-      if (cost_at(x1) < cost_at(x2)) {
-        b = x2;
-      } else {
-        a = x1;
-      }
-    }
-    const double tf = std::exp(0.5 * (a + b));
+    const double tf = std::exp(
+        golden_min(cost_at, std::max(lo, best_ln - step), std::min(hi, best_ln + step), 10));
     // The filter's own gain: the same fit with and without it (a refit can also land on another
     // optimum of the other terms, which is not the filter's doing).
     drop = cost_with(0.0) - cost_with(tf);
