@@ -90,7 +90,8 @@ TEST(SpscRing, FullRingRefusesTheNewestAndKeepsTheOldest) {
 }
 
 TEST(IsrFrameSource, ReceiveBatchesInOrderAndCountsOverflow) {
-  IsrFrameSource<8> src;
+  IsrFrameSource<8>::Ring ring;
+  IsrFrameSource<8> src(ring);
   RxFrame out[3]{};
   std::size_t n = 5;
   EXPECT_EQ(src.receive(out, 3, n, -1), IoStatus::kTimeout);  // empty: never waits
@@ -138,7 +139,8 @@ bool drain_some(void* ctx, int timeout_ms) {
 }
 
 TEST(RingFrameSink, FullRingWithoutWaitRefusesAndCounts) {
-  RingFrameSink<4> sink;
+  RingFrameSink<4>::Ring ring;
+  RingFrameSink<4> sink(ring);
   for (std::uint32_t k = 0; k < 4; ++k) {
     EXPECT_EQ(sink.send(frame(k), 100), IoStatus::kOk);
   }
@@ -155,7 +157,8 @@ TEST(RingFrameSink, FullRingWithoutWaitRefusesAndCounts) {
 }
 
 TEST(RingFrameSink, WaitFunctionMakesRoomOnlyWhenATimeoutIsGiven) {
-  RingFrameSink<4> sink;
+  RingFrameSink<4>::Ring ring;
+  RingFrameSink<4> sink(ring);
   Drainer d;
   d.sink = &sink;
   d.take = 1;
@@ -187,7 +190,8 @@ TEST(IsrFrameSource, ProducerAndConsumerThreadsSeeEveryFrameInOrder) {
 #ifdef IMU_EMULATED_TARGET
   GTEST_SKIP() << "threads under user-mode emulation";
 #endif
-  static IsrFrameSource<16> src;
+  static IsrFrameSource<16>::Ring ring;
+  static IsrFrameSource<16> src(ring);
   constexpr std::uint32_t kFrames = 50000;
   std::uint32_t refused = 0;
   std::thread producer([&refused] {

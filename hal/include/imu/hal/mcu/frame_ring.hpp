@@ -1,11 +1,14 @@
 // Bare-metal MCU backend of the frame ports (imu/hal/frame_io.hpp): interrupt-fed rings.
 //
 //   SpscRing<T, N>      lock-free single-producer / single-consumer ring of N slots.
-//   IsrFrameSource<N>   FrameSource: the CAN RX interrupt pushes (push_from_isr), the main loop
-//                       takes frames with receive().
-//   RingFrameSink<N>    FrameSink: the node's send() pushes telemetry, one consumer (the CAN
-//                       TX-complete interrupt or the main loop) pops and hands it to the
-//                       controller.
+//   IsrFrameSource<N>   FrameSource over a SpscRing<RxFrame, N>: the CAN RX interrupt pushes
+//                       (push_from_isr), the main loop takes frames with receive().
+//   RingFrameSink<N>    FrameSink over a SpscRing<CanFrame, N>: the node's send() pushes
+//                       telemetry, one consumer (the CAN TX-complete interrupt or the main
+//                       loop) pops and hands it to the controller.
+// The ports hold a reference to their ring, which the image defines as a separate object: the
+// ports have a vtable pointer, so a port object is initialised data (.data: flash and RAM),
+// while a ring on its own is all zeros (.bss: RAM only).
 //
 // Platform-free (no OS, no heap, no exceptions; built under the fw rules), compile-time
 // capacities, header-only, unit-tested on the desktop (tests/hal/test_frame_ring.cpp).
@@ -105,6 +108,10 @@ class SpscRing {
 template <std::size_t N>
 class IsrFrameSource final : public FrameSource {
  public:
+  using Ring = SpscRing<RxFrame, N>;
+  /// The ring must outlive the source; the source is its only producer and consumer.
+  explicit IsrFrameSource(Ring& ring) : ring_(ring) {}
+
   /// Producer. Queues one received frame as the transport delivered it (nbytes: kCanMtu or
   /// kCanFdMtu; the receiver counts anything else) with its receive time. False when the
   /// ring is full: the frame is dropped and counted in overflows(). O(1).
@@ -145,7 +152,7 @@ class IsrFrameSource final : public FrameSource {
   static constexpr std::size_t capacity() { return N; }
 
  private:
-  SpscRing<RxFrame, N> ring_;
+  Ring& ring_;
   std::atomic<std::uint32_t> overflows_{0};
 };
 
@@ -161,6 +168,9 @@ class RingFrameSink final : public FrameSink {
   /// now. It runs in the producer's context: if it pops, the producer context must be the
   /// ring's only consumer (e.g. the main loop both sends and drains).
   using WaitFn = bool (*)(void* ctx, int timeout_ms);
+  using Ring = SpscRing<CanFrame, N>;
+  /// The ring must outlive the sink; the sink is its only producer and consumer.
+  explicit RingFrameSink(Ring& ring) : ring_(ring) {}
 
   void set_wait(WaitFn fn, void* ctx) {
     wait_ = fn;
@@ -193,7 +203,7 @@ class RingFrameSink final : public FrameSink {
   static constexpr std::size_t capacity() { return N; }
 
  private:
-  SpscRing<CanFrame, N> ring_;
+  Ring& ring_;
   std::atomic<std::uint32_t> overflows_{0};
   WaitFn wait_ = nullptr;
   void* wait_ctx_ = nullptr;
