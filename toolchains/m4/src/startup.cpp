@@ -1,11 +1,16 @@
-// Reset and fault handlers and the vector table for the Cortex-M4F test image (mps2-an386).
+// Reset and fault handlers and the vector table for the Cortex-M4F images (mps2-an386 and any
+// Cortex-M4F: nothing here is board specific).
 // Reset: enable the FPU, copy .data, zero .bss, paint the stack (for the high-water mark), run
-// static constructors, call imu_m4_main(), exit through semihosting with its return value.
+// static constructors, call imu_m4_main(), then imu_m4_exit() with its return value. Faults
+// call imu_m4_fault(). The image provides both: the test images exit through semihosting
+// (semihost.cpp), the production image resets (node_prod.cpp).
+// SysTick and PendSV handlers are weak (default: the fault handler), so an image may define
+// them; external interrupt vectors (the board's, e.g. the CAN controller's) follow the 16 core
+// vectors from input sections .isr_vector.irq (see mps2_an386.ld).
 // No newlib crt0 (the image links with -nostartfiles), so nothing calls _sbrk or atexit.
 #include <cstddef>
 #include <cstdint>
 
-#include "semihost.hpp"
 #include "startup.hpp"
 
 extern "C" {
@@ -23,6 +28,8 @@ extern void (*__init_array_end[])();
 int imu_m4_main();  // the program (ISO C++ forbids calling main())
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void Fault_Handler();
+void SysTick_Handler();
+void PendSV_Handler();
 }
 
 namespace {
@@ -45,8 +52,8 @@ __attribute__((section(".isr_vector"), used)) const Vector g_vector_table[16] = 
     Fault_Handler,  // SVCall
     Fault_Handler,  // DebugMonitor
     nullptr,
-    Fault_Handler,  // PendSV
-    Fault_Handler,  // SysTick
+    PendSV_Handler,
+    SysTick_Handler,
 };
 
 void Reset_Handler() {
@@ -71,14 +78,14 @@ void Reset_Handler() {
   for (Vector* f = __init_array_start; f < __init_array_end; ++f) {
     (*f)();
   }
-  const int rc = imu_m4_main();
-  imu::m4::semihost_exit(static_cast<std::uint32_t>(rc));
+  imu_m4_exit(imu_m4_main());
 }
 
-void Fault_Handler() {
-  imu::m4::semihost_write0("IMU-M4 FAULT: processor exception\n");
-  imu::m4::semihost_exit(3);
-}
+void Fault_Handler() { imu_m4_fault(); }
+
+// Weak: an image that uses SysTick or PendSV defines its own.
+__attribute__((weak)) void SysTick_Handler() { imu_m4_fault(); }
+__attribute__((weak)) void PendSV_Handler() { imu_m4_fault(); }
 
 namespace imu::m4 {
 

@@ -1,8 +1,16 @@
-// What the startup code exposes to the program: the stack high-water mark.
+// What the startup code exposes to the program (the stack high-water mark) and what it needs
+// from the image (exit and fault handling).
 #ifndef IMU_M4_STARTUP_HPP
 #define IMU_M4_STARTUP_HPP
 
 #include <cstddef>
+
+extern "C" {
+/// After imu_m4_main() returns, with its value. Provided by the image (never returns).
+[[noreturn]] void imu_m4_exit(int rc);
+/// From every fault and unused exception vector. Provided by the image (never returns).
+[[noreturn]] void imu_m4_fault();
+}
 
 namespace imu::m4 {
 
