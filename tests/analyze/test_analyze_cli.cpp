@@ -376,19 +376,19 @@ TEST(AnalyzeWholeImu, ChannelAllJsonAndKalibrYaml) {
             std::string::npos);
 }
 
-// A record past 2^22 samples is analysed on block means for the whole record,
-// and its first 2^22 samples at full rate for what the means cannot resolve. The first-order model
-// plus a 30 Hz sinusoid (A = 0.02, 0.6 x the white std per sample: an 8 % ADEV bump at Ts), 4.5e6
+// A record past 2^20 samples is analysed on block means for the whole record,
+// and its first 2^20 samples at full rate for what the means cannot resolve. The first-order model
+// plus a 30 Hz sinusoid (A = 0.02, 0.6 x the white std per sample: an 8 % ADEV bump at Ts), 1.125e6
 // samples at 100 Hz: the means of 2 (50 Hz) cannot hold 30 Hz, it aliases to 20 Hz at 0.59 A.
 // Before the full-rate head the report named a 20 Hz sinusoid: a wrong name. Now the sinusoid
 // is named at 30 Hz with its amplitude, no 20 Hz one is named, the model handed to the node
 // carries it, and the report gives the head's errors before and after.
 TEST(AnalyzeLongRecord, FastSinusoidIsFoundAtFullRateNotAtItsAlias) {
 #ifdef IMU_EMULATED_TARGET
-  GTEST_SKIP() << "4.5e6 samples analysed twice: minutes under qemu-user";
+  GTEST_SKIP() << "1.125e6 samples analysed twice: minutes under qemu-user";
 #endif
   imu::analyze::SynthSpec sp;
-  sp.samples = 4500000;
+  sp.samples = 1125000;
   sp.seed = 31;
   sp.sin_a = 0.02;
   sp.sin_f_hz = 30.0;
@@ -411,8 +411,8 @@ TEST(AnalyzeLongRecord, FastSinusoidIsFoundAtFullRateNotAtItsAlias) {
   const double f = number_after(effects, sine, "\"freq_hz\": ");
   const double a = number_after(effects, sine, "\"amplitude\": ");
   std::printf("sinusoid named at %.6f Hz, A = %.5f (synth 30 Hz, 0.02)\n", f, a);
-  EXPECT_NEAR(f, 30.0, 0.01);       // the DTFT peak of 11.6 h: resolution ~1e-5 Hz
-  EXPECT_NEAR(a, 0.02, 0.02 * 0.02);  // LS amplitude; white std 0.033 over 4e6 samples: 2e-5
+  EXPECT_NEAR(f, 30.0, 0.01);       // the DTFT peak of 3.1 h: resolution ~1e-4 Hz
+  EXPECT_NEAR(a, 0.02, 0.02 * 0.02);  // LS amplitude; white std 0.033 over 1e6 samples: 5e-5
   EXPECT_EQ(effects.find("sinusoid", sine + 20), std::string::npos) << effects;
   EXPECT_EQ(effects.find("oscillation"), std::string::npos) << effects;
   // The model handed to the node: the sinusoid, the white noise of the full rate (the means put

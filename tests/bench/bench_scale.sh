@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Peak RSS and wall time of `imu-sim synth`, `adev`, `run` and `analyze` on synthesised records
 # of 10^6, 10^7, ... samples (memory flat in the record's length, <= 64 MB at 10^8 for
-# adev and run; analyze bounded by its 2^22 analysed samples, block means beyond). Not a test
+# adev, run and analyze; analyze holds at most 2^20 samples, block means beyond). Not a test
 # (ctest does not run it): it prints figures, with the load average, for the README.
 #
 #   tests/bench/bench_scale.sh [MAX_EXP [RUN_MAX_EXP]]
@@ -73,7 +73,8 @@ for ((e = 6; e <= max_exp; ++e)); do
   rm -f "$mat"
 done
 # Text input (CSV with a time column), streamed as MAT-files are: 10^6 and 10^7 rows (10^8
-# rows of text is ~1.6 GB; TEXT_MAX_EXP=8 to include it).
+# rows of text is ~1.6 GB; TEXT_MAX_EXP=8 to include it). The rows hold a 0.37 Hz sinusoid, so
+# analyze's sinusoid search (its spectrum: analyze's largest memory) runs on them.
 text_max_exp=${TEXT_MAX_EXP:-7}
 printf '%-10s %8s | %-26s | %-17s\n' rows file_MB "adev (CSV) RSS_MB wall_s MB/s" \
   "analyze RSS wall"
@@ -81,7 +82,8 @@ for ((e = 6; e <= text_max_exp; ++e)); do
   n=$((10**e))
   csv="$dir/rec_1e$e.csv"
   awk -v n="$n" 'BEGIN { srand(5); print "t,acc_z"
-    for (i = 0; i < n; i++) printf "%.2f,%.4f\n", i * 0.01, 9.81 + 0.01 * (rand() - 0.5) }' > "$csv"
+    for (i = 0; i < n; i++) printf "%.2f,%.4f\n", i * 0.01,
+      9.81 + 0.01 * (rand() - 0.5) + 0.002 * sin(2.324779 * i * 0.01) }' > "$csv"
   file_mb=$(awk -v b="$(stat -c %s "$csv")" 'BEGIN { printf "%.0f", b / 1e6 }')
   measure adev_text "$imu_sim" adev "$csv" --channel acc_z --lsb 1e-4 --estimator online
   mbs=$(awk -v m="$file_mb" -v t="$wall_s" 'BEGIN { printf "%.0f", (t > 0) ? m / t : 0 }')

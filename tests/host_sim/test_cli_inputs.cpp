@@ -559,8 +559,8 @@ TEST(SimCliInputs, FailedWritesLeaveNoPartialFile) {
 // Defect: an allocation failure escaped as std::bad_alloc (abort, core dump). It is caught at the
 // top of every command: one line, exit 1. Here a 2^25-sample channel (256 MiB of doubles) meets
 // an address space of 64 MiB more than the process already uses: synth writes it in chunks,
-// so it succeeds; analyze, which reads it in chunks but analyses 2^22 block means
-// (about 160 MB whatever the record's length), fails in one line.
+// so it succeeds; analyze, which reads it in chunks but analyses 2^20 block means (about 30 MB
+// whatever the record's length), given 16 MiB more, fails in one line.
 TEST(SimCliInputs, AllocationFailureIsOneLineAndExit1) {
   SKIP_IF_EMULATED();  // an RLIMIT_AS limit starves qemu-user itself, not the program
 #if IMU_TEST_UNDER_ASAN
@@ -574,69 +574,71 @@ TEST(SimCliInputs, AllocationFailureIsOneLineAndExit1) {
                              RLIMIT_AS, vm + (64U << 20U), dir.file("err.txt"));
   EXPECT_EQ(w.status, 0) << w.err;
   const auto r = run_limited({"analyze", dir.file("big.mat"), "--channel", "acc_z"}, RLIMIT_AS,
-                             vm + (64U << 20U), dir.file("err2.txt"));
+                             vm + (16U << 20U), dir.file("err2.txt"));
   EXPECT_EQ(r.status, 1) << r.err;
   EXPECT_EQ(r.err, "imu-sim analyze: out of memory\n");
 }
 
-// A record longer than 2^22 samples is analysed on block means (read from the
-// stream, the file never whole), so analyze's memory stops growing with the record. 4.5e6
-// samples of the synth model (white N + GM + rate random walk K) become 2.25e6 means of 2 at
-// 50 Hz: the report says so, and the model found is still the synthesised one (N within 2 %,
-// the walk named, K within its sampling spread on 12.5 h: a factor 1.5), and the one the
-// full-rate analysis finds on the same realisation's first 4.19e6 samples (N within 1 %, K
-// within 10 %: the means add no bias).
+// A record longer than 2^20 samples is analysed on block means (read from the
+// stream, the file never whole), so analyze's memory stops growing with the record. 12.5 h at
+// 25 Hz, 1.125e6 samples of the synth model (white N + GM + rate random walk K = 4e-4, which
+// meets the white noise at 200 s), become 562500 means of 2 at 12.5 Hz: the report says so, and
+// the model found is still the synthesised one (N within 2 %, the walk named, K within a factor
+// 1.5), and the one the full-rate analysis finds on the same realisation's first 1.048e6
+// samples (N within 1 %, K within 10 %: the means add no bias).
 TEST(SimCliInputs, LongRecordIsAnalysedOnBlockMeans) {
-  SKIP_IF_EMULATED();  // 4.5e6 samples under qemu-user: minutes
+  SKIP_IF_EMULATED();  // 1.125e6 samples under qemu-user: minutes
   simtest::TempDir dir;
   const std::string mat = dir.file("long.mat");
-  auto r = run({"synth", "--out", mat, "--duration", "45000", "--N", "3.3e-3", "--K", "1.4e-4",
+  auto r = run({"synth", "--out", mat, "--fs", "25", "--duration", "45000", "--N", "3.3e-3",
+                "--K", "4e-4",
                 "--B", "9e-4", "--Tp", "300", "--seed", "11"});
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string json = dir.file("long.json");
   r = run({"analyze", mat, "--channel", "acc_z", "--json", json});
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_NE(r.out.find("long record: its 4500000 samples analysed as 2250000 means of 2 samples "
-                       "(rate 50 Hz)"),
+  EXPECT_NE(r.out.find("long record: its 1125000 samples analysed as 562500 means of 2 samples "
+                       "(rate 12.5 Hz)"),
             std::string::npos)
       << r.out;
   const std::string j = simtest::read_text(json);
-  EXPECT_EQ(simtest::json_number_in(j, "channel", "n_samples"), 2250000.0);
-  EXPECT_EQ(simtest::json_number_in(j, "channel", "fs_hz"), 50.0);
+  EXPECT_EQ(simtest::json_number_in(j, "channel", "n_samples"), 562500.0);
+  EXPECT_EQ(simtest::json_number_in(j, "channel", "fs_hz"), 12.5);
   const double n = simtest::json_number_in(j, "model_after", "n");
   const double k = simtest::json_number_in(j, "model_after", "k");
-  std::printf("block means of 2: N = %.4e (synth 3.3e-3), K = %.4e (synth 1.4e-4)\n", n, k);
+  std::printf("block means of 2: N = %.4e (synth 3.3e-3), K = %.4e (synth 4e-4)\n", n, k);
   EXPECT_NEAR(n, 3.3e-3, 0.02 * 3.3e-3);
   EXPECT_NE(j.find("\"rate_random_walk\""), std::string::npos);
-  EXPECT_GT(k, 1.4e-4 / 1.5);
-  EXPECT_LT(k, 1.4e-4 * 1.5);
+  EXPECT_GT(k, 4e-4 / 1.5);
+  EXPECT_LT(k, 4e-4 * 1.5);
 
   const std::string prefix = dir.file("prefix.mat");
-  r = run({"synth", "--out", prefix, "--duration", "41900", "--N", "3.3e-3", "--K", "1.4e-4",
+  r = run({"synth", "--out", prefix, "--fs", "25", "--duration", "41920", "--N", "3.3e-3",
+           "--K", "4e-4",
            "--B", "9e-4", "--Tp", "300", "--seed", "11"});
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string json_full = dir.file("prefix.json");
   r = run({"analyze", prefix, "--channel", "acc_z", "--json", json_full});
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_EQ(r.out.find("long record"), std::string::npos) << "4.19e6 samples: full rate";
+  EXPECT_EQ(r.out.find("long record"), std::string::npos) << "1.048e6 samples: full rate";
   const std::string jf = simtest::read_text(json_full);
   const double n_full = simtest::json_number_in(jf, "model_after", "n");
   const double k_full = simtest::json_number_in(jf, "model_after", "k");
-  std::printf("full rate, first 4.19e6 samples: N = %.4e, K = %.4e\n", n_full, k_full);
+  std::printf("full rate, first 1.048e6 samples: N = %.4e, K = %.4e\n", n_full, k_full);
   EXPECT_NEAR(n / n_full, 1.0, 0.01);
   EXPECT_NEAR(k / k_full, 1.0, 0.10);
 }
 
 // The same for a text file (analyze streams text too, never the table): a text
-// record past 2^22 samples is held as block means, found while it streams (the length is not
-// known in advance: B doubles, merging pairs of blocks). 4.2e6 samples give 2.1e6 means of 2,
+// record past 2^20 samples is held as block means, found while it streams (the length is not
+// known in advance: B doubles, merging pairs of blocks). 1.05e6 samples give 525000 means of 2,
 // and the analysis of the text is the MAT-file's, number for number (means of 2 are the same
 // sums whichever way they are formed).
 TEST(SimCliInputs, LongTextIsAnalysedOnTheMatFilesBlockMeans) {
-  SKIP_IF_EMULATED();  // 4.2e6 text rows under qemu-user: minutes
+  SKIP_IF_EMULATED();  // 1.05e6 text rows under qemu-user: minutes
   simtest::TempDir dir;
   const std::string mat = dir.file("long.mat");
-  auto r = run({"synth", "--out", mat, "--duration", "42000", "--N", "2.1e-3", "--K", "9e-5",
+  auto r = run({"synth", "--out", mat, "--duration", "10500", "--N", "2.1e-3", "--K", "9e-5",
                 "--B", "6e-4", "--Tp", "200", "--seed", "23"});
   ASSERT_EQ(r.status, 0) << r.err;
   const auto col = imu::mat::read_column(mat, "acc_z");
@@ -657,7 +659,7 @@ TEST(SimCliInputs, LongTextIsAnalysedOnTheMatFilesBlockMeans) {
   ASSERT_EQ(r.status, 0) << r.err;
   r = run({"analyze", csv, "--channel", "acc_z", "--fs", "100", "--lsb", "1e-6", "--json", jt});
   ASSERT_EQ(r.status, 0) << r.err;
-  EXPECT_NE(r.out.find("long record: its 4200000 samples analysed as 2100000 means of 2 samples "
+  EXPECT_NE(r.out.find("long record: its 1050000 samples analysed as 525000 means of 2 samples "
                        "(rate 50 Hz)"),
             std::string::npos)
       << r.out;

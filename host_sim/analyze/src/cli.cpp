@@ -30,6 +30,12 @@
 namespace imu::analyze {
 namespace {
 
+// Records longer than this are analysed on block means: the analysis keeps several values per
+// sample (up to about 50 bytes in flight while the sinusoid search holds its spectrum), so 2^20
+// samples (2.9 h at 100 Hz, 17 min at 1 kHz) stay under 64 MB per channel whatever the record's
+// length. The ADIS16405 records of imudata (1.008e6 samples at 100 Hz) stay at full rate.
+constexpr std::uint64_t kMaxAnalysedSamples = std::uint64_t{1} << 20;
+
 using imu::cli::kExitOk;
 using imu::cli::kExitRuntime;
 using imu::cli::kExitUsage;
@@ -58,8 +64,9 @@ constexpr const char* kUsage =
     "  lsb) in [1e-12, 1e6], for a single channel only. NaN/Inf samples are gaps (counted in\n"
     "  the report's `gaps`). --plots DIR (created if missing): analyze_NAME_adev.csv and\n"
     "  analyze_NAME_{before,after}.{svg,png}, NAME made a safe file name (no ':' or '/').\n"
-    "  A channel longer than 2^22 samples is analysed on block means of 2^k samples, and its first 2^22 samples at full\n"
-    "  rate for what the means cannot resolve (said in the report); the file (MAT or text) is\n"
+    "  A channel longer than 2^20 samples is analysed on block means of 2^k samples, and\n"
+    "  its first 2^20 samples at full rate for what the means cannot resolve (said in the\n"
+    "  report); the file (MAT or text) is\n"
     "  read in chunks, never whole. A ROS bag (format 2.0; chunks uncompressed or LZ4, BZ2\n"
     "  refused) is read as the columns t_ns (header stamps), acc_x..acc_z (m/s^2),\n"
     "  gyro_x..gyro_z (rad/s) of its sensor_msgs/Imu topic: --topic NAME, needed when it holds\n"
@@ -92,7 +99,8 @@ class StreamedFile {
       return st.error();
     }
     std::vector<double> out;
-    out.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(st.value().size(), 1U << 22U)));
+    out.reserve(
+        static_cast<std::size_t>(std::min<std::uint64_t>(st.value().size(), kMaxAnalysedSamples)));
     double chunk[4096];
     for (;;) {
       auto got = st.value().read(chunk, std::size(chunk));
@@ -211,11 +219,6 @@ bool resolve_channels(const StreamedFile& m, const std::string& file,
   }
   return within_channel_limit(file, out, err);
 }
-
-// Records longer than this are analysed on block means: the analysis keeps several doubles per
-// sample (about 40 bytes in flight), so 2^22 samples (11.6 h at 100 Hz) is ~0.16 GB per channel
-// whatever the record's length. The shared records (10^6 samples) stay at full rate.
-constexpr std::uint64_t kMaxAnalysedSamples = std::uint64_t{1} << 22;
 
 // Samples in, means of blocks of B consecutive samples out, one rule for every input: a block
 // with fewer than half of its samples finite is a gap (NaN); a last, partial block is dropped.
