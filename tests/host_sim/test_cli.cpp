@@ -315,7 +315,12 @@ TEST(SimCli, FirstOrderModelAlarmsAndPushedAnalysisModelIsQuietOnTheDemoData) {
   EXPECT_GE(nis, 0.8);
   EXPECT_LE(nis, 1.25);
   EXPECT_EQ(simtest::json_number_in(push_json, "node", "model_rejected"), 0.0);
-  EXPECT_GE(simtest::json_number_in(push_json, "node", "n_states"), 1.0);
+  // The demo's data hold a rate random walk beside the GM (synth's default K): the analysis keeps
+  // the walk its record's likelihood requires, so the node runs GM + walk.
+  const std::string node = push_json.substr(push_json.find("\"node\": {"));
+  const double states = simtest::json_number_in(node, "model", "n_states");  // the node's echo
+  std::printf("pushed model: %.0f states\n", states);
+  EXPECT_GE(states, 2.0) << node.substr(0, 1500);
 }
 
 /// `run --model` sends the white noise's output filter and the narrowband oscillation as filter

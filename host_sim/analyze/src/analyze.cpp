@@ -3,6 +3,7 @@
 #include "effects.hpp"
 #include "imu/analyze/long_memory.hpp"
 #include "fft.hpp"
+#include "noise_level.hpp"
 
 #include <algorithm>
 #include <array>
@@ -226,8 +227,10 @@ struct FilterRun {
   double nis_flagged = 0.0;        // fraction of NisMonitor blocks outside the band
   double whiteness_flagged = 0.0;  // fraction of WhitenessMonitor blocks above the bound
   std::size_t states = 0;
-  std::vector<double> nu;    // normalised innovation per sample (0 when not updated)
-  std::vector<double> pred;  // predicted measurement per sample (empty unless asked for)
+  // Per sample, in single precision (the fw monitors read the innovations as float; a record
+  // of 2^22 samples holds 16 MB per vector, not 32):
+  std::vector<float> nu;        // normalised innovation (0 when not updated)
+  std::vector<float> pred_rel;  // predicted measurement minus the known signal (empty unless asked)
 };
 
 constexpr std::size_t kStates = kModelMaxStates;
@@ -598,9 +601,9 @@ bool steady_state_covariance(const Model& d, std::size_t n, double r, Dense& x) 
 FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<double>& y,
                      double known, const std::vector<std::uint8_t>* skip, bool want_pred) {
   FilterRun out;
-  out.nu.assign(y.size(), 0.0);
+  out.nu.assign(y.size(), 0.0F);
   if (want_pred) {
-    out.pred.assign(y.size(), known);
+    out.pred_rel.assign(y.size(), 0.0F);
   }
   Model d;
   if (!discretize_params(stochastic_part(p_full), ts, d)) {
@@ -660,7 +663,7 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
     }
     st.swap(tmp);
     if (want_pred) {
-      out.pred[i] = known + hx;
+      out.pred_rel[i] = static_cast<float>(hx);
     }
     const bool tv = i < burn_in;
     double s_i = s;
@@ -691,12 +694,12 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
           }
         }
       }
-      out.nu[i] = e / std::sqrt(s_i);
+      out.nu[i] = static_cast<float>(e / std::sqrt(s_i));
       nis_sum += e * e / s_i;
       ++updates;
     } else {
       // not updated; its innovation is still recorded (the outlier check reads it)
-      out.nu[i] = (y[i] - known - hx) / std::sqrt(s_i);
+      out.nu[i] = static_cast<float>((y[i] - known - hx) / std::sqrt(s_i));
     }
   }
   out.nis_mean = updates > 0 ? nis_sum / static_cast<double>(updates) : 0.0;
@@ -708,8 +711,8 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
       white.configure(1000, 0.95) == MonitorStatus::kOk) {
     for (std::size_t i = 0; i < y.size(); ++i) {
       if (skip == nullptr || (*skip)[i] == 0) {
-        nis.push(static_cast<float>(out.nu[i]));
-        white.push(static_cast<float>(out.nu[i]));
+        nis.push(out.nu[i]);
+        white.push(out.nu[i]);
       }
     }
     out.nis_flagged = nis.blocks() > 0 ? static_cast<double>(nis.flagged_blocks()) /
@@ -750,9 +753,33 @@ double covariance_ratio(const ModelParams& p, double ts, const std::vector<doubl
   return robust_std(ends.data(), windows) / sd.back();
 }
 
+// The median of v (destroyed): robust_std's rule, in single precision.
+double median_inplace(std::vector<float>& v) {
+  if (v.empty()) {
+    return 0.0;
+  }
+  const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
+  std::nth_element(v.begin(), mid, v.end());
+  const double upper = *mid;
+  if (v.size() % 2 == 1) {
+    return upper;
+  }
+  return 0.5 * (static_cast<double>(*std::max_element(v.begin(), mid)) + upper);
+}
+
 double robust_scale(const std::vector<double>& v) {
   std::vector<double> c(v);
   return robust_std(c.data(), c.size());
+}
+
+// robust_std (1.4826 x the median absolute deviation) of per-sample float values, on a float
+// copy: the copy of a 2^22-sample record is 16 MB.
+double robust_scale(std::vector<float> c) {
+  const double med = median_inplace(c);
+  for (auto& x : c) {
+    x = static_cast<float>(std::fabs(static_cast<double>(x) - med));
+  }
+  return 1.4826 * median_inplace(c);
 }
 
 // The known signal of the bias filters, as the node sets it (host_sim/node: init_samples): the
@@ -1279,21 +1306,21 @@ void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip
   if (found.empty() || !fa.ok) {
     return;
   }
-  std::vector<double> used;
+  std::vector<float> used;
   used.reserve(fa.nu.size());
   for (std::size_t i = 0; i < fa.nu.size(); ++i) {
     if (skip[i] == 0) {
       used.push_back(fa.nu[i]);
     }
   }
-  const double scale = robust_std(used.data(), used.size());
+  const double scale = robust_scale(std::move(used));
   const double thr =
       two_sided_normal_threshold(alpha / static_cast<double>(fa.nu.size()));
   std::vector<double> times;
   std::uint64_t count = 0;
   double max_abs = 0.0;
   for (const auto& f : found) {
-    const double z = scale > 0.0 ? std::fabs(fa.nu[f.first]) / scale : 0.0;
+    const double z = scale > 0.0 ? std::fabs(static_cast<double>(fa.nu[f.first])) / scale : 0.0;
     if (z > thr) {
       ++count;
       max_abs = std::max(max_abs, z);
@@ -1377,6 +1404,10 @@ struct AfterContext {
   const ErrorStats& before;
   double cost_thr;         // the ADEV cost drop a term must make (the search's test)
   double white_filter_s;   // the sensor's output filter on the white noise (0: none)
+  // Terms the record's likelihood requires (kFitRrw when its 2 ln LR passed the test): the ADEV
+  // never-worse rule does not remove them; a model worse on the ADEV is kept and said.
+  std::uint32_t required = 0;
+  double required_lr = 0.0;
 };
 
 struct AfterChoice {
@@ -1486,7 +1517,7 @@ const char* term_name(std::uint32_t t) {
 AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const ModelParams& cur,
                          const ModelParams& before_model, std::vector<std::string>& notes) {
   constexpr std::uint32_t kSines = 1U << 31;
-  const std::uint32_t base = kFitWhite | kFitGm1;
+  const std::uint32_t base = kFitWhite | kFitGm1 | (terms & c.required);
   std::uint32_t set = terms | (cur.sin_a > 0.0 ? kSines : 0U);
   AfterChoice best = fit_after(c, terms, cur, (set & kSines) != 0U);
   while (!(best.ok && not_worse(best.e, c.before)) && (set & ~base) != 0U) {
@@ -1517,6 +1548,16 @@ AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const Model
     set &= ~removed;
     best = next;
   }
+  if (best.ok && !not_worse(best.e, c.before) && (base & c.required) != 0U) {
+    notes.push_back(std::string("kept: ") + term_name(base & c.required) +
+                    ", which the record's likelihood requires (2 ln LR = " +
+                    fmt("%.1f", c.required_lr) + "), although the model after is worse than "
+                    "before on the ADEV over [Ts, T/10] (RMS " + fmt("%.3f", best.e.adev_rms_rel) +
+                    " / max " + fmt("%.3f", best.e.adev_max_rel) + " against " +
+                    fmt("%.3f", c.before.adev_rms_rel) + " / " +
+                    fmt("%.3f", c.before.adev_max_rel) + ")");
+    return best;
+  }
   if (!best.ok || !not_worse(best.e, c.before)) {
     // Not even the base family is as good: the before-model stays (it is not worse than itself).
     notes.emplace_back("no after-model with the terms found is as good as the before-model at "
@@ -1542,6 +1583,55 @@ struct WalkOnly {
   double slow_tb_s = 0.0;
 };
 
+// A level that decays from the start of the record (a warm-up transient, A exp(-t / tau)) by the
+// record's likelihood under the walk test's H0: the GLS 2 ln LR of the regressor at 24 taus from
+// two blocks to a fifth of the record, the best one (compared at alpha / 24).
+struct TransientLr {
+  double lr = 0.0;
+  double tau_s = 0.0;
+};
+
+TransientLr warmup_transient_lr(const RrwLikelihoodTest& lt) {
+  TransientLr best;
+  const std::size_t nb = lt.means.size();
+  if (!lt.ok || nb < 64) {
+    return best;
+  }
+  const double lo = 2.0 * lt.block_s;
+  const double hi = static_cast<double>(nb) * lt.block_s / 5.0;
+  std::vector<double> u(nb);
+  for (int g = 0; g < 24; ++g) {
+    const double tau = lo * std::pow(hi / lo, g / 23.0);
+    double mean = 0.0;
+    for (std::size_t k = 0; k < nb; ++k) {
+      u[k] = std::exp(-(static_cast<double>(k) + 0.5) * lt.block_s / tau);
+      mean += u[k];
+    }
+    mean /= static_cast<double>(nb);
+    for (auto& v : u) {
+      v -= mean;
+    }
+    const double lr = regressor_lr(lt, u);
+    if (lr > best.lr) {
+      best = TransientLr{lr, tau};
+    }
+  }
+  return best;
+}
+
+// p with the walk k in place of its GMs of tb >= slow_tb.
+ModelParams walk_alone(const ModelParams& p, double k, double slow_tb) {
+  ModelParams q = p;
+  q.k = k;
+  q.n_gm = 0;
+  for (std::size_t i = 0; i < p.n_gm; ++i) {
+    if (p.gm[i].tb_s < slow_tb) {
+      q.gm[q.n_gm++] = p.gm[i];
+    }
+  }
+  return q;
+}
+
 WalkOnly walk_only_k(const AfterContext& c, const std::vector<double>& y_fit, bool ramp,
                      const std::vector<std::uint64_t>& step_at, const ModelParams& p,
                      std::vector<std::string>& notes) {
@@ -1553,7 +1643,10 @@ WalkOnly walk_only_k(const AfterContext& c, const std::vector<double>& y_fit, bo
   if (!lt.ok || !(lt.h1.model.k > 0.0)) {
     return {};
   }
-  const double slow_tb = 2.0 * lt.block_s;
+  // Slow: a GM whose ADEV peak (1.89 Tb) and an octave of its falling side do not fit inside
+  // [Ts, T/10] (tb beyond c.tb_max, the search's rule), whose curve there is the walk's. A GM
+  // that shows its peak is a term of its own, whatever the block means say.
+  const double slow_tb = std::max(2.0 * lt.block_s, 0.95 * c.tb_max);
   bool slow = false;
   double k2_pair = p.k * p.k;  // the pair's walk power at tau << Tb: K^2 + sum Sb (slow GMs)
   for (std::size_t i = 0; i < p.n_gm; ++i) {
@@ -1578,6 +1671,20 @@ WalkOnly walk_only_k(const AfterContext& c, const std::vector<double>& y_fit, bo
   // block means tell a different story than the ADEV, and the ADEV fit's K stays.
   const double ratio = f.model.k / std::sqrt(k2_pair);
   if (lr > thr || ratio < 1.0 / 1.5 || ratio > 1.5) {
+    return {};
+  }
+  // The ADEV must not need the slow GM either: the walk alone may not raise its cost over
+  // [Ts, T/10] by more than the search's threshold for a term.
+  ErrorStats e_pair;
+  ErrorStats e_walk;
+  const ModelParams q = walk_alone(p, f.model.k, slow_tb);
+  fill_errors(points_for_model(c.clean, p), p, c.o, c.ts, c.tau_max, e_pair);
+  fill_errors(points_for_model(c.clean, q), q, c.o, c.ts, c.tau_max, e_walk);
+  if (e_walk.cost > e_pair.cost + c.cost_thr) {
+    notes.push_back("rate_random_walk: the walk alone (K = " + fmt("%.4g", f.model.k) +
+                    ") is not taken for the slow GM + K: the block means do not need the GM "
+                    "(2 ln LR = " + fmt("%.1f", lr) + "), the ADEV does (cost " +
+                    fmt("%.1f", e_walk.cost) + " against " + fmt("%.1f", e_pair.cost) + ")");
     return {};
   }
   notes.push_back("rate_random_walk: K = " + fmt("%.4g", f.model.k) + " from the record's "
@@ -1657,7 +1764,7 @@ std::vector<UnexplainedRun> unexplained_runs(const AfterContext& c, const ModelP
       rel = std::max(rel, std::fabs(std::sqrt(model_avar(p, pts[k].tau_s) / pts[k].avar) - 1.0));
     }
     if ((j - i >= c.o.min_run || zmax > z_single) && rel > c.o.unexplained_min_rel) {
-      out.push_back(UnexplainedRun{pts[i].tau_s, pts[j - 1].tau_s, zmax, sign});
+      out.push_back(UnexplainedRun{pts[i].tau_s, pts[j - 1].tau_s, zmax, sign, 0.0, 0.0, {}});
     }
     i = j;
   }
@@ -1795,7 +1902,7 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
         zmax = std::max(zmax, std::fabs(r0.z[i]));
       }
     }
-    out.unexplained.push_back(UnexplainedRun{dom_lo, dom_hi, zmax, -1});
+    out.unexplained.push_back(UnexplainedRun{dom_lo, dom_hi, zmax, -1, 0.0, 0.0, {}});
   }
   out.effects = kept;
 }
@@ -2091,6 +2198,7 @@ class Analysis {
     if (!prepare() || !fit_before()) {
       return false;
     }
+    noise_change = find_noise_level_change(y0, gap, o.alpha);
     find_outliers();
     find_steps_by_windows();
     // Over [Ts, T/10] the GM must show its ADEV peak (1.89 Tb) and one octave of its falling side
@@ -2235,6 +2343,7 @@ class Analysis {
     // y0 is not read again: y takes its storage.
     y = std::move(y0);
     y0 = std::vector<double>{};
+    const double known_raw = initial_level(y);  // the before filter's known signal
     outlier = gap.empty() ? std::vector<std::uint8_t>(y.size(), 0) : gap;
     bool outliers_replaced = false;
     {
@@ -2242,19 +2351,31 @@ class Analysis {
       // sees only them: a sample one step away would be an "outlier". The rounding's own
       // variance (q^2 / 12, Sheppard) is part of every innovation's; the innovations are
       // normalised by the filter's, at least the white noise's N^2 / Ts.
-      const double mad_scale = robust_scale(fb.nu);
+      // With a change of the noise level, each part's own spread (else the louder part's
+      // samples would be "outliers").
+      const std::size_t split = noise_change.found ? noise_change.at : y.size();
+      const auto part = [this](std::size_t a, std::size_t b) {
+        return robust_scale(std::vector<float>(fb.nu.begin() + static_cast<std::ptrdiff_t>(a),
+                                               fb.nu.begin() + static_cast<std::ptrdiff_t>(b)));
+      };
+      const double mad_a = part(0, split);
+      const double mad_b = split < y.size() ? part(split, y.size()) : mad_a;
       const double white_var = out.model_before.n * out.model_before.n / ts;
       const double rounding = white_var > 0.0 ? lsb * lsb / 12.0 / white_var : 0.0;
-      const double scale = std::sqrt(mad_scale * mad_scale + rounding);
+      const double scale_a = std::sqrt(mad_a * mad_a + rounding);
+      const double scale_b = std::sqrt(mad_b * mad_b + rounding);
+      const double scale = std::min(scale_a, scale_b);
       const double thr = two_sided_normal_threshold(o.alpha / n_d);
       OutlierGate gate;
       std::vector<double> times;
       if (scale > 0.0 && gate.configure(thr) == EffectStatus::kOk) {
         for (std::size_t i = 0; i < y.size(); ++i) {
-          if ((gap.empty() || gap[i] == 0) && gate.push(fb.nu[i] / scale)) {
+          const double sc = i < split ? scale_a : scale_b;
+          if ((gap.empty() || gap[i] == 0) && gate.push(static_cast<double>(fb.nu[i]) / sc)) {
             outlier[i] = 1;
-            outlier_delta.emplace_back(i, y[i] - fb.pred[i]);
-            y[i] = fb.pred[i];
+            const double pred = known_raw + static_cast<double>(fb.pred_rel[i]);
+            outlier_delta.emplace_back(i, y[i] - pred);
+            y[i] = pred;
             outliers_replaced = true;
             if (times.size() < 100) {
               times.push_back(static_cast<double>(i) * ts);
@@ -2281,66 +2402,141 @@ class Analysis {
       adev_y = adev_of(counts, gap, ts, lsb);
     }
     // The before filter's per-sample innovations and predictions served the outlier search only.
-    fb.nu = std::vector<double>{};
-    fb.pred = std::vector<double>{};
+    fb.nu = std::vector<float>{};
+    fb.pred_rel = std::vector<float>{};
+  }
+
+  // The strongest excursion of the two-window step detectors over the scales the ADEV gives
+  // (windows up to n / 50 samples); false when none passes its threshold thr.
+  bool strongest_step(StepEvent& best, double& best_window, double& thr) {
+    const Points& pts = adev_y.by_alpha[2];
+    const std::size_t np = pts.size();
+    struct Scale {
+      std::uint32_t block;
+      double avar_counts2;
+    };
+    std::vector<Scale> scales;
+    double n_eff = 0.0;
+    for (std::uint32_t p = 4; p < 24; ++p) {
+      const std::uint32_t af = 8U << p;
+      if (static_cast<double>(af) > n_d / 50.0) {
+        break;
+      }
+      for (std::size_t i = 0; i < np; ++i) {
+        if (pts[i].af == af && pts[i].avar > 0.0) {
+          scales.push_back(Scale{1U << p, pts[i].avar / (lsb * lsb)});
+          n_eff += 2.0 * n_d / static_cast<double>(af);
+        }
+      }
+    }
+    if (scales.empty()) {
+      return false;
+    }
+    thr = two_sided_normal_threshold(o.alpha / n_eff);
+    std::vector<StepDetector<16, 4>> det(scales.size());
+    bool ok = true;
+    for (std::size_t s = 0; s < scales.size(); ++s) {
+      ok = ok && det[s].configure(scales[s].block, 8, scales[s].avar_counts2, thr) ==
+                     EffectStatus::kOk;
+    }
+    if (!ok) {
+      return false;
+    }
+    for (const std::int32_t v : counts) {
+      for (auto& d : det) {
+        d.push(v);
+      }
+    }
+    bool found = false;
+    best_window = 0.0;  // samples on each side of the boundary at the best scale
+    for (std::size_t s = 0; s < det.size(); ++s) {
+      StepDetector<16, 4>& d = det[s];
+      d.finish();
+      for (std::size_t i = 0; i < d.n_events(); ++i) {
+        if (!found || std::fabs(d.event(i).z) > std::fabs(best.z)) {
+          best = d.event(i);
+          best_window = 8.0 * scales[s].block;
+          found = true;
+        }
+      }
+    }
+    return found;
+  }
+
+  // The strongest excursion lies within one window of an end: not a step the windows can
+  // place; its window is an unexplained time range.
+  void edge_excursion(const StepEvent& best, double best_window) {
+    const double at = static_cast<double>(best.sample_index);
+    out.notes.push_back("step search stopped: the strongest excursion, at t = " +
+                        fmt("%.1f", at * ts) + " s, lies within one window (" +
+                        fmt("%.0f", best_window * ts) +
+                        " s) of an end of the record: not a step the windows can place");
+    UnexplainedRun u;
+    const bool start = at < best_window;
+    u.t_min_s = start ? 0.0 : (at - best_window) * ts;
+    u.t_max_s = start ? (at + best_window) * ts : n_d * ts;
+    u.tau_min_s = best_window * ts / 8.0;
+    u.tau_max_s = best_window * ts;
+    u.max_abs_z = std::fabs(best.z);
+    u.what = std::string("a significant level change within one window of the ") +
+             (start ? "start (a warm-up transient?)" : "end") + " of the record, z " +
+             fmt("%.1f", best.z);
+    time_ranges.push_back(u);
+  }
+
+  // A second "step" within one window of the last one: the other edge of a transient (or the
+  // residue of the first estimate), not a new step.
+  void near_previous_step(const StepEvent& best, double best_window) {
+    const double at = static_cast<double>(best.sample_index);
+    // The other edge of a short transient (a blip, not a level change) when it undoes at least
+    // half of the step just found: that step is withdrawn. Otherwise it is the residue of
+    // the step's estimate. Either way the search ends here.
+    const double prev_size = out.effects.back().size;
+    const double this_size = best.size_counts * lsb;
+    const bool undoes = out.effects.back().type == "bias_step" && this_size * prev_size < 0.0 &&
+                        std::fabs(this_size) >= 0.5 * std::fabs(prev_size);
+    // At (nearly) the same sample the step is undone where it was found: no step, and no
+    // time range either (a blip of the noise the first window took for a step).
+    const double dist = std::fabs(at - static_cast<double>(step_at.back()));
+    const bool blip = dist < best_window / 8.0;
+    if (undoes) {
+      const auto from = static_cast<std::size_t>(step_at.back());
+      for (std::size_t i = from; i < y.size(); ++i) {
+        y[i] += prev_size;
+      }
+      out.notes.push_back(std::string(blip ? "not a step" : "transient, not a step") +
+                          ": the level shift at t = " +
+                          fmt("%.1f", static_cast<double>(from) * ts) + " s is undone at t = " +
+                          fmt("%.1f", at * ts) + " s, within one window");
+      UnexplainedRun u;
+      u.t_min_s = std::min(static_cast<double>(from), at) * ts;
+      u.t_max_s = std::max(static_cast<double>(from), at) * ts;
+      u.tau_min_s = u.t_max_s - u.t_min_s;
+      u.tau_max_s = best_window * ts;
+      u.max_abs_z = std::fabs(best.z);
+      u.what = "a level shift of " + fmt("%.3g", prev_size) + " undone after " +
+               fmt("%.3g", u.t_max_s - u.t_min_s) + " s (a transient, not a step)";
+      if (!blip) {
+        time_ranges.push_back(u);
+      }
+      step_at.pop_back();
+      out.effects.pop_back();
+      counts = to_counts(y, offset, lsb, sat);
+      adev_y = adev_of(counts, gap, ts, lsb);
+    } else {
+      out.notes.push_back("step search stopped: a further excursion at t = " +
+                          fmt("%.1f", at * ts) +
+                          " s lies within one window of a step already found (its residue)");
+    }
   }
 
   void find_steps_by_windows() {
     // ---- time domain: bias steps (two-window detector at several scales)
     for (int step_no = 0; step_no < o.max_steps; ++step_no) {
-      const Points& pts = adev_y.by_alpha[2];
-      const std::size_t np = pts.size();
-      struct Scale {
-        std::uint32_t block;
-        double avar_counts2;
-      };
-      std::vector<Scale> scales;
-      double n_eff = 0.0;
-      for (std::uint32_t p = 4; p < 24; ++p) {
-        const std::uint32_t af = 8U << p;
-        if (static_cast<double>(af) > n_d / 50.0) {
-          break;
-        }
-        for (std::size_t i = 0; i < np; ++i) {
-          if (pts[i].af == af && pts[i].avar > 0.0) {
-            scales.push_back(Scale{1U << p, pts[i].avar / (lsb * lsb)});
-            n_eff += 2.0 * n_d / static_cast<double>(af);
-          }
-        }
-      }
-      if (scales.empty()) {
-        break;
-      }
-      const double thr = two_sided_normal_threshold(o.alpha / n_eff);
-      std::vector<StepDetector<16, 4>> det(scales.size());
-      bool ok = true;
-      for (std::size_t s = 0; s < scales.size(); ++s) {
-        ok = ok && det[s].configure(scales[s].block, 8, scales[s].avar_counts2, thr) ==
-                       EffectStatus::kOk;
-      }
-      if (!ok) {
-        break;
-      }
-      for (const std::int32_t v : counts) {
-        for (auto& d : det) {
-          d.push(v);
-        }
-      }
       StepEvent best{};
-      bool found = false;
-      double best_window = 0.0;  // samples on each side of the boundary at the best scale
-      for (std::size_t s = 0; s < det.size(); ++s) {
-        StepDetector<16, 4>& d = det[s];
-        d.finish();
-        for (std::size_t i = 0; i < d.n_events(); ++i) {
-          if (!found || std::fabs(d.event(i).z) > std::fabs(best.z)) {
-            best = d.event(i);
-            best_window = 8.0 * scales[s].block;
-            found = true;
-          }
-        }
-      }
-      if (!found) {
+      double best_window = 0.0;
+      double thr = 0.0;
+      if (!strongest_step(best, best_window, thr)) {
         break;
       }
       // A second "step" within one window of an earlier one is the other edge of a transient (or
@@ -2353,37 +2549,11 @@ class Analysis {
       }
       const double at = static_cast<double>(best.sample_index);
       if (at < best_window || n_d - at < best_window) {
-        out.notes.push_back("step search stopped: the strongest excursion, at t = " +
-                            fmt("%.1f", at * ts) + " s, lies within one window (" +
-                            fmt("%.0f", best_window * ts) +
-                            " s) of an end of the record: an edge effect, not a step");
+        edge_excursion(best, best_window);
         break;
       }
       if (near_previous) {
-        // The other edge of a short transient (a blip, not a level change) when it undoes at least
-        // half of the step just found: that step is withdrawn. Otherwise it is the residue of
-        // the step's estimate. Either way the search ends here.
-        const double prev_size = out.effects.back().size;
-        const double this_size = best.size_counts * lsb;
-        const bool undoes = out.effects.back().type == "bias_step" && this_size * prev_size < 0.0 &&
-                            std::fabs(this_size) >= 0.5 * std::fabs(prev_size);
-        if (undoes) {
-          const auto from = static_cast<std::size_t>(step_at.back());
-          for (std::size_t i = from; i < y.size(); ++i) {
-            y[i] += prev_size;
-          }
-          out.notes.push_back("transient, not a step: the level shift at t = " +
-                              fmt("%.1f", static_cast<double>(from) * ts) + " s is undone at t = " +
-                              fmt("%.1f", at * ts) + " s, within one window");
-          step_at.pop_back();
-          out.effects.pop_back();
-          counts = to_counts(y, offset, lsb, sat);
-          adev_y = adev_of(counts, gap, ts, lsb);
-        } else {
-          out.notes.push_back("step search stopped: a further excursion at t = " +
-                              fmt("%.1f", at * ts) +
-                              " s lies within one window of a step already found (its residue)");
-        }
+        near_previous_step(best, best_window);  // either way the search ends here
         break;
       }
       const double size = best.size_counts * lsb;  // the difference of its two window means
@@ -2417,6 +2587,16 @@ class Analysis {
       const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
       const StepLikelihood sl = profile_step(lt, margin);
       if (!sl.ok || sl.positions == 0) {
+        break;
+      }
+      // At a step already found the level is reset in the blocks around it and a second step
+      // there is not identifiable (its GLS size is ill-conditioned): the residue of that step.
+      bool at_previous = !std::isfinite(sl.size);
+      for (const std::uint64_t prev : step_at) {
+        const double dist = std::fabs(static_cast<double>(sl.sample) - static_cast<double>(prev));
+        at_previous = at_previous || dist <= 2.0 * static_cast<double>(lt.per_block);
+      }
+      if (at_previous) {
         break;
       }
       // Bonferroni over the effectively independent boundaries, counted four per slowest
@@ -2491,7 +2671,7 @@ class Analysis {
       fit_set = clean;
       fit_pts = eval;
       cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
-      y_fit = y;
+      y_minus_sine = std::vector<double>{};  // the record itself
       return true;
     }
     eval = in_range(points_for_model(clean, base0.params), tau_max);
@@ -2506,7 +2686,7 @@ class Analysis {
     cur_p = cur.params;
     cur_cost = residual(eval, cur_p, o, ts, tau_max).cost;
     lr_thr = chi2_quantile(1.0 - o.alpha, 1.0);  // record likelihood: no inflation
-    y_fit = y;
+    y_minus_sine = std::vector<double>{};  // the record itself
     for (int round = 0; round < 6; ++round) {
       const Residual res = residual(eval, cur_p, o, ts, tau_max);
       if (res.check.n_runs == 0) {
@@ -2629,10 +2809,10 @@ class Analysis {
         auto it = harmonic_cache.find(h);
         if (it == harmonic_cache.end()) {
           SineCand sc;
-          sc.fit = sine_ls(y_fit, ts, f_h);
+          sc.fit = sine_ls(fit_record(), ts, f_h);
           if (sc.fit.ok) {
-            sc.adev = adev_of(to_counts(minus_sine(y_fit, ts, sc.fit), offset, lsb, sat), gap, ts,
-                              lsb);
+            sc.adev = adev_of(to_counts(minus_sine(fit_record(), ts, sc.fit), offset, lsb, sat),
+                              gap, ts, lsb);
           }
           it = harmonic_cache.emplace(h, std::move(sc)).first;
         }
@@ -2669,7 +2849,7 @@ class Analysis {
           continue;  // too few cycles in the record to see a band
         }
         if (psd_of_y_fit.sm.empty()) {
-          psd_of_y_fit = welch_psd(y_fit, ts);
+          psd_of_y_fit = welch_psd(fit_record(), ts);
         }
         auto it = osc_cache.find(imin);
         if (it == osc_cache.end()) {
@@ -2720,8 +2900,8 @@ class Analysis {
     // block-mean likelihoods (long_memory.hpp) less their extra parameters (AIC: 1 for B or K,
     // 2 for a GM).
     if (best != nullptr) {
-      best = long_tau_choice(LongTauInput{y_fit, ts, tb_max, (terms & kFitRamp) != 0U, step_at,
-                                          cur_p, cur_cost, cost_thr},
+      best = long_tau_choice(LongTauInput{fit_record(), ts, tb_max, (terms & kFitRamp) != 0U,
+                                          step_at, cur_p, cur_cost, cost_thr},
                              cands, best, out.notes);
     }
     if (best != nullptr && !walk_or_flicker(cands, best)) {
@@ -2749,7 +2929,7 @@ class Analysis {
     cur_cost = best->cost;
     if (best->sine != nullptr && best->type == "sinusoid_harmonic") {
       have_sine2 = true;
-      y_fit = minus_sine(y_fit, ts, best->sine->fit);
+      y_minus_sine = minus_sine(fit_record(), ts, best->sine->fit);
       psd_of_y_fit = WelchPsd{};
       osc_cache.clear();
       fit_set = best->sine->adev;
@@ -2759,7 +2939,7 @@ class Analysis {
     } else if (best->sine != nullptr) {
       have_sine = true;
       sine = best->sine->fit;
-      y_fit = minus_sine(y, ts, sine);
+      y_minus_sine = minus_sine(y, ts, sine);
       psd_of_y_fit = WelchPsd{};
       osc_cache.clear();
       fit_set = best->sine->adev;
@@ -2791,10 +2971,10 @@ class Analysis {
     if (ramp == nullptr || walk == nullptr) {
       return;
     }
-    const RrwLikelihoodTest detrended = test_rrw(y_fit, ts, cur_p, tb_max, true, step_at);
+    const RrwLikelihoodTest detrended = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at);
     const double lr_walk = detrended.ok ? detrended.lr : 0.0;
     double lr_line = 0.0;
-    RrwLikelihoodTest with_walk = test_rrw(y_fit, ts, cur_p, tb_max, false, step_at);
+    RrwLikelihoodTest with_walk = test_rrw(fit_record(), ts, cur_p, tb_max, false, step_at);
     if (with_walk.ok) {
       with_walk.h0 = with_walk.h1;  // the line against the model with the walk
       const double nb = static_cast<double>(with_walk.means.size());
@@ -2904,8 +3084,8 @@ class Analysis {
     ModelParams no_b = cur_p;
     no_b.k = 0.0;
     no_b.bi = 0.0;
-    const RrwLikelihoodTest with_b = test_rrw(y_fit, ts, h0, tb_max, detrend, step_at);
-    const RrwLikelihoodTest without_b = test_rrw(y_fit, ts, no_b, tb_max, detrend, step_at);
+    const RrwLikelihoodTest with_b = test_rrw(fit_record(), ts, h0, tb_max, detrend, step_at);
+    const RrwLikelihoodTest without_b = test_rrw(fit_record(), ts, no_b, tb_max, detrend, step_at);
     if (!with_b.ok || !without_b.ok) {
       return out_lr;
     }
@@ -2913,6 +3093,31 @@ class Analysis {
     out_lr.k_beside_b = std::max(0.0, 2.0 * (l_both - with_b.h0.loglik));
     out_lr.b_beside_k = std::max(0.0, 2.0 * (l_both - without_b.h1.loglik));
     return out_lr;
+  }
+
+  // A warm-up transient explains the record at least as well as the walk of lt (its tau is a
+  // second parameter: at least the walk's 2 ln LR less 2): reported as an unexplained time
+  // range with a note, and true; the walk is then not taken.
+  bool transient_for_walk(const RrwLikelihoodTest& lt) {
+    const TransientLr tr = warmup_transient_lr(lt);
+    const double tr_thr = chi2_quantile(1.0 - o.alpha / 24.0, 1.0);
+    if (!(tr.lr > tr_thr && tr.lr + 2.0 >= lt.lr)) {
+      return false;
+    }
+    UnexplainedRun u;
+    u.t_min_s = 0.0;
+    u.t_max_s = std::min(3.0 * tr.tau_s, static_cast<double>(y.size()) * ts);
+    u.tau_min_s = lt.block_s;
+    u.tau_max_s = u.t_max_s;
+    u.max_abs_z = std::sqrt(tr.lr);
+    u.what = "a level decaying from the start of the record with a time constant of " +
+             fmt("%.3g", tr.tau_s) + " s (a warm-up transient), 2 ln LR " + fmt("%.1f", tr.lr) +
+             " against the walk's " + fmt("%.1f", lt.lr);
+    time_ranges.push_back(u);
+    out.notes.push_back("no rate_random_walk: the record's likelihood finds one (2 ln LR = " +
+                        fmt("%.1f", lt.lr) + ") but " + u.what +
+                        " explains it as well: reported as unexplained");
+    return true;
   }
 
   void rrw_by_likelihood() {
@@ -2923,14 +3128,38 @@ class Analysis {
     // was found).
     const bool walk_ruled_out = std::find(ruled_out.begin(), ruled_out.end(),
                                           "rate_random_walk") != ruled_out.end();
-    if (walk_ruled_out && (terms & kFitRrw) == 0U) {
-      out.notes.emplace_back("no rate_random_walk by the record's likelihood: ruled out above");
-    } else if ((terms & kFitRrw) == 0U) {
+    if ((terms & kFitRrw) != 0U) {
+      // Found on the ADEV: the record's likelihood says whether the model needs it (then the
+      // never-worse rule on the ADEV does not remove it: one criterion decides).
       const RrwLikelihoodTest lt =
-          test_rrw(y_fit, ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+          test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+      if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
+        const FitResult f = fit_terms(fit_pts, terms & ~kFitRrw, ts, tau_max, tb_max, &cur_p,
+                                      white_filter_s);
+        if (f.status == FitStatus::kOk) {
+          terms &= ~kFitRrw;
+          cur_p = with_sines(f.params, cur_p);
+          return;
+        }
+        time_ranges.pop_back();
+        out.notes.pop_back();
+      }
+      if (lt.ok) {
+        walk_lr = lt.lr;
+        out.notes.push_back("rate_random_walk in the record's likelihood: 2 ln LR = " +
+                            fmt("%.1f", lt.lr) + (lt.lr > lr_thr ? " > " : " <= ") +
+                            fmt("%.2f", lr_thr) + (lt.lr > lr_thr ? " (required)" : ""));
+      }
+    } else if (walk_ruled_out) {
+      out.notes.emplace_back("no rate_random_walk by the record's likelihood: ruled out above");
+    } else {
+      const RrwLikelihoodTest lt =
+          test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
       // With bias instability in the model its flicker bank is in H0: lt is already the walk's
       // test beside it.
-      if (lt.ok && lt.lr > lr_thr) {
+      if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
+        // reported as unexplained (transient_for_walk)
+      } else if (lt.ok && lt.lr > lr_thr) {
         const FitResult f =
             fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p, white_filter_s);
         if (f.status == FitStatus::kOk && f.params.k > 0.0) {
@@ -2945,6 +3174,7 @@ class Analysis {
               fmt("%.3g", lt.block_s) + " s; GM alone, tb <= " + fmt("%.0f", tb_max) +
               " s, vs GM + K = " + fmt("%.3g", lt.h1.model.k) + ")");
           terms |= kFitRrw;
+          walk_lr = lt.lr;
           cur_p = with_sines(f.params, cur_p);
         }
       } else if (lt.ok) {
@@ -2965,7 +3195,7 @@ class Analysis {
       Report trial;
       trial.effects = out.effects;
       std::vector<std::string> dominates_nowhere;
-      name_check(ac, choice.p, ramp_bend_lr(y_fit, ts, choice.p, tb_max, step_at), trial,
+      name_check(ac, choice.p, ramp_bend_lr(fit_record(), ts, choice.p, tb_max, step_at), trial,
                  dominates_nowhere);
       std::vector<std::string> gone;
       for (const auto& e : out.effects) {
@@ -3133,16 +3363,9 @@ class Analysis {
   void settle_terms(const AfterContext& ac, AfterChoice& choice,
                     std::vector<UnexplainedRun>& withdrawn) {
     const WalkOnly walk =
-        walk_only_k(ac, y_fit, (terms & kFitRamp) != 0U, step_at, choice.p, out.notes);
+        walk_only_k(ac, fit_record(), (terms & kFitRamp) != 0U, step_at, choice.p, out.notes);
     if (walk.k > 0.0) {
-      ModelParams q = choice.p;
-      q.k = walk.k;
-      q.n_gm = 0;
-      for (std::size_t i = 0; i < choice.p.n_gm; ++i) {
-        if (choice.p.gm[i].tb_s < walk.slow_tb_s) {
-          q.gm[q.n_gm++] = choice.p.gm[i];
-        }
-      }
+      const ModelParams q = walk_alone(choice.p, walk.k, walk.slow_tb_s);
       choice.terms &= q.n_gm < 2 ? ~kFitGm2 : ~0U;
       choice.p = q;
       fill_errors(points_for_model(ac.clean, q), q, o, ts, tau_max, choice.e);
@@ -3194,23 +3417,50 @@ class Analysis {
     }
   }
 
+  // The parts of the record that are not stationary (noise level, transients), as unexplained
+  // time ranges, said in a note.
+  void add_time_ranges() {
+    if (noise_change.found) {
+      const double t_c = static_cast<double>(noise_change.at) * ts;
+      const double t_end = static_cast<double>(y.size()) * ts;
+      const bool louder_after = noise_change.std_ratio > 1.0;
+      UnexplainedRun u;
+      u.t_min_s = louder_after ? t_c : 0.0;
+      u.t_max_s = louder_after ? t_end : t_c;
+      u.tau_min_s = ts;
+      u.tau_max_s = static_cast<double>(noise_change.block_len) * ts;
+      u.max_abs_z = noise_change.statistic;
+      u.what = "the white noise's std changes at t = " + fmt("%.1f", t_c) + " s by x " +
+               fmt("%.2f", noise_change.std_ratio) + " (the model's N is the record's average)";
+      out.unexplained.push_back(u);
+      out.notes.push_back("noise level: " + u.what + "; CUSUM of " +
+                          std::to_string(noise_change.blocks) + " blocks' log-levels " +
+                          fmt("%.2f", noise_change.statistic) + " > " +
+                          fmt("%.2f", noise_change.threshold) +
+                          "; outliers judged against each part's own spread");
+    }
+    out.unexplained.insert(out.unexplained.end(), time_ranges.begin(), time_ranges.end());
+  }
+
   void after_model() {
     // ---- after: never worse than before, every named effect real, the remainder said.
     const AdevSet& clean = adev_y;
     out.adev_clean = clean.by_alpha[2];
-    const AfterContext ac0{o, ts, tau_max, tb_max, clean, fit_set, out.error_before, cost_thr,
-                           0.0};
+    const std::uint32_t required = walk_lr > lr_thr ? kFitRrw : 0U;
+    const AfterContext ac0{o,        ts,       tau_max, tb_max, clean, fit_set, out.error_before,
+                           cost_thr, 0.0,      required, walk_lr};
     // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
     // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
     AfterChoice choice = choose_after(ac0, terms, cur_p, out.model_before, out.notes);
     std::vector<UnexplainedRun> withdrawn;
     settle_terms_and_filter(ac0, choice, withdrawn);
-    const AfterContext ac{o, ts, tau_max, tb_max, clean, fit_set, out.error_before, cost_thr,
-                          white_filter_s};
+    const AfterContext ac{o,        ts,       tau_max, tb_max, clean, fit_set, out.error_before,
+                          cost_thr, white_filter_s, required, walk_lr};
     cur_p = choice.p;
     out.model_after = cur_p;
     out.error_after = choice.e;
     out.unexplained = unexplained_runs(ac, cur_p);
+    add_time_ranges();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
     for (const auto& w : withdrawn) {
       bool covered = false;
@@ -3240,9 +3490,10 @@ class Analysis {
     }
     // The filter sees the record without the deterministic terms the model holds (their
     // least-squares estimates): sinusoids, and the least-squares line for a ramp.
-    // y_fit is not read again: with a sinusoid, y_det takes its storage.
-    std::vector<double> y_det = cur_p.sin_a > 0.0 ? std::move(y_fit) : y;
-    y_fit = std::vector<double>{};
+    // fit_record() is not read again: with a sinusoid, y_det takes its storage.
+    std::vector<double> y_det =
+        cur_p.sin_a > 0.0 && !y_minus_sine.empty() ? std::move(y_minus_sine) : y;
+    y_minus_sine = std::vector<double>{};
     if (cur_p.r > 0.0) {
       remove_line(y_det, ts);
     }
@@ -3304,11 +3555,19 @@ class Analysis {
   double cur_cost = 0.0;
   double cost_thr = 0.0;  // the ADEV cost drop a term must make
   double lr_thr = 0.0;    // the record likelihood's level (no inflation)
+  double walk_lr = -1.0;  // the walk's 2 ln LR on the record (< 0: not tested)
+  NoiseLevelChange noise_change;             // of the white noise's level (find_noise_level_change)
+  std::vector<UnexplainedRun> time_ranges;   // transients found by the step search
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
   // Terms the record's likelihood could not tell from a look-alike (ramp_or_walk,
   // walk_or_flicker): not proposed again.
   std::vector<std::string> ruled_out;
-  std::vector<double> y_fit;  // y minus the accepted sinusoid
+  // y minus the accepted sinusoid; empty while none is accepted (then y itself: a record-length
+  // copy less)
+  std::vector<double> y_minus_sine;
+  [[nodiscard]] const std::vector<double>& fit_record() const {
+    return y_minus_sine.empty() ? y : y_minus_sine;
+  }
   bool have_sine = false;
   bool have_sine2 = false;
   SineFit sine{};
@@ -3316,8 +3575,8 @@ class Analysis {
   // bump comes back round after round; each entry costs passes over the record.
   std::map<std::size_t, SineCand> sine_cache;
   std::map<int, SineCand> harmonic_cache;   // by harmonic number, of y minus the sinusoid
-  std::map<std::size_t, OscFit> osc_cache;  // by bump (tau index), of y_fit's PSD
-  WelchPsd psd_of_y_fit;                    // empty until needed; reset when y_fit changes
+  std::map<std::size_t, OscFit> osc_cache;  // by bump (tau index), of fit_record()'s PSD
+  WelchPsd psd_of_y_fit;                    // empty until needed; reset when fit_record() changes
   SpectrumCache spectrum_of_y;              // of y (the sinusoid search reads y itself)
 };
 

@@ -139,7 +139,12 @@ std::string unexplained_json(const std::vector<UnexplainedRun>& runs) {
   for (std::size_t i = 0; i < runs.size(); ++i) {
     const UnexplainedRun& u = runs[i];
     s << (i > 0 ? ", " : "") << "{\"tau_min_s\": " << num(u.tau_min_s) << ", \"tau_max_s\": "
-      << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z) << "}";
+      << num(u.tau_max_s) << ", \"max_abs_z\": " << num(u.max_abs_z);
+    if (u.t_max_s > u.t_min_s) {
+      s << ", \"t_min_s\": " << num(u.t_min_s) << ", \"t_max_s\": " << num(u.t_max_s)
+        << ", \"what\": " << quoted(u.what);
+    }
+    s << "}";
   }
   return s.str();
 }
@@ -439,6 +444,12 @@ std::string to_text(const Report& r) {
     s << "unexplained: nothing (the model after is inside the intervals, no significant run)\n";
   }
   for (const auto& u : r.unexplained) {
+    if (u.t_max_s > u.t_min_s) {
+      std::snprintf(buf, sizeof buf, "unexplained: t %.6g - %.6g s (tau %.3g - %.4g s): ",
+                    u.t_min_s, u.t_max_s, u.tau_min_s, u.tau_max_s);
+      s << buf << u.what << "\n";
+      continue;
+    }
     std::snprintf(buf, sizeof buf,
                   "unexplained: tau %.3g - %.4g s, max |z| %.1f (model %s the data)\n",
                   u.tau_min_s, u.tau_max_s, u.max_abs_z, u.sign > 0 ? "above" : "below");

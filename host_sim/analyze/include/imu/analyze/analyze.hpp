@@ -122,9 +122,15 @@ struct UnexplainedRun {
   double tau_max_s = 0.0;
   double max_abs_z = 0.0;
   int sign = 0;  ///< +1: the model lies above the data there, -1: below
+  /// A part of the record where it is not stationary (t_max_s > t_min_s; else the run is one of
+  /// the ADEV's taus over the whole record): what was seen there (e.g. the white noise's level
+  /// changes, a level shift undone, an excursion at the start).
+  double t_min_s = 0.0;
+  double t_max_s = 0.0;
+  std::string what;
 };
 
-/// A record longer than the analysis holds (host_sim/analyze/src/cli.cpp: 2^22 samples) is
+/// A record longer than the analysis holds (host_sim/analyze/src/cli.cpp: 2^20 samples) is
 /// analysed on block means of `block` samples for the whole record, and at full rate on its
 /// first `samples` samples (the head), for the taus and effects the means cannot resolve.
 /// merge_full_rate_head() says how the two are joined.

@@ -1,0 +1,129 @@
+// What the analysis says about records that are not stationary: the white noise's level
+// changing part way, a warm-up transient. They are reported as unexplained time ranges (t_min_s,
+// t_max_s), never as a wrong name (outliers for the louder part, a rate random walk for the
+// decay) and never as nothing; clean records get no time range. The first-order model of
+// synth_cases.hpp, 10^6 samples at 100 Hz, seeds 301..330 (no other test uses them).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "imu/analyze/analyze.hpp"
+#include "imu/analyze/synth.hpp"
+#include "synth_cases.hpp"
+
+namespace {
+
+namespace ia = imu::analyze;
+namespace tc = imu::analyze::test;
+
+constexpr int kSeeds = 10;
+
+ia::Report analyse(const std::vector<double>& y, const std::string& name, std::uint64_t seed) {
+  ia::Report r;
+  std::string err;
+  EXPECT_TRUE(ia::analyze(y, name, ia::Options{}, r, err)) << err;
+  std::string why;
+  EXPECT_TRUE(ia::report_consistent(r, why)) << name << " seed " << seed << ": " << why;
+  return r;
+}
+
+bool named(const ia::Report& r, const std::string& type) {
+  for (const auto& e : r.effects) {
+    if (e.type == type) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// The first unexplained entry with a time range, or nullptr.
+const ia::UnexplainedRun* time_range(const ia::Report& r) {
+  for (const auto& u : r.unexplained) {
+    if (u.t_max_s > u.t_min_s) {
+      return &u;
+    }
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+// From 40 % of the record on, the white noise's std is 2.5 x (independent white noise added).
+// Reported: a time range starting within 2 % of the record of the change, and no outliers.
+TEST(AnalyzeStationarity, ANoiseLevelChangeIsATimeRangeNotOutliers) {
+  int ok = 0;
+  for (int i = 0; i < kSeeds; ++i) {
+    const std::uint64_t seed = 301 + static_cast<std::uint64_t>(i);
+    const ia::SynthSpec spec = tc::make_case("control", seed);
+    std::vector<double> y = ia::synthesize(spec);
+    const std::size_t at = y.size() * 4 / 10;
+    const double extra_sd = spec.n * std::sqrt(spec.fs_hz) * std::sqrt(2.5 * 2.5 - 1.0);
+    std::mt19937_64 rng(seed * 7919U);
+    std::normal_distribution<double> g(0.0, extra_sd);
+    for (std::size_t k = at; k < y.size(); ++k) {
+      y[k] += g(rng);
+    }
+    const ia::Report r = analyse(y, "noise_change", seed);
+    const ia::UnexplainedRun* u = time_range(r);
+    const double t_rec = static_cast<double>(y.size()) / spec.fs_hz;
+    const double t_c = static_cast<double>(at) / spec.fs_hz;
+    const bool good = u != nullptr && std::fabs(u->t_min_s - t_c) < 0.02 * t_rec &&
+                      u->t_max_s > 0.98 * t_rec && !named(r, "outliers");
+    ok += good ? 1 : 0;
+    if (!good) {
+      std::printf("noise change seed %llu:\n%s", static_cast<unsigned long long>(seed),
+                  ia::to_text(r).c_str());
+    }
+  }
+  std::printf("noise level x 2.5 at 40 %%: a time range at the change, no outliers, on %d of %d\n",
+              ok, kSeeds);
+  EXPECT_GE(ok, 9);
+}
+
+// A bias decaying from the start, 20 GM sigmas, time constant T / 30: a time range from 0,
+// and no rate random walk named for it.
+TEST(AnalyzeStationarity, AWarmUpTransientIsATimeRangeNotAWalk) {
+  int ok = 0;
+  for (int i = 0; i < kSeeds; ++i) {
+    const std::uint64_t seed = 311 + static_cast<std::uint64_t>(i);
+    const ia::SynthSpec spec = tc::make_case("control", seed);
+    std::vector<double> y = ia::synthesize(spec);
+    const double t_rec = static_cast<double>(y.size()) / spec.fs_hz;
+    const double tau_w = t_rec / 30.0;
+    for (std::size_t k = 0; k < y.size(); ++k) {
+      y[k] += 20.0 * tc::kGmSigma * std::exp(-static_cast<double>(k) / spec.fs_hz / tau_w);
+    }
+    const ia::Report r = analyse(y, "warm_up", seed);
+    const ia::UnexplainedRun* u = time_range(r);
+    const bool good = u != nullptr && u->t_min_s <= 0.0 && u->t_max_s < 0.5 * t_rec &&
+                      !named(r, "rate_random_walk");
+    ok += good ? 1 : 0;
+    if (!good) {
+      std::printf("warm-up seed %llu:\n%s", static_cast<unsigned long long>(seed),
+                  ia::to_text(r).c_str());
+    }
+  }
+  std::printf("warm-up transient (20 GM sigmas, T/30): a time range from 0, no walk, on %d of %d\n",
+              ok, kSeeds);
+  EXPECT_GE(ok, 8);
+}
+
+// Clean records (the first-order model alone): no time range.
+TEST(AnalyzeStationarity, CleanRecordsGetNoTimeRange) {
+  int clean = 0;
+  for (int i = 0; i < 2 * kSeeds; ++i) {
+    const std::uint64_t seed = 321 + static_cast<std::uint64_t>(i);
+    const ia::Report r = analyse(ia::synthesize(tc::make_case("control", seed)), "control", seed);
+    clean += time_range(r) == nullptr ? 1 : 0;
+    if (time_range(r) != nullptr) {
+      std::printf("control seed %llu:\n%s", static_cast<unsigned long long>(seed),
+                  ia::to_text(r).c_str());
+    }
+  }
+  std::printf("clean records without a time range: %d of %d\n", clean, 2 * kSeeds);
+  EXPECT_GE(clean, 2 * kSeeds - 1);
+}
