@@ -760,7 +760,7 @@ double median_inplace(std::vector<float>& v) {
   }
   const auto mid = v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2);
   std::nth_element(v.begin(), mid, v.end());
-  const double upper = *mid;
+  const double upper = static_cast<double>(*mid);
   if (v.size() % 2 == 1) {
     return upper;
   }
