@@ -4,6 +4,7 @@
 #include "imu/hal/codec.hpp"
 #include "imu/hal/sim/memory_frame_source.hpp"
 #include "imu/node/node.hpp"
+#include "largest_model.hpp"
 #include "line.hpp"
 #include "samples.hpp"
 
@@ -68,26 +69,6 @@ bool append(const hal::EncodedFrames& fr, std::size_t& n) {
     g_frames[n++] = fr.frame[i];
   }
   return true;
-}
-
-/// The largest model the node runs (kNodeStates = 8 states): white, 2 GM, RRW and a flicker
-/// bank over 3 decades (5 GMs; 1 s .. 1e3 s: a wider bank is refused as more than 8 states), in
-/// the units of samples.hpp's channels (white sigma 18.5 units per sample at 100 Hz: N = 1.85
-/// units/sqrt(Hz)).
-hal::ModelRecord largest_model(std::uint8_t channel) {
-  hal::ModelRecord m{};
-  m.version = hal::kModelVersion1;
-  m.channel = channel;
-  m.n = 1.85F;
-  m.gm_sb[0] = 1e-4F;
-  m.gm_tb_s[0] = 50.0F;
-  m.gm_sb[1] = 1e-3F;
-  m.gm_tb_s[1] = 2.0F;
-  m.k = 0.18F;
-  m.bi = 0.05F;
-  m.bi_tau_lo_s = 1.0F;
-  m.bi_tau_hi_s = 1e3F;
-  return m;
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 
 #include "imu/hal/codec.hpp"
 #include "imu/hal/mcu/board_hooks.hpp"
+#include "largest_model.hpp"
 #include "line.hpp"
 #include "node_prod.hpp"
 #include "samples.hpp"
@@ -51,23 +52,6 @@ struct TxCounts {
 };
 volatile TxCounts g_txc = {};
 
-/// The largest model the node runs (as the test image's node_workload.cpp).
-imu::hal::ModelRecord largest_model(std::uint8_t channel) {
-  imu::hal::ModelRecord m{};
-  m.version = imu::hal::kModelVersion1;
-  m.channel = channel;
-  m.n = 1.85F;
-  m.gm_sb[0] = 1e-4F;
-  m.gm_tb_s[0] = 50.0F;
-  m.gm_sb[1] = 1e-3F;
-  m.gm_tb_s[1] = 2.0F;
-  m.k = 0.18F;
-  m.bi = 0.05F;
-  m.bi_tau_lo_s = 1.0F;
-  m.bi_tau_hi_s = 1e3F;
-  return m;
-}
-
 void encode_frame(std::uint32_t k, imu::hal::EncodedFrames& fr) {
   using imu::hal::Layout;
   if (k == 0) {
@@ -79,7 +63,7 @@ void encode_frame(std::uint32_t k, imu::hal::EncodedFrames& fr) {
     }
     imu::hal::encode(cfg, Layout::kFd, 0, fr);
   } else if (k < kSetupFrames) {
-    imu::hal::encode(largest_model(static_cast<std::uint8_t>(k - 1)), false, Layout::kFd, 0, fr);
+    imu::hal::encode(imu::m4::largest_model(static_cast<std::uint8_t>(k - 1)), false, Layout::kFd, 0, fr);
   } else {
     imu::hal::SampleRecord s{};
     s.seq = k - kSetupFrames;
