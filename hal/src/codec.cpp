@@ -385,7 +385,7 @@ void serialize(const ChannelMonitorRecord& r, std::uint8_t* buf) {
   w.u8(r.channel);
   w.u8(r.n_states);
   w.u8(r.flags);
-  w.u8(0);
+  w.u8(r.cusum_detections);
   w.u32(r.seq);
   w.u32(r.updates);
   w.f32(r.nis_mean);
@@ -516,7 +516,7 @@ void parse(const std::uint8_t* buf, ChannelMonitorRecord& r) {
   r.channel = rd.u8();
   r.n_states = rd.u8();
   r.flags = rd.u8();
-  (void)rd.u8();
+  r.cusum_detections = rd.u8();
   r.seq = rd.u32();
   r.updates = rd.u32();
   r.nis_mean = rd.f32();

@@ -237,10 +237,45 @@ TEST_F(NodeTest, StepRaisesAlarmLineOnlyOnActiveChannels) {
   EXPECT_TRUE(node_->active(2));
   EXPECT_FALSE(node_->active(0));
   EXPECT_TRUE(node_->alarm());
-  EXPECT_TRUE(node_->monitors(2).cusum.alarm());
+  // One step, one detection: the node moved the known signal to the new level (the init
+  // window's mean, ~0, + 0.5; the size comes from the few updates between the step and the
+  // alarm, sd ~0.033 / sqrt(5)) and the re-armed CUSUM stayed quiet for the remaining 1990.
+  const imu::node::Node::LevelShifts& ls = node_->level_shifts(2);
+  EXPECT_EQ(ls.count, 1U);
+  EXPECT_NEAR(static_cast<double>(ls.last_update), 1900.0, 16.0);  // update 1900 = sample 2000
+  EXPECT_NEAR(node_->known_signal(2), 0.5F, 0.06F);
+  EXPECT_FALSE(node_->monitors(2).cusum.alarm()) << "re-armed after the detection";
   bool line = false;
   ASSERT_EQ(alarm_line_.read(line), imu::hal::GpioStatus::kOk);
-  EXPECT_TRUE(line);
+  EXPECT_TRUE(line) << "the line stays set once a level shift was detected";
+}
+
+// A step of one noise sd, the size real IMUs show (one LSB of a coarse accelerometer): the
+// CUSUM takes a few hundred updates to see it, over which the CUSUM's own start estimate (where
+// its sum last was zero) can lie thousands of updates earlier. The step locator's start and
+// size must still put the known signal on the new level: one detection, not a train of them.
+// A clean run of the same length has none.
+TEST_F(NodeTest, OneSigmaStepIsOneDetectionAndTheKnownSignalFollows) {
+  for (const bool with_step : {false, true}) {
+    SetUp();
+    send_config(100.0, 1e-4);
+    imu::GaussianRng rng(with_step ? 7 : 8);
+    for (std::uint32_t k = 0; k < 30000; ++k) {
+      const double v = 0.033 * rng.normal() + (with_step && k >= 10000 ? 0.033 : 0.0);
+      const std::int32_t c[6] = {0, 0, static_cast<std::int32_t>(std::lround(v / 1e-4)), 0, 0, 0};
+      send_sample(k, c);
+    }
+    const imu::node::Node::LevelShifts& ls = node_->level_shifts(2);
+    if (!with_step) {
+      EXPECT_EQ(ls.count, 0U);
+      continue;
+    }
+    EXPECT_EQ(ls.count, 1U);
+    EXPECT_NEAR(static_cast<double>(ls.last_update), 9900.0, 200.0);
+    // The init window's mean has sd 0.033 / sqrt(100) = 0.0033; the size estimate's, over the
+    // ~250 updates to the alarm, about 0.002.
+    EXPECT_NEAR(node_->known_signal(2), 0.033F, 0.012F);
+  }
 }
 
 // Each active channel's monitors travel on their own: the summary MonitorRecord gives the worst
@@ -285,7 +320,10 @@ TEST_F(NodeTest, EachActiveChannelSendsItsOwnMonitors) {
   // The whole-run NIS mean of white noise under its own model: 1 within a few sd of the
   // chi-square mean (sd sqrt(2 / 3900) = 0.023), and the record says so for this channel only.
   EXPECT_NEAR(clean.nis_mean, 1.0F, 0.12F);
-  EXPECT_GT(step.nis_mean, 2.0F) << "a 15-sigma step must show in the stepped channel's NIS";
+  // The step shows in the stepped channel's NIS for the few updates before the node moved its
+  // known signal (15 sigma: ~225 per update), far above the clean channel's 1 +- 0.023.
+  EXPECT_GT(step.nis_mean, 1.5F) << "a 15-sigma step must show in the stepped channel's NIS";
+  EXPECT_EQ(step.cusum_detections, 1U);
 }
 
 TEST_F(NodeTest, NotStaticMeansNoFilterUpdate) {

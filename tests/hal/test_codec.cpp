@@ -636,6 +636,7 @@ TEST(Codec, ChannelMonitorRecordRoundTripsAndRefusesABadChannel) {
   r.channel = 4;
   r.n_states = 6;
   r.flags = imu::hal::kChanMonCusum | imu::hal::kChanMonPushed;
+  r.cusum_detections = 201;
   r.seq = 0xFEDCBA98U;
   r.updates = 1234567U;
   r.nis_mean = 1.0625F;
@@ -659,6 +660,7 @@ TEST(Codec, ChannelMonitorRecordRoundTripsAndRefusesABadChannel) {
     imu::hal::serialize(r, b);
     EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
     EXPECT_EQ(ev[0].rec.channel_monitor.cusum_step_update, 765432U);
+    EXPECT_EQ(ev[0].rec.channel_monitor.cusum_detections, 201U);
     EXPECT_EQ(ev[0].rec.channel_monitor.white_flagged, 99U);
   }
   imu::hal::ChannelMonitorRecord b = r;

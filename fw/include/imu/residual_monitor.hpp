@@ -340,6 +340,76 @@ class Cusum {
   int direction_ = 0;
 };
 
+/// Where a level shift that the CUSUM detected began, and how large it is: the generalised
+/// likelihood ratio for a step of unknown size in N(0, 1) input, maximised over the starts on
+/// a grid of kBlockUpdates updates within the last kBlocks blocks (and the current part block):
+/// start tau maximises (sum_{k > tau} nu_k)^2 / (n - tau), the size is that sum's mean (in sd).
+/// The CUSUM's own estimate, where the alarming sum last was zero, is no use for the size: with
+/// a small slack the sum wanders above zero for thousands of updates before a step, and the mean
+/// since then dilutes the step. Memory kBlocks floats; cost per update an addition and a
+/// compare, plus a store per block; locate() O(kBlocks), at an alarm only.
+template <std::size_t kBlocks = 32, std::uint32_t kBlockUpdates = 16>
+class StepLocator {
+  static_assert(kBlocks >= 1 && kBlockUpdates >= 1, "an empty step locator");
+
+ public:
+  struct Estimate {
+    float mean = 0.0F;          ///< mean nu after the start (sd units, signed)
+    std::uint32_t updates = 0;  ///< updates after the start, up to the current one; 0: none
+  };
+
+  /// Forget every block.
+  void reset() {
+    head_ = 0;
+    count_ = 0;
+    part_sum_ = 0.0F;
+    part_n_ = 0;
+  }
+  /// One normalised innovation.
+  void push(float nu) {
+    part_sum_ += nu;
+    if (++part_n_ == kBlockUpdates) {
+      sum_[head_] = part_sum_;
+      head_ = head_ + 1 == kBlocks ? 0 : head_ + 1;
+      count_ = count_ < kBlocks ? count_ + 1 : count_;
+      part_sum_ = 0.0F;
+      part_n_ = 0;
+    }
+  }
+  /// The most likely start of a step in `direction` (+1 up, -1 down) at most `max_updates`
+  /// back (the CUSUM's window), and the step's mean.
+  [[nodiscard]] Estimate locate(int direction, std::uint64_t max_updates) const {
+    Estimate best{};
+    float best_stat = -1.0F;
+    float tail = part_sum_;  // sum of nu after the candidate start
+    std::uint32_t n = part_n_;
+    std::size_t idx = head_;  // one past the newest block not yet in the tail
+    for (std::size_t i = 0; i <= count_; ++i) {
+      if (n > 0 && n <= max_updates && (direction > 0 ? tail > 0.0F : tail < 0.0F)) {
+        const float stat = tail * tail / static_cast<float>(n);
+        if (stat > best_stat) {
+          best_stat = stat;
+          best = Estimate{tail / static_cast<float>(n), n};
+        }
+      }
+      if (i == count_) {
+        break;
+      }
+      idx = idx == 0 ? kBlocks - 1 : idx - 1;
+      tail += sum_[idx];
+      n += kBlockUpdates;
+    }
+    return best;
+  }
+
+ private:
+  float sum_[kBlocks] = {};
+  std::size_t head_ = 0;
+  std::size_t count_ = 0;
+  float part_sum_ = 0.0F;
+  std::uint32_t part_n_ = 0;
+};
+
 /// The three monitors of one channel, fed from the filter's step result.
 template <std::size_t kLags = 4>
 struct ResidualMonitors {
@@ -355,15 +425,17 @@ struct ResidualMonitors {
     }
     return MonitorStatus::kOk;
   }
-  /// innovation and its variance S (> 0) of one update.
-  void push(float innovation, float innovation_var) {
+  /// innovation and its variance S (> 0) of one update. Returns nu = innovation / sqrt(S), 0
+  /// (and nothing pushed) when S is not positive.
+  float push(float innovation, float innovation_var) {
     if (!(innovation_var > 0.0F)) {
-      return;
+      return 0.0F;
     }
     const float nu = innovation / std::sqrt(innovation_var);
     nis.push(nu);
     whiteness.push(nu);
     (void)cusum.push(nu);
+    return nu;
   }
   /// Any monitor fires (the "alarm" output line).
   [[nodiscard]] bool any_alarm() const { return nis.flag() || whiteness.flag() || cusum.alarm(); }

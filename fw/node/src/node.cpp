@@ -197,6 +197,8 @@ void Node::restart_estimators() {
     known_[c] = 0.0F;
     active_[c] = false;
     init_sum_[c] = 0.0;
+    shifts_[c] = LevelShifts{};
+    locator_[c].reset();
     (void)mon_[c].configure(cfg_node_.monitor_window);  // window checked in configure()
   }
   init_count_ = 0;
@@ -409,13 +411,45 @@ void Node::on_sample(const hal::SampleRecord& s) {
       const auto z = to_f32(static_cast<double>(s.counts[c]) * lsb_[c]);
       const KfStep<float> st = pushed_[c] ? kfn_[c].step(z, static_) : kf_[c].step(z, static_);
       if (st.updated) {
-        mon_[c].push(st.innovation, st.innovation_var);
+        const float nu = mon_[c].push(st.innovation, st.innovation_var);
+        track_level(c, nu, st.innovation_var);
       }
     }
     update_alarm();
   }
   ++stats_.samples;
   after_sample();
+}
+
+// Feed the channel's step locator; at a CUSUM alarm, a level shift: count it, move the known
+// signal to the new level (LevelShifts) and re-arm the CUSUM.
+void Node::track_level(std::size_t c, float nu, float innovation_var) {
+  locator_[c].push(nu);
+  if (mon_[c].cusum.alarm()) {
+    accommodate_step(c, innovation_var);
+  }
+}
+
+void Node::accommodate_step(std::size_t c, float innovation_var) {
+  Cusum& cu = mon_[c].cusum;
+  LevelShifts& ls = shifts_[c];
+  const int dir = cu.direction();
+  StepLocator<>::Estimate est = locator_[c].locate(dir, cu.updates() - cu.step_index());
+  if (est.updates == 0) {  // the CUSUM's window is shorter than the locator's grid
+    est = locator_[c].locate(dir, UINT64_MAX);
+  }
+  float size = est.mean * std::sqrt(innovation_var);
+  const bool apply = est.updates > 0 && std::isfinite(size);
+  size = apply ? size : 0.0F;
+  if (apply) {
+    known_[c] += size;
+    kf_[c].set_known_signal(known_[c]);
+    kfn_[c].set_known_signal(known_[c]);
+  }
+  ls.count = ls.count < UINT32_MAX ? ls.count + 1U : ls.count;
+  ls.last_update = cu.updates() - est.updates;
+  ls.last_size = size;
+  cu.reset();
 }
 
 void Node::on_missing(std::uint32_t n) {
@@ -478,7 +512,7 @@ void Node::read_static() {
 void Node::update_alarm() {
   bool any = false;
   for (std::size_t c = 0; c < kChannels; ++c) {
-    any = any || (active_[c] && mon_[c].any_alarm());
+    any = any || (active_[c] && (mon_[c].any_alarm() || shifts_[c].count > 0));
   }
   if (any == alarm_) {
     return;
@@ -563,7 +597,7 @@ void Node::send_status() {
     const float ratio = mc.whiteness.box_pierce_ratio();
     white_ratio = ratio > white_ratio ? ratio : white_ratio;
     white_any = white_any || mc.whiteness.flag();
-    if (mc.cusum.alarm()) {
+    if (shifts_[c].count > 0) {
       cusum_any = true;
       m.cusum_mask = static_cast<std::uint8_t>(m.cusum_mask | (1U << c));
     }
@@ -607,8 +641,9 @@ void Node::send_channel_monitors() {
     hal::ChannelMonitorRecord r{};
     r.channel = static_cast<std::uint8_t>(c);
     r.n_states = static_cast<std::uint8_t>(pushed_[c] ? model_states_[c] : 1U);
-    const bool down = mc.cusum.alarm() && mc.cusum.direction() < 0;
-    r.flags = static_cast<std::uint8_t>((mc.cusum.alarm() ? hal::kChanMonCusum : 0U) |
+    const LevelShifts& ls = shifts_[c];
+    const bool down = ls.count > 0 && ls.last_size < 0.0F;
+    r.flags = static_cast<std::uint8_t>((ls.count > 0 ? hal::kChanMonCusum : 0U) |
                                         (down ? hal::kChanMonCusumDown : 0U) |
                                         (mc.whiteness.flag() ? hal::kChanMonWhiteness : 0U) |
                                         (pushed_[c] ? hal::kChanMonPushed : 0U));
@@ -620,7 +655,8 @@ void Node::send_channel_monitors() {
     r.blocks = mc.nis.blocks();
     r.nis_flagged = mc.nis.flagged_blocks();
     r.white_flagged = mc.whiteness.flagged_blocks();
-    r.cusum_step_update = mc.cusum.alarm() ? sat_u32(mc.cusum.step_index()) : 0U;
+    r.cusum_detections = static_cast<std::uint8_t>(ls.count < 255U ? ls.count : 255U);
+    r.cusum_step_update = ls.count > 0 ? sat_u32(ls.last_update) : 0U;
     hal::encode(r, cfg_node_.layout, transfer_id_++, fr);
     send_frames(fr);
   }

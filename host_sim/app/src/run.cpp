@@ -49,6 +49,9 @@ namespace {
 constexpr const char* kCmd = "imu-sim run";
 
 /// Telemetry received from the node.
+// Level shifts listed per channel in the report (the node's count goes on beyond).
+constexpr std::size_t kMaxListedSteps = 64;
+
 struct Telemetry {
   hal::Receiver<8> rx;
   bool have_stats = false;
@@ -63,6 +66,9 @@ struct Telemetry {
   bool have_model_echo[hal::kChannels] = {};
   hal::ChannelMonitorRecord chan_mon[hal::kChannels] = {};  // each channel's monitors
   bool have_chan_mon[hal::kChannels] = {};
+  // Each detected level shift's start update, as the per-second records show them (two within
+  // one record period are seen as one: the count says how many there were).
+  std::vector<std::uint32_t> step_updates[hal::kChannels];
   hal::AdevRecord curve[kNumChannels][node::kMaxAdevPoints] = {};
   std::uint8_t n_points[kNumChannels] = {};
   std::bitset<node::kMaxAdevPoints> got[kNumChannels];
@@ -132,10 +138,16 @@ struct Telemetry {
         model_echo[e.rec.model.channel] = e.rec.model;  // channel < 6: checked by the receiver
         have_model_echo[e.rec.model.channel] = true;
         break;
-      case hal::RxEvent::Type::kChannelMonitor:
-        chan_mon[e.rec.channel_monitor.channel] = e.rec.channel_monitor;  // < 6: checked
+      case hal::RxEvent::Type::kChannelMonitor: {
+        const hal::ChannelMonitorRecord& cm = e.rec.channel_monitor;
+        if (cm.cusum_detections > chan_mon[cm.channel].cusum_detections &&
+            step_updates[cm.channel].size() < kMaxListedSteps) {
+          step_updates[cm.channel].push_back(cm.cusum_step_update);
+        }
+        chan_mon[cm.channel] = cm;  // channel < 6: checked by the receiver
         have_chan_mon[e.rec.channel_monitor.channel] = true;
         break;
+      }
       case hal::RxEvent::Type::kModel:
       case hal::RxEvent::Type::kSample:
       case hal::RxEvent::Type::kMissing:
@@ -1244,6 +1256,7 @@ struct ChannelVerdict {
   hal::ChannelMonitorRecord m{};
   std::uint32_t white_allowed = 0;  // max_flagged_blocks at the whiteness test's rate
   bool whiteness_passed = false;
+  std::vector<double> steps_t_s;  // detected level shifts' estimated times in the record
   [[nodiscard]] bool pushed() const { return (m.flags & hal::kChanMonPushed) != 0; }
   [[nodiscard]] bool cusum_alarm() const { return (m.flags & hal::kChanMonCusum) != 0; }
 };
@@ -1253,14 +1266,19 @@ using Verdicts = std::array<ChannelVerdict, kNumChannels>;
 constexpr double kWhitenessFlagRate = 0.05;
 
 // Every channel's verdict, once per run (the report's table, note and JSON read them).
-Verdicts channel_verdicts(const Telemetry& tel) {
+Verdicts channel_verdicts(const Telemetry& tel, double fs_hz) {
   Verdicts vs{};
+  // The node's filter updates start after its known-signal average (gaps aside).
+  const double first_update = static_cast<double>(imu::node::NodeConfig{}.init_samples);
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     ChannelVerdict& v = vs[c];
     v.have = tel.have_chan_mon[c];
     v.m = tel.chan_mon[c];
     v.white_allowed = max_flagged_blocks(v.m.blocks, kWhitenessFlagRate);
     v.whiteness_passed = v.have && v.m.blocks > 0 && v.m.white_flagged <= v.white_allowed;
+    for (const std::uint32_t u : tel.step_updates[c]) {
+      v.steps_t_s.push_back((first_update + static_cast<double>(u)) / fs_hz);
+    }
   }
   return vs;
 }
@@ -1269,7 +1287,7 @@ Verdicts channel_verdicts(const Telemetry& tel) {
 std::string node_channels_text(const RunOptions& o, const Verdicts& vs) {
   std::string t;
   char line[200];
-  std::snprintf(line, sizeof line, "%-10s %-8s %6s %9s %10s %14s %6s\n", "channel", "model",
+  std::snprintf(line, sizeof line, "%-10s %-8s %6s %9s %10s %14s %10s\n", "channel", "model",
                 "states", "NIS mean", "whiteness", "white. fails", "CUSUM");
   t += line;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
@@ -1280,17 +1298,23 @@ std::string node_channels_text(const RunOptions& o, const Verdicts& vs) {
     char fails[40];
     std::snprintf(fails, sizeof fails, "%u/%u %s", v.m.white_flagged, v.m.blocks,
                   v.whiteness_passed ? "ok" : "FAIL");
-    std::snprintf(line, sizeof line, "%-10.10s %-8s %6u %9.3f %10.3f %14s %6s\n",
+    char shifts[24] = "quiet";
+    if (v.cusum_alarm()) {
+      std::snprintf(shifts, sizeof shifts, "%u shift%s", static_cast<unsigned>(v.m.cusum_detections),
+                    v.m.cusum_detections == 1 ? "" : "s");
+    }
+    std::snprintf(line, sizeof line, "%-10.10s %-8s %6u %9.3f %10.3f %14s %10s\n",
                   slot_name(o, c).c_str(), v.pushed() ? "pushed" : "default",
                   static_cast<unsigned>(v.m.n_states), static_cast<double>(v.m.nis_mean),
-                  static_cast<double>(v.m.whiteness), fails, v.cusum_alarm() ? "ALARM" : "quiet");
+                  static_cast<double>(v.m.whiteness), fails, shifts);
     t += line;
   }
   t += "model: pushed (from --model) or default (the first-order model); NIS mean over every\n"
        "filter update (1 for a model that fits); whiteness: the last block's Box-Pierce\n"
        "statistic over its 95 % bound; white. fails: blocks that failed it, ok while their count\n"
-       "is within the test's own 5 % false-alarm rate (binomial, 1 % level); CUSUM: the latched\n"
-       "innovation-mean alarm.\n";
+       "is within the test's own 5 % false-alarm rate (binomial, 1 % level); CUSUM: the level\n"
+       "shifts of the innovations' mean it detected (255: 255 or more); at each the node moves\n"
+       "its known signal to the new level and re-arms (their times: the JSON's cusum_steps_t_s).\n";
   return t;
 }
 
@@ -1307,7 +1331,8 @@ std::string monitor_note(const RunOptions& o, const Telemetry& tel, const Verdic
     }
     std::string& list = v.pushed() ? alarm_pushed : alarm_default;
     if (v.cusum_alarm()) {
-      list += (list.empty() ? "" : ", ") + slot_name(o, c);
+      list += (list.empty() ? "" : ", ") + slot_name(o, c) + " (" +
+              std::to_string(v.m.cusum_detections) + ")";
     }
     if (!v.whiteness_passed) {
       white_failed += (white_failed.empty() ? "" : ", ") + slot_name(o, c);
@@ -1318,16 +1343,17 @@ std::string monitor_note(const RunOptions& o, const Telemetry& tel, const Verdic
   }
   std::string t = "residual monitors:";
   if (!alarm_default.empty()) {
-    t += " the innovation CUSUM alarms on " + alarm_default +
+    t += " the innovation CUSUM detected level shifts on " + alarm_default +
          ", which run the first-order model (white + one GM): their innovations drift when the "
-         "data hold an effect that model lacks (a rate random walk, a step, a ramp). `imu-sim "
-         "analyze " + o.path + " --channel all --json M.json` names it and `--model M.json` "
-         "pushes the fitted models.";
+         "data hold an effect that model lacks (a rate random walk, a step, a ramp), and each "
+         "drift reads as shifts. `imu-sim analyze " + o.path +
+         " --channel all --json M.json` names it and `--model M.json` pushes the fitted models.";
   }
   if (!alarm_pushed.empty()) {
-    t += " The CUSUM alarms on " + alarm_pushed +
-         " with the pushed model: the data hold what the node does not run (a ramp or "
-         "sinusoids are not filter states) or what the analysis did not name.";
+    t += " The CUSUM detected level shifts on " + alarm_pushed +
+         " with the pushed model: bias steps (compare their times, cusum_steps_t_s, with the "
+         "analysis's bias_step effects), or what the node does not run (a ramp or sinusoids are "
+         "not filter states) or the analysis did not name.";
   }
   if (!white_failed.empty()) {
     t += " Whiteness fails on " + white_failed +
@@ -1389,7 +1415,13 @@ std::string node_json(const RunOptions& o, const Telemetry& tel, const Verdicts&
          ", \"whiteness_failed_blocks\": " + std::to_string(v.m.white_flagged) +
          ", \"whiteness_failed_allowed\": " + std::to_string(v.white_allowed) +
          ", \"whiteness_passed\": " + (v.whiteness_passed ? "true" : "false") +
-         ", \"cusum_alarm\": " + (v.cusum_alarm() ? "true" : "false") + "}";
+         ", \"cusum_alarm\": " + (v.cusum_alarm() ? "true" : "false") +
+         ", \"cusum_detections\": " + std::to_string(v.m.cusum_detections) +
+         ", \"cusum_steps_t_s\": [";
+    for (std::size_t i = 0; i < v.steps_t_s.size(); ++i) {
+      j += (i == 0 ? "" : ", ") + json_num(v.steps_t_s[i]);
+    }
+    j += "]}";
     first_c = false;
   }
   j += "]";
@@ -1453,7 +1485,7 @@ ReportInput report_input(const RunOptions& o, const SensorData& sd, const SendPl
   if (!o.input_note.empty()) {
     ri.notes.insert(ri.notes.begin(), o.input_note);
   }
-  const Verdicts vs = channel_verdicts(tel);
+  const Verdicts vs = channel_verdicts(tel, sd.fs_hz);
   const std::string mon_note = monitor_note(o, tel, vs);
   if (!mon_note.empty()) {
     ri.notes.insert(ri.notes.begin(), mon_note);

@@ -166,8 +166,8 @@ struct MonitorRecord {
 };
 
 /// ChannelMonitorRecord::flags bits.
-inline constexpr std::uint8_t kChanMonCusum = 1U << 0;       ///< this channel's CUSUM in alarm
-inline constexpr std::uint8_t kChanMonCusumDown = 1U << 1;   ///< ... on a downward step
+inline constexpr std::uint8_t kChanMonCusum = 1U << 0;       ///< the CUSUM detected a level shift
+inline constexpr std::uint8_t kChanMonCusumDown = 1U << 1;   ///< ... the last one downward
 inline constexpr std::uint8_t kChanMonWhiteness = 1U << 2;   ///< the last block failed whiteness
 inline constexpr std::uint8_t kChanMonPushed = 1U << 3;      ///< the channel runs a pushed model
 
@@ -179,6 +179,7 @@ struct ChannelMonitorRecord {
   std::uint8_t channel;          ///< 0..5
   std::uint8_t n_states;         ///< filter states the channel runs
   std::uint8_t flags;            ///< kChanMonCusum | kChanMonCusumDown | kChanMonWhiteness | kChanMonPushed
+  std::uint8_t cusum_detections; ///< level shifts the CUSUM detected (saturates at 255)
   std::uint32_t seq;
   std::uint32_t updates;         ///< filter updates since the stream started
   float nis_mean;                ///< mean NIS over all those updates
@@ -187,7 +188,7 @@ struct ChannelMonitorRecord {
   std::uint32_t blocks;          ///< complete monitor blocks
   std::uint32_t nis_flagged;     ///< blocks whose NIS mean left its chi-square interval
   std::uint32_t white_flagged;   ///< blocks that failed the whiteness test
-  std::uint32_t cusum_step_update; ///< in alarm: the update after which the step began
+  std::uint32_t cusum_step_update; ///< the update after which the last detected step began
 };
 
 /// Frame statistics of the sender's own receiver (see RxStats). 44 bytes. Counters saturate.

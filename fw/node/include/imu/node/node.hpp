@@ -217,6 +217,19 @@ class Node {
   [[nodiscard]] hal::ModelRecord model_echo(std::size_t c) const;
   [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
   [[nodiscard]] const ResidualMonitors<4>& monitors(std::size_t c) const { return mon_[c]; }
+  /// Level shifts the channel's CUSUM detected since the stream (re)started. At each one the
+  /// node moves the channel's known signal by the step's size and re-arms the CUSUM, so one
+  /// step is one detection and the filter goes on from the new level (a latched alarm would
+  /// leave the filter off by the step and the monitor blind for the rest of the run). Start and
+  /// size come from the StepLocator: the mean innovation after the start. What the filter's
+  /// states took up of the step before the alarm stays in them and decays with the model (the
+  /// states' change cannot be told from their own motion: a sinusoid's, a Gauss-Markov term's).
+  struct LevelShifts {
+    std::uint32_t count = 0;
+    std::uint64_t last_update = 0;  ///< the update after which the last detected step began
+    float last_size = 0.0F;         ///< the known signal's move then (channel units, signed)
+  };
+  [[nodiscard]] const LevelShifts& level_shifts(std::size_t c) const { return shifts_[c]; }
   /// The channel has carried a non-zero count since the stream (re)started. Inactive channels
   /// (e.g. absent from a one-channel recording) run no filter and raise no alarm.
   [[nodiscard]] bool active(std::size_t c) const { return active_[c]; }
@@ -239,6 +252,8 @@ class Node {
   void send_frames(const hal::EncodedFrames& fr);
   void update_alarm();
   void read_static();
+  void track_level(std::size_t c, float nu, float innovation_var);
+  void accommodate_step(std::size_t c, float innovation_var);
 
   NodeConfig cfg_node_{};
   hal::FrameSink* tx_ = nullptr;
@@ -258,6 +273,8 @@ class Node {
   bool echo_v2_[kChannels] = {};  // the channel's last push was version 2: echo in version 2
   DiscreteModel<kNodeStates> scratch_dm_{};  // discretisation workspace (not on the stack)
   ResidualMonitors<4> mon_[kChannels];
+  LevelShifts shifts_[kChannels] = {};
+  StepLocator<> locator_[kChannels];
   float known_[kChannels] = {};
   bool active_[kChannels] = {};  // a non-zero count was seen since the stream started
   double init_sum_[kChannels] = {};
