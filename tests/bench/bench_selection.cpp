@@ -128,6 +128,7 @@ struct Outcome {
   bool consistent = true;
   Fate fate[kKinds] = {kNothing, kNothing, kNothing};  // of each kind the record holds
   bool note_time[kKinds] = {};  // a note gives a time inside the kind's event
+  bool any_time_range = false;  // an unexplained entry with a time range, anywhere
   double cpu_s = 0.0;
 };
 
@@ -366,6 +367,11 @@ bool note_time_in(const std::string& note, double t0, double t1) {
 
 // The fate of each non-stationary kind the record holds (see the header).
 void classify_kinds(const Record& rec, const ia::Report& r, Outcome& out) {
+  for (const auto& u : r.unexplained) {
+    double a = 0.0;
+    double b = 0.0;
+    out.any_time_range = out.any_time_range || time_range(u, a, b, 0);
+  }
   for (std::size_t k = 0; k < kKinds; ++k) {
     if (!rec.has_kind[k]) {
       continue;
@@ -574,6 +580,18 @@ void print_nonstationary(const std::vector<Record>& recs, const std::vector<Outc
     }
     std::printf(" %s |\n", pct(any, n).c_str());
   }
+  // A time range on a record that holds no non-stationary kind is a false finding.
+  std::size_t stationary = 0;
+  std::size_t timed = 0;
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    const Record& r = recs[i];
+    if (outs[i].ok && !r.has_kind[kTransient] && !r.has_kind[kNoiseChange] && !r.has[kStep]) {
+      ++stationary;
+      timed += outs[i].any_time_range ? 1U : 0U;
+    }
+  }
+  std::printf("\nrecords with none of the kinds that get an unexplained time range: %s of %zu\n",
+              pct(timed, stationary).c_str(), stationary);
 }
 
 bool write_csv(const char* path, const std::vector<Record>& recs,

@@ -3442,6 +3442,100 @@ class Analysis {
     out.unexplained.insert(out.unexplained.end(), time_ranges.begin(), time_ranges.end());
   }
 
+  // Stationarity of the named terms: each ADEV term named on the record must also hold on each
+  // half of it. The half's ADEV over the taus where the term dominates the model (>= half its
+  // AVAR, within [Ts, T_half/10]) is compared with the model fitted to the whole record, with
+  // the half's own intervals; a |z| above the Bonferroni level over every tau so tested (both
+  // halves, every term) that also misses by more than unexplained_min_rel says the term does
+  // not hold there: an unexplained time range over that half. Under a stationary record the
+  // halves' deviations from the whole record's model are smaller than from the truth (the
+  // whole contains them), so the level is conservative.
+  struct PartMiss {
+    std::string type;
+    std::size_t begin = 0;
+    std::size_t end = 0;
+    double dom_lo = 0.0;
+    double dom_hi = 0.0;
+    double zmax = 0.0;
+    int sign = 0;
+    double rel = 0.0;
+  };
+  static constexpr std::size_t kMinPartSamples = 4096;
+
+  // The worst tau of each ADEV term in one part (taus tested: added to `tested`).
+  void part_misses(std::size_t b, std::size_t e, std::vector<PartMiss>& misses,
+                   std::size_t& tested) const {
+    const std::vector<std::int32_t> c(counts.begin() + static_cast<std::ptrdiff_t>(b),
+                                      counts.begin() + static_cast<std::ptrdiff_t>(e));
+    std::vector<std::uint8_t> g;
+    if (!gap.empty()) {
+      g.assign(gap.begin() + static_cast<std::ptrdiff_t>(b),
+               gap.begin() + static_cast<std::ptrdiff_t>(e));
+    }
+    const double tmax = tau_max * static_cast<double>(e - b) / static_cast<double>(counts.size());
+    const Points pts = in_range(points_for_model(adev_of(c, g, ts, lsb), cur_p), tmax);
+    const Residual r = residual(pts, cur_p, o, ts, tmax);
+    for (const auto& eff : out.effects) {
+      if (term_avar(eff.type, cur_p, 1.0) < 0.0) {
+        continue;
+      }
+      PartMiss m{eff.type, b, e, 0.0, 0.0, 0.0, 0, 0.0};
+      for (std::size_t i = 0; i < pts.size() && i < r.z.size(); ++i) {
+        const double t = pts[i].tau_s;
+        if (term_avar(eff.type, cur_p, t) < 0.5 * model_avar(cur_p, t)) {
+          continue;
+        }
+        ++tested;
+        m.dom_lo = m.dom_lo > 0.0 ? m.dom_lo : t;
+        m.dom_hi = t;
+        if (std::fabs(r.z[i]) > m.zmax) {
+          m.zmax = std::fabs(r.z[i]);
+          m.sign = r.z[i] > 0.0 ? 1 : -1;
+          m.rel = std::fabs(std::sqrt(model_avar(cur_p, t) / pts[i].avar) - 1.0);
+        }
+      }
+      if (m.dom_hi > 0.0) {
+        misses.push_back(m);
+      }
+    }
+  }
+
+  void check_terms_on_halves() {
+    const std::size_t n = counts.size();
+    if (n < 2 * kMinPartSamples) {
+      return;
+    }
+    std::vector<PartMiss> misses;
+    std::size_t tested = 0;
+    part_misses(0, n / 2, misses, tested);
+    part_misses(n / 2, n, misses, tested);
+    if (tested == 0) {
+      return;
+    }
+    const double z_thr = two_sided_normal_threshold(o.alpha / static_cast<double>(tested));
+    for (const auto& m : misses) {
+      if (!(m.zmax > z_thr) || !(m.rel > o.unexplained_min_rel)) {
+        continue;
+      }
+      UnexplainedRun u;
+      u.tau_min_s = m.dom_lo;
+      u.tau_max_s = m.dom_hi;
+      u.max_abs_z = m.zmax;
+      u.sign = m.sign;
+      u.t_min_s = static_cast<double>(m.begin) * ts;
+      u.t_max_s = static_cast<double>(m.end) * ts;
+      u.what = m.type + " does not hold on the " + (m.begin == 0 ? "first" : "second") +
+               " half: there the model (fitted to the whole record) lies " +
+               (m.sign > 0 ? "above" : "below") + " the half's ADEV by up to " +
+               fmt("%.0f", 100.0 * m.rel) + " % where the term dominates";
+      out.unexplained.push_back(u);
+      out.notes.push_back("stationarity: " + u.what + " (tau " + fmt("%.3g", m.dom_lo) + "-" +
+                          fmt("%.3g", m.dom_hi) + " s, |z| " + fmt("%.1f", m.zmax) + " > " +
+                          fmt("%.2f", z_thr) + ", the Bonferroni level over " +
+                          std::to_string(tested) + " taus of both halves)");
+    }
+  }
+
   void after_model() {
     // ---- after: never worse than before, every named effect real, the remainder said.
     const AdevSet& clean = adev_y;
@@ -3461,6 +3555,7 @@ class Analysis {
     out.error_after = choice.e;
     out.unexplained = unexplained_runs(ac, cur_p);
     add_time_ranges();
+    check_terms_on_halves();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
     for (const auto& w : withdrawn) {
       bool covered = false;
