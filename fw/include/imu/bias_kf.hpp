@@ -21,12 +21,30 @@
 // Cost per sample: scalar 1 predict = 4 flops, update +~12 flops, 1 division; n-state predict
 // 2 n^3 + n^2, update ~4 n^3 + 4 n^2 flops (Joseph form as two full n x n products). No heap, not re-entrant
 // on one instance. sizeof(ScalarBiasKf<float>) is the whole state (see the benchmark).
+//
+// Steady-state gain (KalmanFilter, opt-in: set_steady_state(true)). With a time-invariant model
+// and a measurement every sample, P converges to the solution of the discrete algebraic Riccati
+// equation and K, S to constants. The filter runs time-varying and compares K and S at the ends
+// of blocks of kSteadyBlock consecutive updates: when every |K_i - K_i'| <= kSteadyTol max_j |K_j|
+// and |S - S'| <= kSteadyTol S (the norm-relative form is the absolute floor for entries that
+// are zero, e.g. inert states), K and S are frozen and each sample costs x = Phi x over Phi's
+// non-zero entries only (a list built at configure: the node's 9-state models are diagonal plus
+// the averaging sampler's row, 17 of 81 entries), e = z - known - H x, x += K e. P stays the
+// posterior of the last time-varying update (the steady state: bias_variance() is still right),
+// the step reports S (innovation_var: NIS stays consistent). A sample without an update (not
+// static, non-finite z: a gap in the measurements) makes P grow again: the filter drops back
+// to the time-varying form from that P, and re-freezes only after a new converged block.
+// Models with a persistent state that no noise drives (Qd(i,i) = 0 with a non-zero row of Phi:
+// sinusoids, ramps) never freeze: their P decays as 1/k (sinusoid) or faster, the gain never
+// settles, and a frozen one would forget what the filter has averaged. They stay time-varying.
+// Inert states (Phi row = 0) do not prevent it.
 #ifndef IMU_BIAS_KF_HPP
 #define IMU_BIAS_KF_HPP
 
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 #include "imu/error_model.hpp"
 #include "imu/linalg.hpp"
@@ -214,13 +232,70 @@ class KalmanFilter {
     // initial or per-step variance. Hitting it is counted, never silent.
     p_max_ = static_cast<T>(1e6 * (pmax > 0.0 ? pmax : 1.0));
     stats_ = KfStats{};
+    index_phi(m);
+    reset_convergence();
     return KfStatus::kOk;
   }
 
   void set_known_signal(T known) { known_ = known; }
 
-  /// One sample: predict, then update if is_static. O(N^3).
+  /// Allow (true) or forbid the frozen steady-state gain (see the file comment). Off by default.
+  /// Turning it off returns to the time-varying filter at once.
+  void set_steady_state(bool enabled) {
+    steady_enabled_ = enabled;
+    reset_convergence();
+  }
+  /// True while K and S are frozen.
+  [[nodiscard]] bool steady() const { return steady_; }
+  /// The model lets the gain freeze (no undriven persistent state).
+  [[nodiscard]] bool steady_allowed() const { return steady_allowed_; }
+  /// The frozen gain and innovation variance (meaningful while steady()).
+  [[nodiscard]] const Vec& steady_gain() const { return k_ss_; }
+  [[nodiscard]] T steady_innovation_var() const { return s_ss_; }
+  /// Non-zero entries of Phi (what a steady-state step multiplies).
+  [[nodiscard]] std::size_t phi_nonzeros() const { return row_start_[N]; }
+
+  /// Updates per convergence block, and the relative change of K and S allowed over one block.
+  static constexpr std::uint32_t kSteadyBlock = 256;
+  static constexpr double kSteadyTol = 1e-5;
+
+  /// One sample: predict, then update if is_static. O(N^3) time-varying; O(non-zeros of Phi + N)
+  /// with a frozen gain.
   KfStep<T> step(T z, bool is_static) {
+    if (steady_) {
+      if (is_static && std::isfinite(z)) {
+        return step_steady(z);
+      }
+      reset_convergence();  // no update: P grows, the time-varying filter takes over from here
+    }
+    return step_time_varying(z, is_static);
+  }
+
+  /// The bias the measurement sees, H x.
+  [[nodiscard]] T bias() const {
+    T s = T(0);
+    for (std::size_t i = 0; i < N; ++i) {
+      s += h_(0, i) * x_(i, 0);
+    }
+    return s;
+  }
+  /// Variance of H x: H P H^T.
+  [[nodiscard]] T bias_variance() const {
+    T s = T(0);
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        s += h_(0, i) * p_(i, j) * h_(0, j);
+      }
+    }
+    return s;
+  }
+  [[nodiscard]] const Vec& state() const { return x_; }
+  [[nodiscard]] const Square& covariance() const { return p_; }
+  [[nodiscard]] const KfStats& stats() const { return stats_; }
+
+ private:
+  // The full filter: predict x and P, update with the Joseph form, floor and cap P. O(N^3).
+  KfStep<T> step_time_varying(T z, bool is_static) {
     x_ = phi_ * x_;
     p_ = phi_ * p_ * phi_.transpose() + qd_;
     ++stats_.predictions;
@@ -248,7 +323,11 @@ class KalmanFilter {
         out.updated = true;
         out.innovation = e;
         out.innovation_var = s;
+        track_convergence(k, s);
       }
+    }
+    if (!out.updated) {
+      block_updates_ = 0;  // a block is consecutive updates
     }
     symmetrize(p_);
     for (std::size_t i = 0; i < N; ++i) {
@@ -268,30 +347,88 @@ class KalmanFilter {
     }
     return out;
   }
-
-  /// The bias the measurement sees, H x.
-  [[nodiscard]] T bias() const {
-    T s = T(0);
+  // Frozen K and S: x = Phi x over the non-zeros of Phi, e = z - known - H x, x += K e.
+  KfStep<T> step_steady(T z) {
+    Vec xp{};
     for (std::size_t i = 0; i < N; ++i) {
-      s += h_(0, i) * x_(i, 0);
+      T acc = T(0);
+      for (std::size_t q = row_start_[i]; q < row_start_[i + 1]; ++q) {
+        acc += phi_(i, col_[q]) * x_(col_[q], 0);
+      }
+      xp(i, 0) = acc;
     }
-    return s;
-  }
-  /// Variance of H x: H P H^T.
-  [[nodiscard]] T bias_variance() const {
-    T s = T(0);
+    T hx = T(0);
     for (std::size_t i = 0; i < N; ++i) {
+      hx += h_(0, i) * xp(i, 0);
+    }
+    const T e = (z - known_) - hx;
+    for (std::size_t i = 0; i < N; ++i) {
+      x_(i, 0) = xp(i, 0) + k_ss_(i, 0) * e;
+    }
+    ++stats_.predictions;
+    ++stats_.updates;
+    KfStep<T> out;
+    out.updated = true;
+    out.innovation = e;
+    out.innovation_var = s_ss_;
+    return out;
+  }
+
+  // Row-wise list of Phi's non-zero entries, and whether the model lets the gain freeze.
+  template <std::size_t kMaxStates>
+  void index_phi(const DiscreteModel<kMaxStates>& m) {
+    std::size_t q = 0;
+    steady_allowed_ = true;
+    for (std::size_t i = 0; i < N; ++i) {
+      row_start_[i] = static_cast<Index>(q);
+      bool row_zero = true;
       for (std::size_t j = 0; j < N; ++j) {
-        s += h_(0, i) * p_(i, j) * h_(0, j);
+        if (std::fabs(phi_(i, j)) > T(0)) {
+          col_[q++] = static_cast<Index>(j);
+          row_zero = false;
+        }
+      }
+      if (!row_zero && !(m.qd(i, i) > 0.0)) {
+        steady_allowed_ = false;  // persistent and undriven: the gain never settles
       }
     }
-    return s;
+    row_start_[N] = static_cast<Index>(q);
   }
-  [[nodiscard]] const Vec& state() const { return x_; }
-  [[nodiscard]] const Square& covariance() const { return p_; }
-  [[nodiscard]] const KfStats& stats() const { return stats_; }
 
- private:
+  void reset_convergence() {
+    steady_ = false;
+    block_updates_ = 0;
+  }
+
+  // After each time-varying update: compare K and S with the block's first, freeze both when a
+  // block of kSteadyBlock consecutive updates changed them by at most kSteadyTol (relative).
+  void track_convergence(const Vec& k, T s) {
+    if (!steady_enabled_ || !steady_allowed_) {
+      return;
+    }
+    if (block_updates_ == 0) {
+      k_ss_ = k;
+      s_ss_ = s;
+    }
+    if (++block_updates_ < kSteadyBlock) {
+      return;
+    }
+    block_updates_ = 0;
+    T kmax = T(0);
+    T dmax = T(0);
+    for (std::size_t i = 0; i < N; ++i) {
+      const T a = std::fabs(k_ss_(i, 0));
+      const T d = std::fabs(k(i, 0) - k_ss_(i, 0));
+      kmax = a > kmax ? a : kmax;
+      dmax = d > dmax ? d : dmax;
+    }
+    const T tol = static_cast<T>(kSteadyTol);
+    const bool settled = dmax <= tol * kmax && std::fabs(s - s_ss_) <= tol * s_ss_;
+    k_ss_ = k;
+    s_ss_ = s;
+    steady_ = settled;
+  }
+
   Square phi_{};
   Square qd_{};
   Square p_{};
@@ -301,6 +438,16 @@ class KalmanFilter {
   T known_ = T(0);
   T p_max_ = T(1);
   KfStats stats_{};
+  // Steady-state gain (see the file comment).
+  Vec k_ss_{};
+  T s_ss_ = T(0);
+  std::uint32_t block_updates_ = 0;
+  using Index = std::conditional_t<(N * N < 256), std::uint8_t, std::uint16_t>;
+  Index row_start_[N + 1] = {};
+  Index col_[N * N] = {};
+  bool steady_enabled_ = false;
+  bool steady_allowed_ = false;
+  bool steady_ = false;
 };
 
 }  // namespace imu
