@@ -257,7 +257,7 @@ class KalmanFilter {
 
   /// Updates per convergence block, and the relative change of K and S allowed over one block.
   static constexpr std::uint32_t kSteadyBlock = 256;
-  static constexpr double kSteadyTol = 1e-5;
+  static constexpr double kSteadyTol = 1e-6;
 
   /// One sample: predict, then update if is_static. O(N^3) time-varying; O(non-zeros of Phi + N)
   /// with a frozen gain.
