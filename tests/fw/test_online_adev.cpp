@@ -574,6 +574,25 @@ TEST(ExactSquareSum, AddSquareMatchesInt128ArithmeticOverTheWholeInt64Range) {
   EXPECT_GT(restarts, 100);  // sums up to near 2^128 many times over
 }
 
+// The 32-bit multiply form the Cortex-M4 runs (the host build uses unsigned __int128).
+TEST(ExactSquareSum, PortableSquareMatchesInt128) {
+  std::mt19937_64 rng(53);
+  for (int i = 0; i < 300000; ++i) {
+    const auto bits = static_cast<unsigned>(rng() % 64U);
+    std::uint64_t u = rng() >> (63U - bits);  // 0 .. 2^(bits+1) - 1, up to 2^64 - 1
+    u = u > (1ULL << 63U) ? (1ULL << 63U) : u;  // |d| <= 2^63
+    if (i < 4) {
+      const std::uint64_t edges[] = {0xFFFFFFFFULL, 0x100000000ULL, 1ULL << 63U, 0};
+      u = edges[i];
+    }
+    std::uint64_t lo = 0;
+    std::uint64_t hi = 0;
+    imu::square_u64_portable(u, lo, hi);
+    const UInt128 ref = static_cast<UInt128>(u) * u;
+    ASSERT_TRUE(as_u128(lo, hi) == ref) << "u " << u;
+  }
+}
+
 TEST(ExactSquareSum, SaturatesAt2To128) {
   std::uint64_t lo = 0;
   std::uint64_t hi = 0;

@@ -15,11 +15,13 @@
 //    which gives M/2 taus per octave from Ts to 2^L M Ts;
 //  * squared second differences are summed exactly, in integers: each term d (int64) is squared
 //    into 128 bits (32 x 32 -> 64-bit multiplies, one when |d| < 2^32) and added to a 128-bit
-//    unsigned accumulator per tau (two uint64 words). No rounding at all until a snapshot
+//    unsigned accumulator per tau (two uint64 words; unsigned __int128 products where the
+//    compiler has them, the same values). No rounding at all until a snapshot
 //    converts the sum to double (correctly rounded). The sum is exact while it is below 2^128:
-//    a level-k term is below 2^(2 (k + 35)) (|counts| <= 2^31, m <= 8; M <= 64 adds 6 bits),
-//    so at full-scale input the accumulator holds at least 2^36 samples on every level (and
-//    2^68 at |counts| <= 2^15); beyond that it saturates at 2^128 - 1 (overflowed() says so).
+//    a level-k term is below 2^(2 (k + 35)) (|counts| <= 2^31, m <= 8; M = 64 adds 6 bits) and
+//    the level has n / 2^k terms, so at full-scale input level k holds n < 2^(58 - k) samples
+//    (2^36 on every level for L = 22; 2^68 at |counts| <= 2^15); beyond that the sum saturates
+//    at 2^128 - 1 (overflowed() says so).
 //    Every way of feeding the samples (push, push_block, push_frames, MultiAdev) and every
 //    target (host, Cortex-M4 without double-precision hardware) gives the same sums, bit for bit;
 //  * term counts are not incremented per sample: they are derived from the number of points in
@@ -83,25 +85,44 @@ struct QuantizeResult {
   return QuantizeResult{static_cast<std::int32_t>(r), false};
 }
 
-/// (hi, lo) += d^2 as one 128-bit unsigned integer, exactly, in 32 x 32 -> 64-bit multiplies
-/// (one when |d| < 2^32, three otherwise): no floating point, the same bits on every target.
-/// Saturates at 2^128 - 1 and returns false when the sum would exceed it.
+/// u^2 as 128 bits (sq_hi, sq_lo) in 32 x 32 -> 64-bit multiplies: one when u < 2^32, three
+/// otherwise. u <= 2^63.
+inline void square_u64_portable(std::uint64_t u, std::uint64_t& sq_lo, std::uint64_t& sq_hi) {
+  if ((u >> 32U) == 0) {
+    sq_lo = u * u;
+    sq_hi = 0;
+    return;
+  }
+  // u = a 2^32 + b: u^2 = a^2 2^64 + 2 a b 2^32 + b^2, with a <= 2^31 (so 2ab < 2^64).
+  const std::uint64_t a = u >> 32U;
+  const std::uint64_t b = u & 0xFFFFFFFFU;
+  const std::uint64_t ab2 = 2U * (a * b);
+  const std::uint64_t bb = b * b;
+  sq_lo = bb + (ab2 << 32U);
+  sq_hi = a * a + (ab2 >> 32U) + (sq_lo < bb ? 1U : 0U);
+}
+
+/// u^2 as 128 bits: square_u64_portable, or one 64 x 64 -> 128-bit multiply where the compiler
+/// has unsigned __int128 (64-bit hosts). The same value either way.
+inline void square_u64(std::uint64_t u, std::uint64_t& sq_lo, std::uint64_t& sq_hi) {
+#if defined(__SIZEOF_INT128__)
+  __extension__ using U128 = unsigned __int128;
+  const U128 sq = static_cast<U128>(u) * u;
+  sq_lo = static_cast<std::uint64_t>(sq);
+  sq_hi = static_cast<std::uint64_t>(sq >> 64U);
+#else
+  square_u64_portable(u, sq_lo, sq_hi);
+#endif
+}
+
+/// (hi, lo) += d^2 as one 128-bit unsigned integer, exactly: no floating point, the same bits
+/// on every target. Saturates at 2^128 - 1 and returns false when the sum would exceed it.
 inline bool add_square_u128(std::uint64_t& lo, std::uint64_t& hi, std::int64_t d) {
   const std::uint64_t u =
       d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
   std::uint64_t sq_lo = 0;
   std::uint64_t sq_hi = 0;
-  if ((u >> 32U) == 0) {
-    sq_lo = u * u;
-  } else {
-    // u = a 2^32 + b: u^2 = a^2 2^64 + 2 a b 2^32 + b^2, with a <= 2^31 (so 2ab < 2^64).
-    const std::uint64_t a = u >> 32U;
-    const std::uint64_t b = u & 0xFFFFFFFFU;
-    const std::uint64_t ab2 = 2U * (a * b);
-    const std::uint64_t bb = b * b;
-    sq_lo = bb + (ab2 << 32U);
-    sq_hi = a * a + (ab2 >> 32U) + (sq_lo < bb ? 1U : 0U);
-  }
+  square_u64(u, sq_lo, sq_hi);
   lo += sq_lo;
   const std::uint64_t add = sq_hi + (lo < sq_lo ? 1U : 0U);  // sq_hi <= 2^62: no wrap
   if (add == 0) {
