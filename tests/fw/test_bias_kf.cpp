@@ -290,7 +290,7 @@ void dare_gain(const imu::DiscreteModel<6>& d, long double (&k)[kN], long double
   long double p[kN][kN] = {};
   for (std::size_t i = 0; i < kN; ++i) {
     for (std::size_t j = 0; j < kN; ++j) {
-      p[i][j] = d.p0(i, j);
+      p[i][j] = static_cast<long double>(d.p0(i, j));
     }
   }
   for (int it = 0; it < 2000000; ++it) {
@@ -305,14 +305,14 @@ void dare_gain(const imu::DiscreteModel<6>& d, long double (&k)[kN], long double
     }
     for (std::size_t i = 0; i < kN; ++i) {
       for (std::size_t j = 0; j < kN; ++j) {
-        m[i][j] = d.qd(i, j);
+        m[i][j] = static_cast<long double>(d.qd(i, j));
         for (std::size_t q = 0; q < kN; ++q) {
           m[i][j] += t[i][q] * static_cast<long double>(d.phi(j, q));
         }
       }
     }
     long double ph[kN] = {};
-    s = d.r_filter();
+    s = static_cast<long double>(d.r_filter());
     for (std::size_t i = 0; i < kN; ++i) {
       for (std::size_t j = 0; j < kN; ++j) {
         ph[i] += m[i][j] * static_cast<long double>(d.h(0, j));
@@ -362,7 +362,7 @@ TEST(KfSteadyState, FrozenGainEqualsTheRiccatiSolution) {
   }
   std::printf("steady gain froze after %d updates; K vs DARE:", frozen_at + 1);
   for (std::size_t i = 0; i < 4; ++i) {
-    const long double got = kf.steady_gain()(i, 0);
+    const auto got = static_cast<long double>(kf.steady_gain()(i, 0));
     std::printf(" %.6Le/%.6Le", got, k_ref[i]);
     // Float filter (relative rounding ~1e-6 in P's products) plus the freeze tolerance 1e-5.
     EXPECT_LE(std::fabs(got - k_ref[i]), 1e-4L * kmax) << "state " << i;

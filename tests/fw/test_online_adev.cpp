@@ -676,7 +676,11 @@ TEST(ExactSquareSum, EstimatorSumsAreExactOnFullScaleLongRecords) {
     const double expect = 0.25 * 0.25 * static_cast<double>(sum) /
                           (2.0 * af * af * static_cast<double>(terms));
     EXPECT_EQ(p.avar, expect) << "af " << p.af;
-    EXPECT_EQ(std::memcmp(&p.avar, &pb[i].avar, sizeof p.avar), 0) << "af " << p.af;
+    std::uint64_t bits_a = 0;
+    std::uint64_t bits_b = 0;
+    std::memcpy(&bits_a, &p.avar, sizeof bits_a);
+    std::memcpy(&bits_b, &pb[i].avar, sizeof bits_b);
+    EXPECT_EQ(bits_a, bits_b) << "af " << p.af;  // push_block and push: the same bits
   }
   EXPECT_TRUE(above_2_64);
   EXPECT_FALSE(a.overflowed());
