@@ -29,7 +29,7 @@
 // and |S - S'| <= kSteadyTol S (the norm-relative form is the absolute floor for entries that
 // are zero, e.g. inert states), K and S are frozen and each sample costs x = Phi x over Phi's
 // non-zero entries only (a list built at configure: the node's 9-state models are diagonal plus
-// the averaging sampler's row, 17 of 81 entries), e = z - known - H x, x += K e. P stays the
+// the averaging sampler's row, 16 of 81 entries), e = z - known - H x, x += K e. P stays the
 // posterior of the last time-varying update (the steady state: bias_variance() is still right),
 // the step reports S (innovation_var: NIS stays consistent). A sample without an update (not
 // static, non-finite z: a gap in the measurements) makes P grow again: the filter drops back
