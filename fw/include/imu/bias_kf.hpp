@@ -19,7 +19,9 @@
 // accumulate: test_bias_kf measures float vs double over 1e6 samples.
 //
 // Cost per sample: scalar 1 predict = 4 flops, update +~12 flops, 1 division; n-state predict
-// 2 n^3 + n^2, update ~4 n^3 + 4 n^2 flops (Joseph form as two full n x n products). No heap, not re-entrant
+// 4 z n flops (z: non-zero entries of Phi, n <= z <= n^2; the node's 9-state models have 16),
+// update ~6 n^2 h flops (h: non-zero entries of H, 1 for the node's models; Joseph form without
+// forming I - K H). No heap, not re-entrant
 // on one instance. sizeof(ScalarBiasKf<float>) is the whole state (see the benchmark).
 //
 // Steady-state gain (KalmanFilter, opt-in: set_steady_state(true)). With a time-invariant model
@@ -259,8 +261,8 @@ class KalmanFilter {
   static constexpr std::uint32_t kSteadyBlock = 256;
   static constexpr double kSteadyTol = 1e-6;
 
-  /// One sample: predict, then update if is_static. O(N^3) time-varying; O(non-zeros of Phi + N)
-  /// with a frozen gain.
+  /// One sample: predict, then update if is_static. Time-varying O(N x non-zeros of Phi + N^2 x
+  /// non-zeros of H); with a frozen gain O(non-zeros of Phi + N).
   KfStep<T> step(T z, bool is_static) {
     if (steady_) {
       if (is_static && std::isfinite(z)) {
@@ -294,22 +296,29 @@ class KalmanFilter {
   [[nodiscard]] const KfStats& stats() const { return stats_; }
 
  private:
-  // The full filter: predict x and P, update with the Joseph form, floor and cap P. O(N^3).
+  // The full filter: predict x and P, update with the Joseph form, floor and cap P.
   KfStep<T> step_time_varying(T z, bool is_static) {
-    x_ = phi_ * x_;
-    p_ = phi_ * p_ * phi_.transpose() + qd_;
+    x_ = phi_times(x_);
+    predict_covariance();
     ++stats_.predictions;
     KfStep<T> out;
     if (is_static) {
       if (!std::isfinite(z)) {
         ++stats_.rejected_nonfinite;
       } else {
-        const Mat<T, N, 1> pht = p_ * h_.transpose();
+        Vec pht{};
+        for (std::size_t i = 0; i < N; ++i) {
+          T acc = T(0);
+          for (std::size_t q = 0; q < h_nnz_; ++q) {
+            acc += p_(i, h_col_[q]) * h_(0, h_col_[q]);
+          }
+          pht(i, 0) = acc;
+        }
         T s = r_;
         T hx = T(0);
-        for (std::size_t i = 0; i < N; ++i) {
-          s += h_(0, i) * pht(i, 0);
-          hx += h_(0, i) * x_(i, 0);
+        for (std::size_t q = 0; q < h_nnz_; ++q) {
+          s += h_(0, h_col_[q]) * pht(h_col_[q], 0);
+          hx += h_(0, h_col_[q]) * x_(h_col_[q], 0);
         }
         const T e = (z - known_) - hx;
         Mat<T, N, 1> k{};
@@ -317,8 +326,7 @@ class KalmanFilter {
           k(i, 0) = pht(i, 0) / s;
           x_(i, 0) += k(i, 0) * e;
         }
-        Square ikh = Square::identity() - k * h_;
-        p_ = ikh * p_ * ikh.transpose() + (k * k.transpose()) * r_;  // Joseph form
+        joseph_update(k, pht);
         ++stats_.updates;
         out.updated = true;
         out.innovation = e;
@@ -349,17 +357,10 @@ class KalmanFilter {
   }
   // Frozen K and S: x = Phi x over the non-zeros of Phi, e = z - known - H x, x += K e.
   KfStep<T> step_steady(T z) {
-    Vec xp{};
-    for (std::size_t i = 0; i < N; ++i) {
-      T acc = T(0);
-      for (std::size_t q = row_start_[i]; q < row_start_[i + 1]; ++q) {
-        acc += phi_(i, col_[q]) * x_(col_[q], 0);
-      }
-      xp(i, 0) = acc;
-    }
+    const Vec xp = phi_times(x_);
     T hx = T(0);
-    for (std::size_t i = 0; i < N; ++i) {
-      hx += h_(0, i) * xp(i, 0);
+    for (std::size_t q = 0; q < h_nnz_; ++q) {
+      hx += h_(0, h_col_[q]) * xp(h_col_[q], 0);
     }
     const T e = (z - known_) - hx;
     for (std::size_t i = 0; i < N; ++i) {
@@ -374,7 +375,67 @@ class KalmanFilter {
     return out;
   }
 
-  // Row-wise list of Phi's non-zero entries, and whether the model lets the gain freeze.
+  // Phi v over Phi's non-zero entries (row by row, in column order).
+  Vec phi_times(const Vec& v) const {
+    Vec out{};
+    for (std::size_t i = 0; i < N; ++i) {
+      T acc = T(0);
+      for (std::size_t q = row_start_[i]; q < row_start_[i + 1]; ++q) {
+        acc += phi_(i, col_[q]) * v(col_[q], 0);
+      }
+      out(i, 0) = acc;
+    }
+    return out;
+  }
+
+  // P = Phi P Phi^T + Qd over Phi's non-zero entries: A = Phi P, then A Phi^T.
+  void predict_covariance() {
+    Square a{};
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t q = row_start_[i]; q < row_start_[i + 1]; ++q) {
+        const T f = phi_(i, col_[q]);
+        for (std::size_t j = 0; j < N; ++j) {
+          a(i, j) += f * p_(col_[q], j);
+        }
+      }
+    }
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        T acc = T(0);
+        for (std::size_t q = row_start_[j]; q < row_start_[j + 1]; ++q) {
+          acc += a(i, col_[q]) * phi_(j, col_[q]);
+        }
+        p_(i, j) = acc + qd_(i, j);
+      }
+    }
+  }
+
+  // Joseph form P = (I - K H) P (I - K H)^T + K R K^T without forming I - K H: with P symmetric,
+  // A = (I - K H) P = P - K (P H^T)^T, then P = A - (A H^T) K^T + R K K^T, the last two terms
+  // added as (R K_i - (A H^T)_i) K_j. O(N^2 x non-zeros of H).
+  void joseph_update(const Vec& k, const Vec& pht) {
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        p_(i, j) -= k(i, 0) * pht(j, 0);
+      }
+    }
+    Vec aht{};
+    for (std::size_t i = 0; i < N; ++i) {
+      T acc = T(0);
+      for (std::size_t q = 0; q < h_nnz_; ++q) {
+        acc += p_(i, h_col_[q]) * h_(0, h_col_[q]);
+      }
+      aht(i, 0) = acc;
+    }
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        p_(i, j) += (r_ * k(i, 0) - aht(i, 0)) * k(j, 0);
+      }
+    }
+  }
+
+  // Row-wise list of Phi's non-zero entries, the non-zero entries of H, and whether the model
+  // lets the gain freeze.
   template <std::size_t kMaxStates>
   void index_phi(const DiscreteModel<kMaxStates>& m) {
     std::size_t q = 0;
@@ -393,6 +454,12 @@ class KalmanFilter {
       }
     }
     row_start_[N] = static_cast<Index>(q);
+    h_nnz_ = 0;
+    for (std::size_t j = 0; j < N; ++j) {
+      if (std::fabs(h_(0, j)) > T(0)) {
+        h_col_[h_nnz_++] = static_cast<Index>(j);
+      }
+    }
   }
 
   void reset_convergence() {
@@ -445,6 +512,8 @@ class KalmanFilter {
   using Index = std::conditional_t<(N * N < 256), std::uint8_t, std::uint16_t>;
   Index row_start_[N + 1] = {};
   Index col_[N * N] = {};
+  Index h_col_[N] = {};
+  std::size_t h_nnz_ = 0;
   bool steady_enabled_ = false;
   bool steady_allowed_ = false;
   bool steady_ = false;
