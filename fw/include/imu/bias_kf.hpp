@@ -21,8 +21,8 @@
 // Cost per sample: scalar 1 predict = 4 flops, update +~12 flops, 1 division; n-state predict
 // 4 z n flops (z: non-zero entries of Phi, n <= z <= n^2; the node's 9-state models have 16),
 // update ~6 n^2 h flops (h: non-zero entries of H, 1 for the node's models; Joseph form without
-// forming I - K H). No heap, not re-entrant
-// on one instance. sizeof(ScalarBiasKf<float>) is the whole state (see the benchmark).
+// forming I - K H). No heap, not re-entrant on one instance. sizeof(ScalarBiasKf<float>) is the
+// whole state (see the benchmark).
 //
 // Steady-state gain (KalmanFilter, opt-in: set_steady_state(true)). With a time-invariant model
 // and a measurement every sample, P converges to the solution of the discrete algebraic Riccati
