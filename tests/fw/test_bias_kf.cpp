@@ -266,3 +266,224 @@ TEST(BiasKf, CovarianceOfAnUnobservedRandomWalkIsCappedAndStaysPsd) {
 }
 
 }  // namespace
+
+namespace {
+
+// GM (2 s) + GM (16 s) + RRW + white, seen through the averaging sampler (4 states: three
+// diagonal ones and the sample mean, whose row of Phi is dense).
+imu::DiscreteModel<6> steady_test_model() {
+  imu::ContinuousModel<6> c;
+  EXPECT_EQ(c.add_white(3.3e-3), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.add_gauss_markov(1e-6, 2.0), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.add_gauss_markov(1e-7, 16.0), imu::ModelStatus::kOk);
+  EXPECT_EQ(c.add_rrw(1.3e-4, 1e-6), imu::ModelStatus::kOk);
+  imu::DiscreteModel<6> d;
+  EXPECT_EQ(imu::discretize_averaged(c, 0.01, d), imu::ModelStatus::kOk);
+  EXPECT_EQ(d.n_states, 4U);
+  return d;
+}
+
+// The discrete algebraic Riccati equation's gain and innovation variance, by iterating the
+// Riccati recursion in long double (plain arrays, no filter code) until P stops changing.
+template <std::size_t kN>
+void dare_gain(const imu::DiscreteModel<6>& d, long double (&k)[kN], long double& s) {
+  long double p[kN][kN] = {};
+  for (std::size_t i = 0; i < kN; ++i) {
+    for (std::size_t j = 0; j < kN; ++j) {
+      p[i][j] = static_cast<long double>(d.p0(i, j));
+    }
+  }
+  for (int it = 0; it < 2000000; ++it) {
+    long double t[kN][kN] = {};
+    long double m[kN][kN] = {};
+    for (std::size_t i = 0; i < kN; ++i) {
+      for (std::size_t j = 0; j < kN; ++j) {
+        for (std::size_t q = 0; q < kN; ++q) {
+          t[i][j] += static_cast<long double>(d.phi(i, q)) * p[q][j];
+        }
+      }
+    }
+    for (std::size_t i = 0; i < kN; ++i) {
+      for (std::size_t j = 0; j < kN; ++j) {
+        m[i][j] = static_cast<long double>(d.qd(i, j));
+        for (std::size_t q = 0; q < kN; ++q) {
+          m[i][j] += t[i][q] * static_cast<long double>(d.phi(j, q));
+        }
+      }
+    }
+    long double ph[kN] = {};
+    s = static_cast<long double>(d.r_filter());
+    for (std::size_t i = 0; i < kN; ++i) {
+      for (std::size_t j = 0; j < kN; ++j) {
+        ph[i] += m[i][j] * static_cast<long double>(d.h(0, j));
+      }
+      s += static_cast<long double>(d.h(0, i)) * ph[i];
+    }
+    long double change = 0.0L;
+    for (std::size_t i = 0; i < kN; ++i) {
+      k[i] = ph[i] / s;
+    }
+    for (std::size_t i = 0; i < kN; ++i) {
+      for (std::size_t j = 0; j < kN; ++j) {
+        const long double next = m[i][j] - k[i] * s * k[j];  // (I - K H) M, symmetric form
+        change = std::fmax(change, std::fabs(next - p[i][j]) / (std::fabs(next) + 1e-300L));
+        p[i][j] = next;
+      }
+    }
+    if (it > 1000 && change < 1e-15L) {
+      break;
+    }
+  }
+}
+
+}  // namespace
+
+TEST(KfSteadyState, FrozenGainEqualsTheRiccatiSolution) {
+  const imu::DiscreteModel<6> d = steady_test_model();
+  imu::KalmanFilter<float, 4> kf;
+  ASSERT_EQ(kf.configure(d), imu::KfStatus::kOk);
+  kf.set_steady_state(true);
+  EXPECT_TRUE(kf.steady_allowed());
+  EXPECT_EQ(kf.phi_nonzeros(), 3U + 3U);  // three diagonal states, the mean's row (Phi(J,J) = 0)
+  imu::ModelSimulator<6> sim;
+  ASSERT_EQ(sim.configure(d, 5), imu::ModelStatus::kOk);
+  int frozen_at = -1;
+  for (int i = 0; i < 200000 && frozen_at < 0; ++i) {
+    (void)kf.step(static_cast<float>(sim.next()), true);
+    frozen_at = kf.steady() ? i : -1;
+  }
+  ASSERT_GE(frozen_at, 0) << "the gain never froze";
+  long double k_ref[4];
+  long double s_ref = 0.0L;
+  dare_gain<4>(d, k_ref, s_ref);
+  long double kmax = 0.0L;
+  for (const long double v : k_ref) {
+    kmax = std::fmax(kmax, std::fabs(v));
+  }
+  std::printf("steady gain froze after %d updates; K vs DARE:", frozen_at + 1);
+  for (std::size_t i = 0; i < 4; ++i) {
+    const auto got = static_cast<long double>(kf.steady_gain()(i, 0));
+    std::printf(" %.6Le/%.6Le", got, k_ref[i]);
+    // Float filter (relative rounding ~1e-6 in P's products) plus the freeze tolerance 1e-5.
+    EXPECT_LE(std::fabs(got - k_ref[i]), 1e-4L * kmax) << "state " << i;
+  }
+  std::printf("; S %.6e/%.6Le\n", static_cast<double>(kf.steady_innovation_var()), s_ref);
+  EXPECT_LE(std::fabs(static_cast<long double>(kf.steady_innovation_var()) - s_ref),
+            1e-4L * s_ref);
+}
+
+TEST(KfSteadyState, EstimatesMatchTheTimeVaryingFilterAndNisStaysConsistent) {
+  const imu::DiscreteModel<6> d = steady_test_model();
+  imu::KalmanFilter<float, 4> ss;
+  imu::KalmanFilter<float, 4> tv;
+  ASSERT_EQ(ss.configure(d), imu::KfStatus::kOk);
+  ASSERT_EQ(tv.configure(d), imu::KfStatus::kOk);
+  ss.set_steady_state(true);
+  imu::ModelSimulator<6> sim;
+  ASSERT_EQ(sim.configure(d, 17), imu::ModelStatus::kOk);
+  double max_db_sigma = 0.0;
+  double nis_sum = 0.0;
+  long steady_steps = 0;
+  for (int i = 0; i < 300000; ++i) {
+    const auto z = static_cast<float>(sim.next());
+    const auto a = ss.step(z, true);
+    const auto b = tv.step(z, true);
+    ASSERT_TRUE(a.updated);
+    if (ss.steady()) {
+      ++steady_steps;
+      ASSERT_EQ(a.innovation_var, ss.steady_innovation_var());  // S frozen with the gain
+      nis_sum += static_cast<double>(a.nis());
+      // The time-varying filter's S has converged too: same value within the freeze tolerance.
+      ASSERT_NEAR(a.innovation_var, b.innovation_var, 1e-4F * b.innovation_var);
+      const double db = std::fabs(static_cast<double>(ss.bias()) - static_cast<double>(tv.bias()));
+      max_db_sigma = std::fmax(max_db_sigma, db / std::sqrt(static_cast<double>(tv.bias_variance())));
+    }
+  }
+  EXPECT_FALSE(tv.steady());  // off by default
+  ASSERT_GT(steady_steps, 250000);
+  const double nis_mean = nis_sum / static_cast<double>(steady_steps);
+  std::printf("steady vs time-varying: %ld steady steps, max |db| %.3e sigma, mean NIS %.4f\n",
+              steady_steps, max_db_sigma, nis_mean);
+  EXPECT_LT(max_db_sigma, 0.01);
+  EXPECT_NEAR(nis_mean, 1.0, 4.0 * std::sqrt(2.0 / static_cast<double>(steady_steps)) + 0.01);
+  EXPECT_EQ(ss.stats().updates, tv.stats().updates);
+  EXPECT_EQ(ss.stats().predictions, tv.stats().predictions);
+}
+
+TEST(KfSteadyState, AGapOrANonFiniteSampleRevertsToTimeVaryingUntilReconverged) {
+  const imu::DiscreteModel<6> d = steady_test_model();
+  imu::KalmanFilter<float, 4> kf;
+  ASSERT_EQ(kf.configure(d), imu::KfStatus::kOk);
+  kf.set_steady_state(true);
+  imu::ModelSimulator<6> sim;
+  ASSERT_EQ(sim.configure(d, 23), imu::ModelStatus::kOk);
+  for (int i = 0; i < 200000 && !kf.steady(); ++i) {
+    (void)kf.step(static_cast<float>(sim.next()), true);
+  }
+  ASSERT_TRUE(kf.steady());
+  const float s_frozen = kf.steady_innovation_var();
+  for (int gap = 0; gap < 2; ++gap) {
+    if (gap == 0) {
+      for (int i = 0; i < 500; ++i) {
+        (void)kf.step(static_cast<float>(sim.next()), false);  // 5 s not static: no update
+        ASSERT_FALSE(kf.steady());
+      }
+    } else {
+      (void)sim.next();
+      (void)kf.step(std::nanf(""), true);  // rejected: a prediction only
+      ASSERT_FALSE(kf.steady());
+    }
+    // P grew during the gap: the first update's S exceeds the steady one.
+    const auto first = kf.step(static_cast<float>(sim.next()), true);
+    EXPECT_GT(first.innovation_var, s_frozen);
+    int updates = 1;
+    while (!kf.steady() && updates < 200000) {
+      (void)kf.step(static_cast<float>(sim.next()), true);
+      ++updates;
+    }
+    ASSERT_TRUE(kf.steady());
+    EXPECT_GE(updates, static_cast<int>(imu::KalmanFilter<float, 4>::kSteadyBlock));
+    EXPECT_NEAR(kf.steady_innovation_var(), s_frozen, 1e-4F * s_frozen);
+  }
+  kf.set_steady_state(false);
+  EXPECT_FALSE(kf.steady());
+}
+
+TEST(KfSteadyState, UndrivenSinusoidStaysTimeVaryingAndInertStatesDoNotPreventIt) {
+  imu::ContinuousModel<6> c;
+  ASSERT_EQ(c.add_white(3.3e-3), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_gauss_markov(1e-6, 2.0), imu::ModelStatus::kOk);
+  ASSERT_EQ(c.add_sinusoid(1e-3, 0.5), imu::ModelStatus::kOk);
+  imu::DiscreteModel<6> d;
+  ASSERT_EQ(imu::discretize(c, 0.01, d), imu::ModelStatus::kOk);
+  ASSERT_EQ(d.n_states, 3U);
+  imu::KalmanFilter<float, 3> kf;
+  ASSERT_EQ(kf.configure(d), imu::KfStatus::kOk);
+  kf.set_steady_state(true);
+  EXPECT_FALSE(kf.steady_allowed());
+  imu::ModelSimulator<6> sim;
+  ASSERT_EQ(sim.configure(d, 29), imu::ModelStatus::kOk);
+  for (int i = 0; i < 100000; ++i) {
+    (void)kf.step(static_cast<float>(sim.next()), true);
+    ASSERT_FALSE(kf.steady());
+  }
+  // The GM alone padded with an inert state (Phi = Qd = P0 = H = 0, as the node pads models).
+  imu::ContinuousModel<6> g;
+  ASSERT_EQ(g.add_white(3.3e-3), imu::ModelStatus::kOk);
+  ASSERT_EQ(g.add_gauss_markov(1e-6, 2.0), imu::ModelStatus::kOk);
+  imu::DiscreteModel<6> gd;
+  ASSERT_EQ(imu::discretize(g, 0.01, gd), imu::ModelStatus::kOk);
+  gd.n_states = 2;
+  imu::KalmanFilter<float, 2> kg;
+  ASSERT_EQ(kg.configure(gd), imu::KfStatus::kOk);
+  kg.set_steady_state(true);
+  EXPECT_TRUE(kg.steady_allowed());
+  EXPECT_EQ(kg.phi_nonzeros(), 1U);
+  imu::ModelSimulator<6> gs;
+  ASSERT_EQ(gs.configure(gd, 31), imu::ModelStatus::kOk);
+  for (int i = 0; i < 100000 && !kg.steady(); ++i) {
+    (void)kg.step(static_cast<float>(gs.next()), true);
+  }
+  EXPECT_TRUE(kg.steady());
+  EXPECT_EQ(kg.steady_gain()(1, 0), 0.0F);
+}

@@ -505,3 +505,183 @@ TEST(Quantize, RoundsAndSaturates) {
 }
 
 }  // namespace
+
+namespace {
+
+__extension__ using UInt128 = unsigned __int128;
+
+UInt128 as_u128(std::uint64_t lo, std::uint64_t hi) { return (UInt128{hi} << 64U) | lo; }
+
+// Exact sum of squared second differences at averaging factor af, stride `stride`, no gaps:
+// phases in __int128, squares and sum in unsigned __int128 (the reference for the estimator's
+// 128-bit accumulator, computed independently of it).
+UInt128 exact_sum(const std::vector<std::int32_t>& y, std::uint64_t af, std::uint64_t stride,
+                  std::uint64_t& terms) {
+  std::vector<Int128> x(y.size() + 1, 0);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    x[i + 1] = x[i] + y[i];
+  }
+  UInt128 sum = 0;
+  terms = 0;
+  for (std::size_t k = 0; k + 2 * af <= y.size(); k += stride) {
+    const Int128 d = x[k + 2 * af] - 2 * x[k + af] + x[k];
+    const UInt128 u = d < 0 ? static_cast<UInt128>(-d) : static_cast<UInt128>(d);
+    sum += u * u;
+    ++terms;
+  }
+  return sum;
+}
+
+}  // namespace
+
+TEST(ExactSquareSum, AddSquareMatchesInt128ArithmeticOverTheWholeInt64Range) {
+  std::mt19937_64 rng(41);
+  std::uint64_t lo = 0;
+  std::uint64_t hi = 0;
+  UInt128 ref = 0;
+  int restarts = 0;
+  const std::int64_t edges[] = {0,
+                                1,
+                                -1,
+                                0xFFFFFFFFLL,
+                                -0xFFFFFFFFLL,
+                                0x100000000LL,
+                                -0x100000000LL,
+                                std::numeric_limits<std::int64_t>::max(),
+                                std::numeric_limits<std::int64_t>::min()};
+  for (int i = 0; i < 200000; ++i) {
+    std::int64_t d = 0;
+    if (i < 9) {
+      d = edges[i];
+    } else {
+      // Magnitudes from 2^0 to 2^63: both multiply paths, carries into the high word.
+      const auto bits = static_cast<unsigned>(rng() % 64U);
+      d = static_cast<std::int64_t>(rng() >> (63U - bits)) * ((rng() & 1U) != 0U ? -1 : 1);
+    }
+    const UInt128 u = d < 0 ? UInt128{0} - static_cast<UInt128>(static_cast<Int128>(d))
+                            : static_cast<UInt128>(d);
+    const UInt128 sq = u * u;
+    if (ref + sq < ref) {  // would pass 2^128 (tested below): start again from 0
+      ref = 0;
+      lo = 0;
+      hi = 0;
+      ++restarts;
+    }
+    ref += sq;
+    ASSERT_TRUE(imu::add_square_u128(lo, hi, d)) << "i " << i;
+    ASSERT_TRUE(as_u128(lo, hi) == ref) << "i " << i << " d " << d;
+  }
+  EXPECT_GT(restarts, 100);  // sums up to near 2^128 many times over
+}
+
+// The 32-bit multiply form the Cortex-M4 runs (the host build uses unsigned __int128).
+TEST(ExactSquareSum, PortableSquareMatchesInt128) {
+  std::mt19937_64 rng(53);
+  for (int i = 0; i < 300000; ++i) {
+    const auto bits = static_cast<unsigned>(rng() % 64U);
+    std::uint64_t u = rng() >> (63U - bits);  // 0 .. 2^(bits+1) - 1, up to 2^64 - 1
+    u = u > (1ULL << 63U) ? (1ULL << 63U) : u;  // |d| <= 2^63
+    if (i < 4) {
+      const std::uint64_t edges[] = {0xFFFFFFFFULL, 0x100000000ULL, 1ULL << 63U, 0};
+      u = edges[i];
+    }
+    std::uint64_t lo = 0;
+    std::uint64_t hi = 0;
+    imu::square_u64_portable(u, lo, hi);
+    const UInt128 ref = static_cast<UInt128>(u) * u;
+    ASSERT_TRUE(as_u128(lo, hi) == ref) << "u " << u;
+  }
+}
+
+TEST(ExactSquareSum, SaturatesAt2To128) {
+  std::uint64_t lo = 0;
+  std::uint64_t hi = 0;
+  const std::int64_t min = std::numeric_limits<std::int64_t>::min();  // |d| = 2^63, d^2 = 2^126
+  for (int i = 0; i < 3; ++i) {
+    ASSERT_TRUE(imu::add_square_u128(lo, hi, min));
+  }
+  EXPECT_EQ(hi, 3ULL << 62U);  // 3 x 2^126, exact
+  EXPECT_EQ(lo, 0U);
+  EXPECT_EQ(imu::u128_to_double(lo, hi), std::ldexp(3.0, 126));
+  ASSERT_TRUE(imu::add_square_u128(lo, hi, -3));  // 3 x 2^126 + 9
+  EXPECT_EQ(lo, 9U);
+  EXPECT_FALSE(imu::add_square_u128(lo, hi, min));  // 2^128 + 9: saturated
+  EXPECT_EQ(hi, ~0ULL);
+  EXPECT_EQ(lo, ~0ULL);
+  // One below the limit, then one more.
+  lo = ~0ULL - 4U;
+  hi = ~0ULL;
+  ASSERT_TRUE(imu::add_square_u128(lo, hi, 2));  // 2^128 - 1
+  EXPECT_EQ(lo, ~0ULL);
+  EXPECT_FALSE(imu::add_square_u128(lo, hi, 1));
+}
+
+TEST(ExactSquareSum, ConversionToDoubleIsCorrectlyRounded) {
+  std::mt19937_64 rng(43);
+  std::vector<UInt128> values;
+  // Ties between two doubles (54 significant bits ending in 1, nothing below): to even; the
+  // same with one more bit far below (the sticky bit): up.
+  for (unsigned s = 0; s <= 74; s += 2) {
+    const UInt128 tie = ((UInt128{1} << 53U) + 1U) << s;
+    values.push_back(tie);
+    values.push_back(((UInt128{1} << 53U) + 3U) << s);
+    if (s > 0) {
+      values.push_back(tie + 1U);
+    }
+  }
+  for (int i = 0; i < 100000; ++i) {
+    const auto bits = static_cast<unsigned>(rng() % 128U);
+    const UInt128 v = as_u128(rng(), rng()) >> (127U - bits);
+    values.push_back(v);
+  }
+  for (const UInt128 v : values) {
+    const auto lo = static_cast<std::uint64_t>(v);
+    const auto hi = static_cast<std::uint64_t>(v >> 64U);
+    // GCC's and clang's unsigned __int128 -> double conversion rounds to nearest even.
+    ASSERT_EQ(imu::u128_to_double(lo, hi), static_cast<double>(v))
+        << "hi " << hi << " lo " << lo;
+  }
+}
+
+// The estimator's sums are the exact integer sums: its AVAR equals the formula evaluated on
+// the exact sum (converted once), bit for bit, on full-scale input whose level-0 sums exceed
+// 2^64 (|d| up to 2^33, 2^20 terms) and whose upper-level terms exceed 2^32 (the three-multiply
+// path), fed through push_block and push.
+TEST(ExactSquareSum, EstimatorSumsAreExactOnFullScaleLongRecords) {
+  std::mt19937 rng(47);
+  std::vector<std::int32_t> y(1U << 20U);
+  for (std::size_t i = 0; i < y.size(); ++i) {
+    // Full-scale random values with a slow square wave of +-2^30 (large upper-level terms).
+    const std::int32_t wave = ((i >> 12U) & 1U) != 0U ? (1 << 30) : -(1 << 30);
+    y[i] = static_cast<std::int32_t>(rng()) / 2 + wave;
+  }
+  Adev a(0.01, 0.25);
+  a.push_block(y.data(), y.size());
+  Adev b(0.01, 0.25);
+  for (const std::int32_t v : y) {
+    b.push(v);
+  }
+  const auto pa = snap(a);
+  const auto pb = snap(b);
+  ASSERT_EQ(pa.size(), pb.size());
+  ASSERT_GT(pa.size(), 60U);
+  bool above_2_64 = false;
+  for (std::size_t i = 0; i < pa.size(); ++i) {
+    const auto& p = pa[i];
+    std::uint64_t terms = 0;
+    const UInt128 sum = exact_sum(y, p.af, p.stride, terms);
+    above_2_64 = above_2_64 || (sum >> 64U) != 0;
+    ASSERT_EQ(p.n_terms, terms) << "af " << p.af;
+    const auto af = static_cast<double>(p.af);
+    const double expect = 0.25 * 0.25 * static_cast<double>(sum) /
+                          (2.0 * af * af * static_cast<double>(terms));
+    EXPECT_EQ(p.avar, expect) << "af " << p.af;
+    std::uint64_t bits_a = 0;
+    std::uint64_t bits_b = 0;
+    std::memcpy(&bits_a, &p.avar, sizeof bits_a);
+    std::memcpy(&bits_b, &pb[i].avar, sizeof bits_b);
+    EXPECT_EQ(bits_a, bits_b) << "af " << p.af;  // push_block and push: the same bits
+  }
+  EXPECT_TRUE(above_2_64);
+  EXPECT_FALSE(a.overflowed());
+}

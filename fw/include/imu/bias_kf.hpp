@@ -19,14 +19,34 @@
 // accumulate: test_bias_kf measures float vs double over 1e6 samples.
 //
 // Cost per sample: scalar 1 predict = 4 flops, update +~12 flops, 1 division; n-state predict
-// 2 n^3 + n^2, update ~4 n^3 + 4 n^2 flops (Joseph form as two full n x n products). No heap, not re-entrant
-// on one instance. sizeof(ScalarBiasKf<float>) is the whole state (see the benchmark).
+// 4 z n flops (z: non-zero entries of Phi, n <= z <= n^2; the node's 9-state models have 16),
+// update ~6 n^2 h flops (h: non-zero entries of H, 1 for the node's models; Joseph form without
+// forming I - K H). No heap, not re-entrant on one instance. sizeof(ScalarBiasKf<float>) is the
+// whole state (see the benchmark).
+//
+// Steady-state gain (KalmanFilter, opt-in: set_steady_state(true)). With a time-invariant model
+// and a measurement every sample, P converges to the solution of the discrete algebraic Riccati
+// equation and K, S to constants. The filter runs time-varying and compares K and S at the ends
+// of blocks of kSteadyBlock consecutive updates: when every |K_i - K_i'| <= kSteadyTol max_j |K_j|
+// and |S - S'| <= kSteadyTol S (the norm-relative form is the absolute floor for entries that
+// are zero, e.g. inert states), K and S are frozen and each sample costs x = Phi x over Phi's
+// non-zero entries only (a list built at configure: the node's 9-state models are diagonal plus
+// the averaging sampler's row, 16 of 81 entries), e = z - known - H x, x += K e. P stays the
+// posterior of the last time-varying update (the steady state: bias_variance() is still right),
+// the step reports S (innovation_var: NIS stays consistent). A sample without an update (not
+// static, non-finite z: a gap in the measurements) makes P grow again: the filter drops back
+// to the time-varying form from that P, and re-freezes only after a new converged block.
+// Models with a persistent state that no noise drives (Qd(i,i) = 0 with a non-zero row of Phi:
+// sinusoids, ramps) never freeze: their P decays as 1/k (sinusoid) or faster, the gain never
+// settles, and a frozen one would forget what the filter has averaged. They stay time-varying.
+// Inert states (Phi row = 0) do not prevent it.
 #ifndef IMU_BIAS_KF_HPP
 #define IMU_BIAS_KF_HPP
 
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <type_traits>
 
 #include "imu/error_model.hpp"
 #include "imu/linalg.hpp"
@@ -214,59 +234,43 @@ class KalmanFilter {
     // initial or per-step variance. Hitting it is counted, never silent.
     p_max_ = static_cast<T>(1e6 * (pmax > 0.0 ? pmax : 1.0));
     stats_ = KfStats{};
+    index_phi(m);
+    reset_convergence();
     return KfStatus::kOk;
   }
 
   void set_known_signal(T known) { known_ = known; }
 
-  /// One sample: predict, then update if is_static. O(N^3).
+  /// Allow (true) or forbid the frozen steady-state gain (see the file comment). Off by default.
+  /// Turning it off returns to the time-varying filter at once.
+  void set_steady_state(bool enabled) {
+    steady_enabled_ = enabled;
+    reset_convergence();
+  }
+  /// True while K and S are frozen.
+  [[nodiscard]] bool steady() const { return steady_; }
+  /// The model lets the gain freeze (no undriven persistent state).
+  [[nodiscard]] bool steady_allowed() const { return steady_allowed_; }
+  /// The frozen gain and innovation variance (meaningful while steady()).
+  [[nodiscard]] const Vec& steady_gain() const { return k_ss_; }
+  [[nodiscard]] T steady_innovation_var() const { return s_ss_; }
+  /// Non-zero entries of Phi (what a steady-state step multiplies).
+  [[nodiscard]] std::size_t phi_nonzeros() const { return row_start_[N]; }
+
+  /// Updates per convergence block, and the relative change of K and S allowed over one block.
+  static constexpr std::uint32_t kSteadyBlock = 256;
+  static constexpr double kSteadyTol = 1e-6;
+
+  /// One sample: predict, then update if is_static. Time-varying O(N x non-zeros of Phi + N^2 x
+  /// non-zeros of H); with a frozen gain O(non-zeros of Phi + N).
   KfStep<T> step(T z, bool is_static) {
-    x_ = phi_ * x_;
-    p_ = phi_ * p_ * phi_.transpose() + qd_;
-    ++stats_.predictions;
-    KfStep<T> out;
-    if (is_static) {
-      if (!std::isfinite(z)) {
-        ++stats_.rejected_nonfinite;
-      } else {
-        const Mat<T, N, 1> pht = p_ * h_.transpose();
-        T s = r_;
-        T hx = T(0);
-        for (std::size_t i = 0; i < N; ++i) {
-          s += h_(0, i) * pht(i, 0);
-          hx += h_(0, i) * x_(i, 0);
-        }
-        const T e = (z - known_) - hx;
-        Mat<T, N, 1> k{};
-        for (std::size_t i = 0; i < N; ++i) {
-          k(i, 0) = pht(i, 0) / s;
-          x_(i, 0) += k(i, 0) * e;
-        }
-        Square ikh = Square::identity() - k * h_;
-        p_ = ikh * p_ * ikh.transpose() + (k * k.transpose()) * r_;  // Joseph form
-        ++stats_.updates;
-        out.updated = true;
-        out.innovation = e;
-        out.innovation_var = s;
+    if (steady_) {
+      if (is_static && std::isfinite(z)) {
+        return step_steady(z);
       }
+      reset_convergence();  // no update: P grows, the time-varying filter takes over from here
     }
-    symmetrize(p_);
-    for (std::size_t i = 0; i < N; ++i) {
-      if (p_(i, i) < T(0)) {
-        p_(i, i) = T(0);
-        ++stats_.covariance_floored;
-      } else if (p_(i, i) > p_max_) {
-        // Scale row and column i by s = sqrt(p_max / P_ii): D P D with D > 0 diagonal keeps P
-        // positive semi-definite (clipping only the diagonal would not).
-        const T sc = std::sqrt(p_max_ / p_(i, i));
-        for (std::size_t j = 0; j < N; ++j) {
-          p_(i, j) *= sc;
-          p_(j, i) *= sc;
-        }
-        ++stats_.covariance_capped;
-      }
-    }
-    return out;
+    return step_time_varying(z, is_static);
   }
 
   /// The bias the measurement sees, H x.
@@ -292,6 +296,206 @@ class KalmanFilter {
   [[nodiscard]] const KfStats& stats() const { return stats_; }
 
  private:
+  // The full filter: predict x and P, update with the Joseph form, floor and cap P.
+  KfStep<T> step_time_varying(T z, bool is_static) {
+    x_ = phi_times(x_);
+    predict_covariance();
+    ++stats_.predictions;
+    KfStep<T> out;
+    if (is_static) {
+      if (!std::isfinite(z)) {
+        ++stats_.rejected_nonfinite;
+      } else {
+        Vec pht{};
+        for (std::size_t i = 0; i < N; ++i) {
+          T acc = T(0);
+          for (std::size_t q = 0; q < h_nnz_; ++q) {
+            acc += p_(i, h_col_[q]) * h_(0, h_col_[q]);
+          }
+          pht(i, 0) = acc;
+        }
+        T s = r_;
+        T hx = T(0);
+        for (std::size_t q = 0; q < h_nnz_; ++q) {
+          s += h_(0, h_col_[q]) * pht(h_col_[q], 0);
+          hx += h_(0, h_col_[q]) * x_(h_col_[q], 0);
+        }
+        const T e = (z - known_) - hx;
+        Mat<T, N, 1> k{};
+        for (std::size_t i = 0; i < N; ++i) {
+          k(i, 0) = pht(i, 0) / s;
+          x_(i, 0) += k(i, 0) * e;
+        }
+        joseph_update(k, pht);
+        ++stats_.updates;
+        out.updated = true;
+        out.innovation = e;
+        out.innovation_var = s;
+        track_convergence(k, s);
+      }
+    }
+    if (!out.updated) {
+      block_updates_ = 0;  // a block is consecutive updates
+    }
+    symmetrize(p_);
+    for (std::size_t i = 0; i < N; ++i) {
+      if (p_(i, i) < T(0)) {
+        p_(i, i) = T(0);
+        ++stats_.covariance_floored;
+      } else if (p_(i, i) > p_max_) {
+        // Scale row and column i by s = sqrt(p_max / P_ii): D P D with D > 0 diagonal keeps P
+        // positive semi-definite (clipping only the diagonal would not).
+        const T sc = std::sqrt(p_max_ / p_(i, i));
+        for (std::size_t j = 0; j < N; ++j) {
+          p_(i, j) *= sc;
+          p_(j, i) *= sc;
+        }
+        ++stats_.covariance_capped;
+      }
+    }
+    return out;
+  }
+  // Frozen K and S: x = Phi x over the non-zeros of Phi, e = z - known - H x, x += K e.
+  KfStep<T> step_steady(T z) {
+    const Vec xp = phi_times(x_);
+    T hx = T(0);
+    for (std::size_t q = 0; q < h_nnz_; ++q) {
+      hx += h_(0, h_col_[q]) * xp(h_col_[q], 0);
+    }
+    const T e = (z - known_) - hx;
+    for (std::size_t i = 0; i < N; ++i) {
+      x_(i, 0) = xp(i, 0) + k_ss_(i, 0) * e;
+    }
+    ++stats_.predictions;
+    ++stats_.updates;
+    KfStep<T> out;
+    out.updated = true;
+    out.innovation = e;
+    out.innovation_var = s_ss_;
+    return out;
+  }
+
+  // Phi v over Phi's non-zero entries (row by row, in column order).
+  Vec phi_times(const Vec& v) const {
+    Vec out{};
+    for (std::size_t i = 0; i < N; ++i) {
+      T acc = T(0);
+      for (std::size_t q = row_start_[i]; q < row_start_[i + 1]; ++q) {
+        acc += phi_(i, col_[q]) * v(col_[q], 0);
+      }
+      out(i, 0) = acc;
+    }
+    return out;
+  }
+
+  // P = Phi P Phi^T + Qd over Phi's non-zero entries: A = Phi P, then A Phi^T.
+  void predict_covariance() {
+    Square a{};
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t q = row_start_[i]; q < row_start_[i + 1]; ++q) {
+        const T f = phi_(i, col_[q]);
+        for (std::size_t j = 0; j < N; ++j) {
+          a(i, j) += f * p_(col_[q], j);
+        }
+      }
+    }
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        T acc = T(0);
+        for (std::size_t q = row_start_[j]; q < row_start_[j + 1]; ++q) {
+          acc += a(i, col_[q]) * phi_(j, col_[q]);
+        }
+        p_(i, j) = acc + qd_(i, j);
+      }
+    }
+  }
+
+  // Joseph form P = (I - K H) P (I - K H)^T + K R K^T without forming I - K H: with P symmetric,
+  // A = (I - K H) P = P - K (P H^T)^T, then P = A - (A H^T) K^T + R K K^T, the last two terms
+  // added as (R K_i - (A H^T)_i) K_j. O(N^2 x non-zeros of H).
+  void joseph_update(const Vec& k, const Vec& pht) {
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        p_(i, j) -= k(i, 0) * pht(j, 0);
+      }
+    }
+    Vec aht{};
+    for (std::size_t i = 0; i < N; ++i) {
+      T acc = T(0);
+      for (std::size_t q = 0; q < h_nnz_; ++q) {
+        acc += p_(i, h_col_[q]) * h_(0, h_col_[q]);
+      }
+      aht(i, 0) = acc;
+    }
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        p_(i, j) += (r_ * k(i, 0) - aht(i, 0)) * k(j, 0);
+      }
+    }
+  }
+
+  // Row-wise list of Phi's non-zero entries, the non-zero entries of H, and whether the model
+  // lets the gain freeze.
+  template <std::size_t kMaxStates>
+  void index_phi(const DiscreteModel<kMaxStates>& m) {
+    std::size_t q = 0;
+    steady_allowed_ = true;
+    for (std::size_t i = 0; i < N; ++i) {
+      row_start_[i] = static_cast<Index>(q);
+      bool row_zero = true;
+      for (std::size_t j = 0; j < N; ++j) {
+        if (std::fabs(phi_(i, j)) > T(0)) {
+          col_[q++] = static_cast<Index>(j);
+          row_zero = false;
+        }
+      }
+      if (!row_zero && !(m.qd(i, i) > 0.0)) {
+        steady_allowed_ = false;  // persistent and undriven: the gain never settles
+      }
+    }
+    row_start_[N] = static_cast<Index>(q);
+    h_nnz_ = 0;
+    for (std::size_t j = 0; j < N; ++j) {
+      if (std::fabs(h_(0, j)) > T(0)) {
+        h_col_[h_nnz_++] = static_cast<Index>(j);
+      }
+    }
+  }
+
+  void reset_convergence() {
+    steady_ = false;
+    block_updates_ = 0;
+  }
+
+  // After each time-varying update: compare K and S with the block's first, freeze both when a
+  // block of kSteadyBlock consecutive updates changed them by at most kSteadyTol (relative).
+  void track_convergence(const Vec& k, T s) {
+    if (!steady_enabled_ || !steady_allowed_) {
+      return;
+    }
+    if (block_updates_ == 0) {
+      k_ss_ = k;
+      s_ss_ = s;
+    }
+    if (++block_updates_ < kSteadyBlock) {
+      return;
+    }
+    block_updates_ = 0;
+    T kmax = T(0);
+    T dmax = T(0);
+    for (std::size_t i = 0; i < N; ++i) {
+      const T a = std::fabs(k_ss_(i, 0));
+      const T d = std::fabs(k(i, 0) - k_ss_(i, 0));
+      kmax = a > kmax ? a : kmax;
+      dmax = d > dmax ? d : dmax;
+    }
+    const T tol = static_cast<T>(kSteadyTol);
+    const bool settled = dmax <= tol * kmax && std::fabs(s - s_ss_) <= tol * s_ss_;
+    k_ss_ = k;
+    s_ss_ = s;
+    steady_ = settled;
+  }
+
   Square phi_{};
   Square qd_{};
   Square p_{};
@@ -301,6 +505,18 @@ class KalmanFilter {
   T known_ = T(0);
   T p_max_ = T(1);
   KfStats stats_{};
+  // Steady-state gain (see the file comment).
+  Vec k_ss_{};
+  T s_ss_ = T(0);
+  std::uint32_t block_updates_ = 0;
+  using Index = std::conditional_t<(N * N < 256), std::uint8_t, std::uint16_t>;
+  Index row_start_[N + 1] = {};
+  Index col_[N * N] = {};
+  Index h_col_[N] = {};
+  std::size_t h_nnz_ = 0;
+  bool steady_enabled_ = false;
+  bool steady_allowed_ = false;
+  bool steady_ = false;
 };
 
 }  // namespace imu

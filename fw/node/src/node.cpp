@@ -301,6 +301,7 @@ bool Node::build_pushed(std::size_t c) {
   if (kf.configure(scratch_dm_, static_cast<double>(known_[c])) != KfStatus::kOk) {
     return false;
   }
+  kf.set_steady_state(true);  // frozen gain once converged, back to time-varying after a gap
   kfn_[c] = kf;  // only now: a refused model leaves the running filter untouched
   model_states_[c] = n;
   return true;

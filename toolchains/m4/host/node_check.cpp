@@ -20,14 +20,18 @@ void collect(const char* line, void* ctx) {
 }
 
 bool relevant(const std::string& l) {
-  return l.rfind("T ", 0) == 0 || l.rfind("IMU-NODE END", 0) == 0;
+  return l.rfind("T ", 0) == 0 || l.rfind("IMU-NODE END", 0) == 0 ||
+         l.rfind("IMU-NODE STEADY ", 0) == 0;
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   std::vector<std::string> host;
-  const imu::m4::NodeRunStatus st = imu::m4::run_node_workload(collect, nullptr, &host);
+  imu::m4::NodeRunStatus st = imu::m4::run_node_workload(collect, nullptr, &host);
+  if (st == imu::m4::NodeRunStatus::kOk) {
+    st = imu::m4::run_node_steady(collect, nullptr, &host);
+  }
   if (st != imu::m4::NodeRunStatus::kOk) {
     std::printf("NODE-CHECK FAIL: host run status %d\n", static_cast<int>(st));
     return 1;
@@ -48,6 +52,8 @@ int main(int argc, char** argv) {
   unsigned long long ticks = 0;
   unsigned long long cal_ticks = 0;
   unsigned long long cal_insns = 0;
+  unsigned long long steady_ticks = 0;
+  unsigned long long steady_samples = 0;
   unsigned long long adev_frame_ticks = 0;
   unsigned long long adev_frames = 0;
   unsigned long long adev_block_ticks = 0;
@@ -62,6 +68,11 @@ int main(int argc, char** argv) {
     }
     std::sscanf(l.c_str(), "IMU-NODE COST ticks=%llu cal_ticks=%llu cal_insns=%llu", &ticks,
                 &cal_ticks, &cal_insns);
+    std::sscanf(l.c_str(), "IMU-NODE STEADY-COST ticks=%llu samples=%llu", &steady_ticks,
+                &steady_samples);
+    if (l.rfind("IMU-NODE STEADY ", 0) == 0) {
+      std::printf("target: %s", l.c_str());
+    }
     std::sscanf(l.c_str(), "IMU-ADEV COST frame_ticks=%llu frames=%llu block_ticks=%llu samples=%llu",
                 &adev_frame_ticks, &adev_frames, &adev_block_ticks, &adev_samples);
   }
@@ -99,6 +110,14 @@ int main(int argc, char** argv) {
                 "calibrated: %llu ticks for %llu instructions)\n",
                 insns, imu::m4::kNodeSamples, insns / (imu::m4::kNodeSamples * 6.0), cal_ticks,
                 cal_insns);
+  }
+  if (cal_ticks > 0 && steady_ticks > 0 && steady_samples > 0) {
+    const double insns = static_cast<double>(steady_ticks) * static_cast<double>(cal_insns) /
+                         static_cast<double>(cal_ticks);
+    std::printf("node-check: steady state (after %u samples, gains frozen): %.0f instructions "
+                "for %llu samples x 6 channels = %.0f instructions per sample per channel\n",
+                imu::m4::kSteadyWarmSamples, insns, steady_samples,
+                insns / (static_cast<double>(steady_samples) * 6.0));
   }
   if (cal_ticks > 0 && adev_frames > 0 && adev_samples > 0) {
     const double per_tick = static_cast<double>(cal_insns) / static_cast<double>(cal_ticks);

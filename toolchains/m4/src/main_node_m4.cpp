@@ -5,6 +5,8 @@
 // ratio is calibrated on a loop of known length (2 instructions per iteration: subs, bne).
 // Extra lines (target only):
 //   IMU-NODE COST ticks=<samples phase> cal_ticks=<calibration loop> cal_insns=<its instructions>
+//   IMU-NODE STEADY-COST ticks=<ticks> samples=<S>: the same over S samples of a second node
+//     whose pushed filters have frozen their gains (run_node_steady)
 //   IMU-ADEV COST frame_ticks=<ticks> frames=<F> block_ticks=<ticks> samples=<S>
 //     the ADEV kernel alone: F frames of six channels through the node's
 //     MultiAdev<6, 8, 22>::push_frame, and S samples of one channel through
@@ -130,6 +132,12 @@ extern "C" int imu_m4_main() {
   line.str("IMU-NODE COST ticks=").u64(g_ticks.total).str(" cal_ticks=").u64(cal);
   line.str(" cal_insns=").u64(2ULL * kCalIterations).str("\n");
   imu::m4::semihost_write0(line.c_str());
+  const imu::m4::NodeRunStatus st_steady =
+      imu::m4::run_node_steady(write_semihost, mark, nullptr);
+  line.clear();
+  line.str("IMU-NODE STEADY-COST ticks=").u64(g_ticks.total).str(" samples=");
+  line.u64(imu::m4::kSteadySamples).str("\n");
+  imu::m4::semihost_write0(line.c_str());
   std::uint64_t frame_ticks = 0;
   std::uint64_t block_ticks = 0;
   adev_kernel_cost(frame_ticks, block_ticks);
@@ -141,5 +149,5 @@ extern "C" int imu_m4_main() {
   line.str("IMU-M4 STACK used=").u64(imu::m4::stack_high_water_bytes());
   line.str(" of=").u64(imu::m4::stack_size_bytes()).str("\n");
   imu::m4::semihost_write0(line.c_str());
-  return st == imu::m4::NodeRunStatus::kOk ? 0 : 1;
+  return st == imu::m4::NodeRunStatus::kOk && st_steady == imu::m4::NodeRunStatus::kOk ? 0 : 1;
 }

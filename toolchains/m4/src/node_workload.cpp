@@ -187,4 +187,108 @@ NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
   return truncated || line.truncated() ? NodeRunStatus::kLineTruncated : NodeRunStatus::kOk;
 }
 
+namespace {
+
+// Counts telemetry, keeps none (the steady-state run is long).
+class CountSink final : public hal::FrameSink {
+ public:
+  [[nodiscard]] hal::IoStatus send(const hal::CanFrame& /*f*/, int /*timeout_ms*/) override {
+    ++count_;
+    return hal::IoStatus::kOk;
+  }
+  [[nodiscard]] std::uint64_t count() const { return count_; }
+
+ private:
+  std::uint64_t count_ = 0;
+};
+
+node::Node g_node_steady;
+// The measured samples, encoded before the measurement (the encoding is not the node's cost).
+constexpr std::size_t kSteadyFrames = 2 * kSteadySamples;
+hal::CanFrame g_steady_frames[kSteadyFrames];
+
+void feed(node::Node& n, const hal::EncodedFrames& fr, std::uint64_t& rx_ns) {
+  for (std::size_t i = 0; i < fr.count; ++i) {
+    rx_ns += 10000000U;
+    n.on_frame(fr.frame[i], static_cast<std::uint32_t>(hal::wire_size(fr.frame[i])), rx_ns);
+  }
+}
+
+}  // namespace
+
+NodeRunStatus run_node_steady(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
+  CountSink sink;
+  node::NodeConfig nc;
+  nc.status_period_samples = 100;
+  nc.adev_period_samples = 0;
+  nc.init_samples = 100;
+  nc.monitor_window = 100;
+  if (g_node_steady.configure(nc, sink, nullptr, nullptr) != node::NodeStatus::kOk) {
+    return NodeRunStatus::kConfigRejected;
+  }
+  std::uint64_t rx_ns = 0;
+  hal::EncodedFrames fr{};
+  hal::ConfigRecord cfg{};
+  cfg.cfg_id = 1;
+  cfg.rate_hz = kRateHz;
+  for (double& l : cfg.lsb) {
+    l = kUnitLsb;
+  }
+  hal::encode(cfg, hal::Layout::kFd, 0, fr);
+  feed(g_node_steady, fr, rx_ns);
+  for (std::uint8_t c = 0; c < hal::kChannels; ++c) {
+    hal::encode(largest_model(c), false, hal::Layout::kFd, 0, fr);
+    feed(g_node_steady, fr, rx_ns);
+  }
+  SampleSource src[hal::kChannels] = {SampleSource(0), SampleSource(1), SampleSource(2),
+                                      SampleSource(3), SampleSource(4), SampleSource(5)};
+  std::size_t n_measured = 0;
+  for (std::uint32_t k = 0; k < kSteadyWarmSamples + kSteadySamples; ++k) {
+    hal::SampleRecord s{};
+    s.seq = k;
+    s.t_sensor_ns = static_cast<std::uint64_t>(k) * 10000000U;
+    s.cfg_id = 1;
+    for (std::size_t c = 0; c < hal::kChannels; ++c) {
+      s.counts[c] = src[c].next();
+    }
+    hal::encode(s, hal::Layout::kFd, fr);
+    if (k < kSteadyWarmSamples) {
+      feed(g_node_steady, fr, rx_ns);
+      continue;
+    }
+    for (std::size_t i = 0; i < fr.count; ++i) {
+      if (n_measured >= kSteadyFrames) {
+        return NodeRunStatus::kFrameOverflow;
+      }
+      g_steady_frames[n_measured++] = fr.frame[i];
+    }
+  }
+  if (mark != nullptr) {
+    mark(0, ctx);
+  }
+  for (std::size_t i = 0; i < n_measured; ++i) {
+    rx_ns += 10000000U;
+    const hal::CanFrame& f = g_steady_frames[i];
+    g_node_steady.on_frame(f, static_cast<std::uint32_t>(hal::wire_size(f)), rx_ns);
+    if (mark != nullptr && i % 8 == 7) {
+      mark(2, ctx);
+    }
+  }
+  if (mark != nullptr) {
+    mark(1, ctx);
+  }
+  std::size_t steady = 0;
+  for (std::size_t c = 0; c < hal::kChannels; ++c) {
+    steady += g_node_steady.filter_steady(c) ? 1U : 0U;
+  }
+  Line<> line;
+  line.str("IMU-NODE STEADY warm=").u64(kSteadyWarmSamples).str(" samples=").u64(kSteadySamples);
+  line.str(" steady_channels=").u64(steady).str(" tx=").u64(sink.count()).str(" bias=");
+  for (std::size_t c = 0; c < hal::kChannels; ++c) {
+    line.f32(g_node_steady.bias(c)).str(c + 1 < hal::kChannels ? "," : "\n");
+  }
+  write(line.c_str(), ctx);
+  return line.truncated() ? NodeRunStatus::kLineTruncated : NodeRunStatus::kOk;
+}
+
 }  // namespace imu::m4

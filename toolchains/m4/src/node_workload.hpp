@@ -38,6 +38,15 @@ enum class NodeRunStatus : std::uint8_t {
 
 [[nodiscard]] NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx);
 
+/// Steady-state run: a second Node, the same config and models, samples generated on the fly
+/// (no input array): kSteadyWarmSamples to let the pushed filters' gains freeze, then
+/// kSteadySamples between the marks (encoded before the first mark, into a static array). Prints one line (compared host vs target byte for byte):
+///   IMU-NODE STEADY warm=<W> samples=<S> steady_channels=<channels with a frozen gain>
+///     tx=<telemetry frames> bias=<six biases, IEEE hex>
+inline constexpr std::uint32_t kSteadyWarmSamples = 12000;
+inline constexpr std::uint32_t kSteadySamples = 2000;
+[[nodiscard]] NodeRunStatus run_node_steady(NodeWriteFn write, NodeMarkFn mark, void* ctx);
+
 }  // namespace imu::m4
 
 #endif  // IMU_M4_NODE_WORKLOAD_HPP

@@ -215,6 +215,8 @@ class Node {
   /// In the version of the channel's last push (version 1 before any), and in version 2
   /// whenever the model it runs was pushed in version 2 (version 1 may not describe it).
   [[nodiscard]] hal::ModelRecord model_echo(std::size_t c) const;
+  /// Channel c runs a pushed model whose filter has frozen its steady-state gain.
+  [[nodiscard]] bool filter_steady(std::size_t c) const { return pushed_[c] && kfn_[c].steady(); }
   [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
   [[nodiscard]] const ResidualMonitors<4>& monitors(std::size_t c) const { return mon_[c]; }
   /// Level shifts the channel's CUSUM detected since the stream (re)started. At each one the
