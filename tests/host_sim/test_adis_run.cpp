@@ -49,7 +49,7 @@ TEST(SimAdis, RunAtMaxRateOverLoopback) {
                                                "flags");
   const std::string report = simtest::read_text(dir.file("run") + "/report.txt");
   EXPECT_GT(flags, 0.5);
-  const std::size_t note = report.find("note: residual monitors: the innovation CUSUM alarms on ");
+  const std::size_t note = report.find("note: residual monitors: the innovation CUSUM detected level shifts on ");
   ASSERT_NE(note, std::string::npos)
       << report.substr(report.size() > 2000 ? report.size() - 2000 : 0);
   const std::string line = report.substr(note, report.find('\n', note) - note);
