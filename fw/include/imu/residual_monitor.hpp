@@ -410,12 +410,14 @@ class StepLocator {
   std::uint32_t part_n_ = 0;
 };
 
-/// The three monitors of one channel, fed from the filter's step result.
+/// The three monitors of one channel, fed from the filter's step result, and the locator of
+/// the steps the CUSUM detects.
 template <std::size_t kLags = 4>
 struct ResidualMonitors {
   NisMonitor nis;
   WhitenessMonitor<kLags> whiteness;
   Cusum cusum;
+  StepLocator<> locator;
 
   [[nodiscard]] MonitorStatus configure(std::uint32_t window = 1000) {
     if (nis.configure(window) != MonitorStatus::kOk ||
@@ -423,19 +425,31 @@ struct ResidualMonitors {
         cusum.configure() != MonitorStatus::kOk) {
       return MonitorStatus::kBadConfig;
     }
+    locator.reset();
     return MonitorStatus::kOk;
   }
-  /// innovation and its variance S (> 0) of one update. Returns nu = innovation / sqrt(S), 0
-  /// (and nothing pushed) when S is not positive.
-  float push(float innovation, float innovation_var) {
+  /// innovation and its variance S (> 0) of one update.
+  void push(float innovation, float innovation_var) {
     if (!(innovation_var > 0.0F)) {
-      return 0.0F;
+      return;
     }
     const float nu = innovation / std::sqrt(innovation_var);
     nis.push(nu);
     whiteness.push(nu);
     (void)cusum.push(nu);
-    return nu;
+    locator.push(nu);
+  }
+  /// In CUSUM alarm: the detected step's start and mean (StepLocator::Estimate), located within
+  /// the CUSUM's window, or anywhere in the locator's ring when that window is shorter than one
+  /// of its blocks (a step of many sd). Re-arms the CUSUM.
+  [[nodiscard]] StepLocator<>::Estimate take_step() {
+    const int dir = cusum.direction();
+    StepLocator<>::Estimate est = locator.locate(dir, cusum.updates() - cusum.step_index());
+    if (est.updates == 0) {
+      est = locator.locate(dir, UINT64_MAX);
+    }
+    cusum.reset();
+    return est;
   }
   /// Any monitor fires (the "alarm" output line).
   [[nodiscard]] bool any_alarm() const { return nis.flag() || whiteness.flag() || cusum.alarm(); }

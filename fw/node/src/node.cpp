@@ -198,7 +198,6 @@ void Node::restart_estimators() {
     active_[c] = false;
     init_sum_[c] = 0.0;
     shifts_[c] = LevelShifts{};
-    locator_[c].reset();
     (void)mon_[c].configure(cfg_node_.monitor_window);  // window checked in configure()
   }
   init_count_ = 0;
@@ -412,8 +411,10 @@ void Node::on_sample(const hal::SampleRecord& s) {
       const auto z = to_f32(static_cast<double>(s.counts[c]) * lsb_[c]);
       const KfStep<float> st = pushed_[c] ? kfn_[c].step(z, static_) : kf_[c].step(z, static_);
       if (st.updated) {
-        const float nu = mon_[c].push(st.innovation, st.innovation_var);
-        track_level(c, nu, st.innovation_var);
+        mon_[c].push(st.innovation, st.innovation_var);
+        if (mon_[c].cusum.alarm()) {
+          accommodate_step(c, st.innovation_var);
+        }
       }
     }
     update_alarm();
@@ -422,35 +423,21 @@ void Node::on_sample(const hal::SampleRecord& s) {
   after_sample();
 }
 
-// Feed the channel's step locator; at a CUSUM alarm, a level shift: count it, move the known
-// signal to the new level (LevelShifts) and re-arm the CUSUM.
-void Node::track_level(std::size_t c, float nu, float innovation_var) {
-  locator_[c].push(nu);
-  if (mon_[c].cusum.alarm()) {
-    accommodate_step(c, innovation_var);
-  }
-}
-
+// A CUSUM alarm is a level shift: count it, move the known signal to the new level
+// (LevelShifts) and re-arm the CUSUM.
 void Node::accommodate_step(std::size_t c, float innovation_var) {
-  Cusum& cu = mon_[c].cusum;
+  const StepLocator<>::Estimate est = mon_[c].take_step();
+  const float size = est.mean * std::sqrt(innovation_var);
   LevelShifts& ls = shifts_[c];
-  const int dir = cu.direction();
-  StepLocator<>::Estimate est = locator_[c].locate(dir, cu.updates() - cu.step_index());
-  if (est.updates == 0) {  // the CUSUM's window is shorter than the locator's grid
-    est = locator_[c].locate(dir, UINT64_MAX);
-  }
-  float size = est.mean * std::sqrt(innovation_var);
-  const bool apply = est.updates > 0 && std::isfinite(size);
-  size = apply ? size : 0.0F;
-  if (apply) {
+  ls.last_size = 0.0F;
+  if (est.updates > 0 && std::isfinite(size)) {
+    ls.last_size = size;
     known_[c] += size;
     kf_[c].set_known_signal(known_[c]);
     kfn_[c].set_known_signal(known_[c]);
   }
   ls.count = ls.count < UINT32_MAX ? ls.count + 1U : ls.count;
-  ls.last_update = cu.updates() - est.updates;
-  ls.last_size = size;
-  cu.reset();
+  ls.last_update = mon_[c].cusum.updates() - est.updates;
 }
 
 void Node::on_missing(std::uint32_t n) {

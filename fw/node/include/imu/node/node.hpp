@@ -223,7 +223,7 @@ class Node {
   /// node moves the channel's known signal by the step's size and re-arms the CUSUM, so one
   /// step is one detection and the filter goes on from the new level (a latched alarm would
   /// leave the filter off by the step and the monitor blind for the rest of the run). Start and
-  /// size come from the StepLocator: the mean innovation after the start. What the filter's
+  /// size come from the monitors' StepLocator: the mean innovation after the start. What the filter's
   /// states took up of the step before the alarm stays in them and decays with the model (the
   /// states' change cannot be told from their own motion: a sinusoid's, a Gauss-Markov term's).
   struct LevelShifts {
@@ -254,7 +254,6 @@ class Node {
   void send_frames(const hal::EncodedFrames& fr);
   void update_alarm();
   void read_static();
-  void track_level(std::size_t c, float nu, float innovation_var);
   void accommodate_step(std::size_t c, float innovation_var);
 
   NodeConfig cfg_node_{};
@@ -276,7 +275,6 @@ class Node {
   DiscreteModel<kNodeStates> scratch_dm_{};  // discretisation workspace (not on the stack)
   ResidualMonitors<4> mon_[kChannels];
   LevelShifts shifts_[kChannels] = {};
-  StepLocator<> locator_[kChannels];
   float known_[kChannels] = {};
   bool active_[kChannels] = {};  // a non-zero count was seen since the stream started
   double init_sum_[kChannels] = {};
