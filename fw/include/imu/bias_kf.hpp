@@ -274,13 +274,7 @@ class KalmanFilter {
   }
 
   /// The bias the measurement sees, H x.
-  [[nodiscard]] T bias() const {
-    T s = T(0);
-    for (std::size_t i = 0; i < N; ++i) {
-      s += h_(0, i) * x_(i, 0);
-    }
-    return s;
-  }
+  [[nodiscard]] T bias() const { return h_times(x_); }
   /// Variance of H x: H P H^T.
   [[nodiscard]] T bias_variance() const {
     T s = T(0);
@@ -306,21 +300,9 @@ class KalmanFilter {
       if (!std::isfinite(z)) {
         ++stats_.rejected_nonfinite;
       } else {
-        Vec pht{};
-        for (std::size_t i = 0; i < N; ++i) {
-          T acc = T(0);
-          for (std::size_t q = 0; q < h_nnz_; ++q) {
-            acc += p_(i, h_col_[q]) * h_(0, h_col_[q]);
-          }
-          pht(i, 0) = acc;
-        }
-        T s = r_;
-        T hx = T(0);
-        for (std::size_t q = 0; q < h_nnz_; ++q) {
-          s += h_(0, h_col_[q]) * pht(h_col_[q], 0);
-          hx += h_(0, h_col_[q]) * x_(h_col_[q], 0);
-        }
-        const T e = (z - known_) - hx;
+        const Vec pht = times_ht(p_);
+        const T s = h_times(pht, r_);
+        const T e = (z - known_) - h_times(x_);
         Mat<T, N, 1> k{};
         for (std::size_t i = 0; i < N; ++i) {
           k(i, 0) = pht(i, 0) / s;
@@ -358,11 +340,7 @@ class KalmanFilter {
   // Frozen K and S: x = Phi x over the non-zeros of Phi, e = z - known - H x, x += K e.
   KfStep<T> step_steady(T z) {
     const Vec xp = phi_times(x_);
-    T hx = T(0);
-    for (std::size_t q = 0; q < h_nnz_; ++q) {
-      hx += h_(0, h_col_[q]) * xp(h_col_[q], 0);
-    }
-    const T e = (z - known_) - hx;
+    const T e = (z - known_) - h_times(xp);
     for (std::size_t i = 0; i < N; ++i) {
       x_(i, 0) = xp(i, 0) + k_ss_(i, 0) * e;
     }
@@ -372,6 +350,27 @@ class KalmanFilter {
     out.updated = true;
     out.innovation = e;
     out.innovation_var = s_ss_;
+    return out;
+  }
+
+  // init + H v over H's non-zero entries (in column order, added to init one by one).
+  T h_times(const Vec& v, T init = T(0)) const {
+    T acc = init;
+    for (std::size_t q = 0; q < h_nnz_; ++q) {
+      acc += h_(0, h_col_[q]) * v(h_col_[q], 0);
+    }
+    return acc;
+  }
+  // A H^T over H's non-zero entries.
+  Vec times_ht(const Square& a) const {
+    Vec out{};
+    for (std::size_t i = 0; i < N; ++i) {
+      T acc = T(0);
+      for (std::size_t q = 0; q < h_nnz_; ++q) {
+        acc += a(i, h_col_[q]) * h_(0, h_col_[q]);
+      }
+      out(i, 0) = acc;
+    }
     return out;
   }
 
@@ -419,14 +418,7 @@ class KalmanFilter {
         p_(i, j) -= k(i, 0) * pht(j, 0);
       }
     }
-    Vec aht{};
-    for (std::size_t i = 0; i < N; ++i) {
-      T acc = T(0);
-      for (std::size_t q = 0; q < h_nnz_; ++q) {
-        acc += p_(i, h_col_[q]) * h_(0, h_col_[q]);
-      }
-      aht(i, 0) = acc;
-    }
+    const Vec aht = times_ht(p_);
     for (std::size_t i = 0; i < N; ++i) {
       for (std::size_t j = 0; j < N; ++j) {
         p_(i, j) += (r_ * k(i, 0) - aht(i, 0)) * k(j, 0);
