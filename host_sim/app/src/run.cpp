@@ -66,9 +66,9 @@ struct Telemetry {
   bool have_model_echo[hal::kChannels] = {};
   hal::ChannelMonitorRecord chan_mon[hal::kChannels] = {};  // each channel's monitors
   bool have_chan_mon[hal::kChannels] = {};
-  // Each detected level shift's start update, as the per-second records show them (two within
+  // Each detected level shift's first sample, as the per-second records show them (two within
   // one record period are seen as one: the count says how many there were).
-  std::vector<std::uint32_t> step_updates[hal::kChannels];
+  std::vector<std::int64_t> step_samples[hal::kChannels];
   hal::AdevRecord curve[kNumChannels][node::kMaxAdevPoints] = {};
   std::uint8_t n_points[kNumChannels] = {};
   std::bitset<node::kMaxAdevPoints> got[kNumChannels];
@@ -141,11 +141,15 @@ struct Telemetry {
       case hal::RxEvent::Type::kChannelMonitor: {
         const hal::ChannelMonitorRecord& cm = e.rec.channel_monitor;
         if (cm.cusum_detections > chan_mon[cm.channel].cusum_detections &&
-            step_updates[cm.channel].size() < kMaxListedSteps) {
-          step_updates[cm.channel].push_back(cm.cusum_step_update);
+            step_samples[cm.channel].size() < kMaxListedSteps) {
+          // The record's last sample (seq) is its last update (updates): the step's first
+          // sample is that many updates back from it, after update cusum_step_update.
+          step_samples[cm.channel].push_back(static_cast<std::int64_t>(cm.seq) -
+                                             static_cast<std::int64_t>(cm.updates) +
+                                             static_cast<std::int64_t>(cm.cusum_step_update) + 1);
         }
         chan_mon[cm.channel] = cm;  // channel < 6: checked by the receiver
-        have_chan_mon[e.rec.channel_monitor.channel] = true;
+        have_chan_mon[cm.channel] = true;
         break;
       }
       case hal::RxEvent::Type::kModel:
@@ -1268,16 +1272,14 @@ constexpr double kWhitenessFlagRate = 0.05;
 // Every channel's verdict, once per run (the report's table, note and JSON read them).
 Verdicts channel_verdicts(const Telemetry& tel, double fs_hz) {
   Verdicts vs{};
-  // The node's filter updates start after its known-signal average (gaps aside).
-  const double first_update = static_cast<double>(imu::node::NodeConfig{}.init_samples);
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     ChannelVerdict& v = vs[c];
     v.have = tel.have_chan_mon[c];
     v.m = tel.chan_mon[c];
     v.white_allowed = max_flagged_blocks(v.m.blocks, kWhitenessFlagRate);
     v.whiteness_passed = v.have && v.m.blocks > 0 && v.m.white_flagged <= v.white_allowed;
-    for (const std::uint32_t u : tel.step_updates[c]) {
-      v.steps_t_s.push_back((first_update + static_cast<double>(u)) / fs_hz);
+    for (const std::int64_t q : tel.step_samples[c]) {
+      v.steps_t_s.push_back(static_cast<double>(q) / fs_hz);
     }
   }
   return vs;
