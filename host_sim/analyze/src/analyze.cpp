@@ -1798,6 +1798,11 @@ double term_avar(const std::string& type, const ModelParams& p, double tau) {
   return -1.0;  // not an ADEV term
 }
 
+// The term of effect type `type` dominates the model at tau: at least half its AVAR.
+bool term_dominates(const std::string& type, const ModelParams& p, double tau) {
+  return term_avar(type, p, tau) >= 0.5 * model_avar(p, tau);
+}
+
 // Before naming an ADEV term: it must dominate the model (>= half its AVAR) somewhere in
 // [Ts, T/10], and the residual must hold no significant run where it dominates; else the term
 // stays in the model (it lowers the error) but is not named: the range goes to `unexplained`.
@@ -1844,7 +1849,7 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
     double dom_hi = 0.0;
     for (std::size_t i = 0; i < pts.size(); ++i) {
       const double t = pts[i].tau_s;
-      const bool dom = term_avar(e.type, p, t) >= 0.5 * model_avar(p, t);
+      const bool dom = term_dominates(e.type, p, t);
       dominated += dom ? 1U : 0U;
       dom_lo = dom && !(dom_lo > 0.0) ? t : dom_lo;
       dom_hi = dom ? t : dom_hi;
@@ -3482,7 +3487,7 @@ class Analysis {
       PartMiss m{eff.type, b, e, 0.0, 0.0, 0.0, 0, 0.0};
       for (std::size_t i = 0; i < pts.size() && i < r.z.size(); ++i) {
         const double t = pts[i].tau_s;
-        if (term_avar(eff.type, cur_p, t) < 0.5 * model_avar(cur_p, t)) {
+        if (!term_dominates(eff.type, cur_p, t)) {
           continue;
         }
         ++tested;
