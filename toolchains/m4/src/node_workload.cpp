@@ -71,11 +71,9 @@ bool append(const hal::EncodedFrames& fr, std::size_t& n) {
   return true;
 }
 
-}  // namespace
-
-NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
-  // The input record, encoded with the hal codec into the in-memory frame array.
-  std::size_t n_in = 0;
+// The workload's stream header: its ConfigRecord, then the largest model for every channel.
+template <typename Take>
+bool encode_header(Take take) {
   hal::EncodedFrames fr{};
   hal::ConfigRecord cfg{};
   cfg.cfg_id = 1;
@@ -84,11 +82,21 @@ NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
     l = kUnitLsb;
   }
   hal::encode(cfg, hal::Layout::kFd, 0, fr);
-  bool ok = append(fr, n_in);
+  bool ok = take(fr);
   for (std::uint8_t c = 0; c < hal::kChannels; ++c) {
     hal::encode(largest_model(c), false, hal::Layout::kFd, 0, fr);
-    ok = ok && append(fr, n_in);
+    ok = take(fr) && ok;
   }
+  return ok;
+}
+
+}  // namespace
+
+NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
+  // The input record, encoded with the hal codec into the in-memory frame array.
+  std::size_t n_in = 0;
+  bool ok = encode_header([&n_in](const hal::EncodedFrames& f) { return append(f, n_in); });
+  hal::EncodedFrames fr{};
   SampleSource src[hal::kChannels] = {SampleSource(0), SampleSource(1), SampleSource(2),
                                       SampleSource(3), SampleSource(4), SampleSource(5)};
   for (std::uint32_t k = 0; k < kNodeSamples; ++k) {
@@ -227,19 +235,11 @@ NodeRunStatus run_node_steady(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
     return NodeRunStatus::kConfigRejected;
   }
   std::uint64_t rx_ns = 0;
+  (void)encode_header([&rx_ns](const hal::EncodedFrames& f) {
+    feed(g_node_steady, f, rx_ns);
+    return true;
+  });
   hal::EncodedFrames fr{};
-  hal::ConfigRecord cfg{};
-  cfg.cfg_id = 1;
-  cfg.rate_hz = kRateHz;
-  for (double& l : cfg.lsb) {
-    l = kUnitLsb;
-  }
-  hal::encode(cfg, hal::Layout::kFd, 0, fr);
-  feed(g_node_steady, fr, rx_ns);
-  for (std::uint8_t c = 0; c < hal::kChannels; ++c) {
-    hal::encode(largest_model(c), false, hal::Layout::kFd, 0, fr);
-    feed(g_node_steady, fr, rx_ns);
-  }
   SampleSource src[hal::kChannels] = {SampleSource(0), SampleSource(1), SampleSource(2),
                                       SampleSource(3), SampleSource(4), SampleSource(5)};
   std::size_t n_measured = 0;
