@@ -593,6 +593,61 @@ bool steady_state_covariance(const Model& d, std::size_t n, double r, Dense& x) 
   return false;
 }
 
+// A model matrix's first n x n entries, row-major.
+template <typename M>
+Dense to_dense(const M& m, std::size_t n) {
+  Dense out(n * n);
+  for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t b = 0; b < n; ++b) {
+      out[a * n + b] = m(a, b);
+    }
+  }
+  return out;
+}
+
+// The steady-state gain k = P H' / s and innovation variance s = H P H' + r from the
+// steady-state covariance p (n x n, row-major).
+double steady_gain(const Model& d, const Dense& p, double r, std::vector<double>& k) {
+  const std::size_t n = d.n_states;
+  k.assign(n, 0.0);
+  double s = r;
+  for (std::size_t i = 0; i < n; ++i) {
+    double ph = 0.0;
+    for (std::size_t j = 0; j < n; ++j) {
+      ph += p[i * n + j] * d.h(0, j);
+    }
+    k[i] = ph;
+    s += d.h(0, i) * ph;
+  }
+  for (auto& v : k) {
+    v /= s;
+  }
+  return s;
+}
+
+// The fw residual monitors over the normalised innovations of the updates: the fractions of
+// their blocks that fail the NIS and the whiteness test.
+void monitor_fractions(const std::vector<std::uint8_t>* skip, FilterRun& out) {
+  const std::vector<float>& nu = out.nu;
+  NisMonitor nis;
+  WhitenessMonitor<4> white;
+  if (nis.configure(1000, 0.99) == MonitorStatus::kOk &&
+      white.configure(1000, 0.95) == MonitorStatus::kOk) {
+    for (std::size_t i = 0; i < nu.size(); ++i) {
+      if (skip == nullptr || (*skip)[i] == 0) {
+        nis.push(nu[i]);
+        white.push(nu[i]);
+      }
+    }
+    out.nis_flagged = nis.blocks() > 0 ? static_cast<double>(nis.flagged_blocks()) /
+                                             static_cast<double>(nis.blocks())
+                                       : 0.0;
+    out.whiteness_flagged = white.blocks() > 0 ? static_cast<double>(white.flagged_blocks()) /
+                                                     static_cast<double>(white.blocks())
+                                               : 0.0;
+  }
+}
+
 // The bias filter of model p over y (known signal `known`), with the steady-state gain of its
 // stochastic part (the deterministic terms must already be removed from y): x = Phi x,
 // e = y - known - H x, x += K e on the samples not skipped. Its innovations are those of the
@@ -616,19 +671,8 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
   if (!(r > 0.0) || (n > 0 && !steady_state_covariance(d, n, r, x))) {
     return out;
   }
-  std::vector<double> k(n, 0.0);
-  double s = r;
-  for (std::size_t i = 0; i < n; ++i) {
-    double ph = 0.0;
-    for (std::size_t j = 0; j < n; ++j) {
-      ph += x[i * n + j] * d.h(0, j);
-    }
-    k[i] = ph;
-    s += d.h(0, i) * ph;
-  }
-  for (auto& v : k) {
-    v /= s;
-  }
+  std::vector<double> k;
+  const double s = steady_gain(d, x, r, k);
   std::vector<double> st(n, 0.0);
   std::vector<double> tmp(n, 0.0);
   double nis_sum = 0.0;
@@ -637,20 +681,9 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
   // unknown; a steady gain from x = 0 would see it as a burst of large innovations), then the
   // steady gain takes over.
   const std::size_t burn_in = std::min<std::size_t>(y.size(), 4096);
-  Dense pk(n * n, 0.0);
-  for (std::size_t a = 0; a < n; ++a) {
-    for (std::size_t b = 0; b < n; ++b) {
-      pk[a * n + b] = d.p0(a, b);
-    }
-  }
-  Dense phi(n * n);
-  Dense q(n * n);
-  for (std::size_t a = 0; a < n; ++a) {
-    for (std::size_t b = 0; b < n; ++b) {
-      phi[a * n + b] = d.phi(a, b);
-      q[a * n + b] = d.qd(a, b);
-    }
-  }
+  Dense pk = to_dense(d.p0, n);
+  const Dense phi = to_dense(d.phi, n);
+  const Dense q = to_dense(d.qd, n);
   for (std::size_t i = 0; i < y.size(); ++i) {
     double hx = 0.0;
     for (std::size_t a = 0; a < n; ++a) {
@@ -704,24 +737,7 @@ FilterRun run_filter(const ModelParams& p_full, double ts, const std::vector<dou
   }
   out.nis_mean = updates > 0 ? nis_sum / static_cast<double>(updates) : 0.0;
   out.ok = true;
-  // The fw residual monitors over the normalised innovations of the updates.
-  NisMonitor nis;
-  WhitenessMonitor<4> white;
-  if (nis.configure(1000, 0.99) == MonitorStatus::kOk &&
-      white.configure(1000, 0.95) == MonitorStatus::kOk) {
-    for (std::size_t i = 0; i < y.size(); ++i) {
-      if (skip == nullptr || (*skip)[i] == 0) {
-        nis.push(out.nu[i]);
-        white.push(out.nu[i]);
-      }
-    }
-    out.nis_flagged = nis.blocks() > 0 ? static_cast<double>(nis.flagged_blocks()) /
-                                             static_cast<double>(nis.blocks())
-                                       : 0.0;
-    out.whiteness_flagged = white.blocks() > 0 ? static_cast<double>(white.flagged_blocks()) /
-                                                     static_cast<double>(white.blocks())
-                                               : 0.0;
-  }
+  monitor_fractions(skip, out);
   return out;
 }
 
