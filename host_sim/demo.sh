@@ -53,8 +53,9 @@ field() { grep -o "\"$2\": [^,}]*" "$1" | head -1 | sed 's/.*: //'; }
       "$(field "$node" nis_mean)" "$(field "$node" whiteness_ratio)" "$(field "$node" cusum_alarm)"
     rm -f "$node"
   done
-  echo "(CUSUM slack 0.025, threshold 247.4 for an in-control run length of 1e8 updates, latched:"
-  echo " fw/include/imu/residual_monitor.hpp)"
+  echo "(CUSUM slack 0.025, threshold 247.4 for an in-control run length of 1e8 updates;"
+  echo " cusum_alarm: it detected a level shift, after which the node moves to the new level and"
+  echo " re-arms: fw/include/imu/residual_monitor.hpp, fw/node/include/imu/node/node.hpp)"
 } | tee "$out/node_models.txt"
 
 echo
