@@ -476,3 +476,79 @@ TEST(ErrorModel, FilteredWhiteIsAGmWhoseAveragesHaveTheWhiteAvarBentDown) {
   imu::ContinuousModel<4> e;
   EXPECT_EQ(e.add_filtered_white(n, -1.0), imu::ModelStatus::kBadParameter);
 }
+
+namespace {
+
+// Van Loan of the whole model at once, written here from its definition (expm of the 2n x 2n
+// matrix [[-F, Qc], [0, F^T]] Ts), with the sample mean J appended as one more state
+// (J' = H x / Ts).
+template <std::size_t kN>
+void whole_van_loan(const imu::ContinuousModel<kN>& c, double ts, imu::Mat<double, kN, kN>& phi,
+                    imu::Mat<double, kN, kN>& qd) {
+  const std::size_t n = c.n_states + 1;
+  imu::Mat<double, kN, kN> f = c.f;
+  for (std::size_t j = 0; j + 1 < n; ++j) {
+    f(n - 1, j) = c.h(0, j) / ts;
+  }
+  imu::Mat<double, 2 * kN, 2 * kN> a{};
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      a(i, j) = -f(i, j) * ts;
+      a(i, n + j) = c.qc(i, j) * ts;
+      a(n + i, n + j) = f(j, i) * ts;
+    }
+  }
+  imu::Mat<double, 2 * kN, 2 * kN> e{};
+  ASSERT_TRUE(imu::expm(a, e, 2 * n));
+  imu::Mat<double, kN, kN> m12{};
+  for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t j = 0; j < n; ++j) {
+      phi(i, j) = e(n + j, n + i);
+      m12(i, j) = e(i, n + j);
+    }
+  }
+  qd = phi * m12;
+}
+
+}  // namespace
+
+TEST(ErrorModel, BlockwiseVanLoanEqualsTheWholeModelAtOnce) {
+  // Every kind of term at once (white, 2 GMs, a flicker bank, RRW, ramp, a sinusoid and an
+  // oscillation: blocks of 1 and 2 states): discretising each block alone must give the
+  // Phi and Qd of one matrix exponential of the whole model, sample mean included.
+  imu::ModelParams p;
+  p.n = 3e-3;
+  p.gm[0] = {2e-4, 40.0};
+  p.gm[1] = {5e-3, 0.3};
+  p.bi = 1e-4;
+  p.bi_tau_lo_s = 1.0;
+  p.bi_tau_hi_s = 100.0;
+  p.k = 2e-5;
+  p.r = 1e-6;
+  p.sin_a = 3e-4;
+  p.sin_f0_hz = 0.05;
+  p.osc_sigma = 1e-3;
+  p.osc_f0_hz = 3.0;
+  p.osc_beta_per_s = 0.4;
+  imu::ContinuousModel<imu::kModelMaxStates> c;
+  ASSERT_EQ(imu::build_model(p, c), imu::ModelStatus::kOk);
+  ASSERT_GE(c.n_states, 10U);
+  ASSERT_LT(c.n_states, imu::kModelMaxStates);
+  for (const double ts : {0.001, 0.01, 0.5}) {
+    imu::DiscreteModel<imu::kModelMaxStates> d;
+    ASSERT_EQ(imu::discretize_averaged(c, ts, d), imu::ModelStatus::kOk);
+    imu::Mat<double, imu::kModelMaxStates, imu::kModelMaxStates> phi{};
+    imu::Mat<double, imu::kModelMaxStates, imu::kModelMaxStates> qd{};
+    whole_van_loan(c, ts, phi, qd);
+    const std::size_t n = c.n_states;
+    phi(n, n) = 0.0;  // the mean is reset at every sample
+    for (std::size_t i = 0; i <= n; ++i) {
+      for (std::size_t j = 0; j <= n; ++j) {
+        const double qscale = std::sqrt(std::fabs(qd(i, i) * qd(j, j)));
+        EXPECT_NEAR(d.phi(i, j), phi(i, j), 1e-12 * (1.0 + std::fabs(phi(i, j))))
+            << ts << " phi " << i << "," << j;
+        EXPECT_NEAR(d.qd(i, j), qd(i, j), 1e-10 * qscale + 1e-300) << ts << " qd " << i << "," << j;
+      }
+    }
+  }
+}

@@ -231,8 +231,11 @@ struct DiscreteModel {
   [[nodiscard]] double r_filter() const { return r_white + 2.0 * q * q / (ts_s * ts_s); }
 };
 
-/// Van Loan: expm([[-F, Qc], [0, F^T]] Ts) = [[., M12], [0, M22]], Phi = M22^T, Qd = Phi M12.
-/// Returns kBadParameter for ts_s <= 0 or an empty model, kNumerical if expm fails.
+/// Van Loan: expm([[-F, Qc], [0, F^T]] Ts) = [[., M12], [0, M22]], Phi = M22^T, Qd = Phi M12,
+/// on each block of coupled states alone (each term is independent of the others: at most
+/// 2 states, so matrices of at most 6 x 6 whatever the model's size; the whole model at once if
+/// a block is larger). Returns kBadParameter for ts_s <= 0 or an empty model, kNumerical if
+/// expm fails (out then has n_states 0).
 template <std::size_t kMaxStates>
 [[nodiscard]] ModelStatus discretize(const ContinuousModel<kMaxStates>& c, double ts_s,
                                      DiscreteModel<kMaxStates>& out);
