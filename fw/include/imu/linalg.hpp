@@ -115,6 +115,20 @@ template <typename T, std::size_t R, std::size_t K, std::size_t C>
   return p;
 }
 
+/// out = x y, out distinct from x and y (the same sums in the same order as operator*).
+template <typename T, std::size_t R, std::size_t K, std::size_t C>
+void mul_into(const Mat<T, R, K>& x, const Mat<T, K, C>& y, Mat<T, R, C>& out) {
+  out = Mat<T, R, C>{};
+  for (std::size_t i = 0; i < R; ++i) {
+    for (std::size_t k = 0; k < K; ++k) {
+      const T xik = x.a[i][k];
+      for (std::size_t j = 0; j < C; ++j) {
+        out.a[i][j] += xik * y.a[k][j];
+      }
+    }
+  }
+}
+
 /// (A + A^T) / 2: removes the asymmetry rounding leaves in a covariance.
 template <typename T, std::size_t N>
 void symmetrize(Mat<T, N, N>& m) {
@@ -254,35 +268,43 @@ template <std::size_t N>
     ++s;
   }
   X *= std::ldexp(1.0, -s);
+  // In place, with one product buffer: the stack holds 5 matrices (and lu_solve's copies), not
+  // one per temporary of the expressions (the arithmetic of each entry is the same).
   constexpr int kQ = 6;
   double c = 0.5;
-  Mat<double, N, N> ident{};
-  for (std::size_t i = 0; i < n; ++i) {
-    ident.a[i][i] = 1.0;
+  Mat<double, N, N> num{};
+  Mat<double, N, N> den{};
+  for (std::size_t i = 0; i < N; ++i) {
+    for (std::size_t j = 0; j < N; ++j) {
+      const double id = i == j && i < n ? 1.0 : 0.0;
+      const double t = X.a[i][j] * c;
+      num.a[i][j] = id + t;
+      den.a[i][j] = id - t;
+    }
   }
-  Mat<double, N, N> num = ident + X * c;
-  Mat<double, N, N> den = ident - X * c;
   Mat<double, N, N> pw = X;
+  Mat<double, N, N> tmp{};
   bool positive = true;
   for (int k = 2; k <= kQ; ++k) {
     c = c * static_cast<double>(kQ - k + 1) / static_cast<double>(k * (2 * kQ - k + 1));
-    pw = pw * X;
-    num += pw * c;
-    if (positive) {
-      den += pw * c;
-    } else {
-      den -= pw * c;
+    mul_into(pw, X, tmp);
+    pw = tmp;
+    for (std::size_t i = 0; i < N; ++i) {
+      for (std::size_t j = 0; j < N; ++j) {
+        const double t = pw.a[i][j] * c;
+        num.a[i][j] += t;
+        den.a[i][j] = positive ? den.a[i][j] + t : den.a[i][j] - t;
+      }
     }
     positive = !positive;
   }
-  Mat<double, N, N> R{};
-  if (!lu_solve(den, num, R, n)) {
+  if (!lu_solve(den, num, E, n)) {
     return false;
   }
   for (int k = 0; k < s; ++k) {
-    R = R * R;
+    mul_into(E, E, tmp);
+    E = tmp;
   }
-  E = R;
   return true;
 }
 
