@@ -245,16 +245,47 @@ class OnlineAdev {
   /// noise_alpha selects the power-law noise assumed for the EDF (0 = white FM). Returns the count.
   std::size_t snapshot(AdevPoint* out, std::size_t capacity, int noise_alpha = 0) const {
     std::size_t k = 0;
-    for (std::size_t i = 0; i < M && k < capacity; ++i) {
-      if (make_point(level0_, i, i + 1, 0, noise_alpha, out[k])) {
-        ++k;
+    if (capacity == 0) {
+      return 0;
+    }
+    for_each_point(
+        [&](const AdevPoint& p) {
+          out[k++] = p;
+          return k < capacity;
+        },
+        noise_alpha);
+    return k;
+  }
+
+  /// The points snapshot() would write, one at a time and without a buffer of them: calls
+  /// visit(const AdevPoint&) for each tau with a term, ascending, until visit returns false.
+  template <typename Visit>
+  void for_each_point(Visit&& visit, int noise_alpha = 0) const {
+    AdevPoint p{};
+    for (std::size_t i = 0; i < M; ++i) {
+      if (make_point(level0_, i, i + 1, 0, noise_alpha, p) && !visit(p)) {
+        return;
       }
     }
     for (std::size_t lv = 0; lv < L; ++lv) {
-      for (std::size_t i = 0; i < kUpperTaus && k < capacity; ++i) {
-        if (make_point(upper_[lv], i, M / 2 + 1 + i, lv + 1, noise_alpha, out[k])) {
-          ++k;
+      for (std::size_t i = 0; i < kUpperTaus; ++i) {
+        if (make_point(upper_[lv], i, M / 2 + 1 + i, lv + 1, noise_alpha, p) && !visit(p)) {
+          return;
         }
+      }
+    }
+  }
+
+  /// Number of points snapshot() would write with unlimited capacity (no EDF or interval
+  /// computed). O(number of taus).
+  [[nodiscard]] std::size_t point_count() const {
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < M; ++i) {
+      k += lv_terms(level0_, i, i + 1) > 0 ? 1U : 0U;
+    }
+    for (std::size_t lv = 0; lv < L; ++lv) {
+      for (std::size_t i = 0; i < kUpperTaus; ++i) {
+        k += lv_terms(upper_[lv], i, M / 2 + 1 + i) > 0 ? 1U : 0U;
       }
     }
     return k;
@@ -337,9 +368,14 @@ class OnlineAdev {
   }
 
   template <std::size_t kTaus, std::size_t kMLo>
+  std::uint64_t lv_terms(const Level<kTaus, kMLo>& lv, std::size_t i, std::size_t m) const {
+    return lv.terms_done[i] + open_terms(lv, m);
+  }
+
+  template <std::size_t kTaus, std::size_t kMLo>
   bool make_point(const Level<kTaus, kMLo>& lv, std::size_t i, std::size_t m, std::size_t level,
                   int noise_alpha, AdevPoint& out) const {
-    const std::uint64_t terms = lv.terms_done[i] + open_terms(lv, m);
+    const std::uint64_t terms = lv_terms(lv, i, m);
     if (terms == 0) {
       return false;
     }

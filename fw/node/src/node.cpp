@@ -293,16 +293,20 @@ void Node::on_config(const hal::ConfigRecord& c) {
 
 bool Node::build_pushed(std::size_t c) {
   std::size_t n = 0;
-  if (!discretize_pushed(model_par_[c], cfg_.rate_hz, scratch_dm_, n)) {
+  if (!discretize_pushed(model_par_[c], cfg_.rate_hz, scratch_dm_, n) || !install_filter(c)) {
     return false;
   }
+  model_states_[c] = n;
+  return true;
+}
+
+bool Node::install_filter(std::size_t c) {
   KalmanFilter<float, kNodeStates> kf;
   if (kf.configure(scratch_dm_, static_cast<double>(known_[c])) != KfStatus::kOk) {
     return false;
   }
   kf.set_steady_state(true);  // frozen gain once converged, back to time-varying after a gap
   kfn_[c] = kf;  // only now: a refused model leaves the running filter untouched
-  model_states_[c] = n;
   return true;
 }
 
@@ -658,20 +662,23 @@ void Node::send_adev() {
   }
   hal::EncodedFrames fr{};
   for (std::size_t c = 0; c < kChannels; ++c) {
-    const std::size_t n = adev_.channel(c).snapshot(points_, kMaxAdevPoints);
-    for (std::size_t i = 0; i < n; ++i) {
+    // One point at a time (no buffer of kMaxAdevPoints points in RAM).
+    const std::size_t n = adev_.channel(c).point_count();
+    std::size_t i = 0;
+    adev_.channel(c).for_each_point([&](const AdevPoint& p) {
       hal::AdevRecord r{};
       r.channel = static_cast<std::uint8_t>(c);
-      r.index = static_cast<std::uint8_t>(i);
+      r.index = static_cast<std::uint8_t>(i++);
       r.n_points = static_cast<std::uint8_t>(n);
-      r.tau_s = to_f32(points_[i].tau_s);
-      r.adev = to_f32(points_[i].adev);
-      r.ci_lo = to_f32(points_[i].ci_lo);
-      r.ci_hi = to_f32(points_[i].ci_hi);
-      r.n_terms = sat_u32(points_[i].n_terms);
+      r.tau_s = to_f32(p.tau_s);
+      r.adev = to_f32(p.adev);
+      r.ci_lo = to_f32(p.ci_lo);
+      r.ci_hi = to_f32(p.ci_hi);
+      r.n_terms = sat_u32(p.n_terms);
       hal::encode(r, cfg_node_.layout, transfer_id_++, fr);
       send_frames(fr);
-    }
+      return i < n;
+    });
   }
   ++stats_.adev_sets;
 }
