@@ -26,6 +26,9 @@ constexpr std::uint32_t kSmokeSamples = 300;  // 3 s at 100 Hz: three status set
 constexpr std::uint32_t kSetupFrames = 1 + imu::hal::kChannels;
 constexpr std::uint32_t kFrames = kSetupFrames + kSmokeSamples;
 constexpr std::uint32_t kCheckMs = 1000;
+// The stack's high-water mark must stay this far below its size: a mark at the size would not
+// tell a fit from an overflow into .bss, and interrupts nest on the same stack.
+constexpr std::size_t kStackGuardBytes = 1024;
 constexpr std::uint32_t kSysclkHz = 25000000;  // mps2-an386
 constexpr std::uintptr_t kSystCsr = 0xE000E010U;
 constexpr std::uintptr_t kSystRvr = 0xE000E014U;
@@ -106,7 +109,9 @@ void inject_next() {
   const bool ok = st.samples == kSmokeSamples && st.models_accepted == imu::hal::kChannels &&
                   st.model_rejected == 0 && pc.rx_overflows == 0 && pc.tx_overflows == 0 &&
                   pc.idle_flushes >= 1 && stats >= kSmokeSamples / 100 && adev > 0 &&
-                  echo >= imu::hal::kChannels && !line.truncated();
+                  echo >= imu::hal::kChannels && !line.truncated() &&
+                  imu::m4::stack_high_water_bytes() + kStackGuardBytes <=
+                      imu::m4::stack_size_bytes();
   imu::m4::semihost_write0(ok ? "PROD-SMOKE PASS\n" : "PROD-SMOKE FAIL\n");
   imu::m4::semihost_exit(ok ? 0 : 1);
 }
