@@ -3,7 +3,7 @@
 #include "demo.hpp"
 #include "line.hpp"
 #include "semihost.hpp"
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
 namespace {
 

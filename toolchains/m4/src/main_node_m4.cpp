@@ -20,7 +20,7 @@
 #include "line.hpp"
 #include "node_workload.hpp"
 #include "semihost.hpp"
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
 namespace {
 

@@ -15,10 +15,10 @@
 #include "imu/hal/mcu/board_hooks.hpp"
 #include "largest_model.hpp"
 #include "line.hpp"
-#include "node_prod.hpp"
+#include "imu/node/mcu_main.hpp"
 #include "samples.hpp"
 #include "semihost.hpp"
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
 namespace {
 

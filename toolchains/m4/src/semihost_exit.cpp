@@ -3,7 +3,7 @@
 #include <cstdint>
 
 #include "semihost.hpp"
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
 extern "C" void imu_m4_exit(int rc) { imu::m4::semihost_exit(static_cast<std::uint32_t>(rc)); }
 

@@ -10,11 +10,11 @@
 //      arrives between the check and the WFI still wakes the core.
 // The telemetry ring's consumer is the main loop (step 1 and the sink's wait function), never
 // an interrupt, so the ring has one consumer.
-#include "node_prod.hpp"
+#include "imu/node/mcu_main.hpp"
 
 #include "imu/hal/mcu/board_hooks.hpp"
 #include "imu/hal/mcu/frame_ring.hpp"
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
 namespace imu::m4 {
 namespace {

@@ -11,7 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
 extern "C" {
 // Linker script symbols: addresses only, never read as values.
