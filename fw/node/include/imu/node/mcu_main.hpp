@@ -1,22 +1,25 @@
-// The production node image (node_prod.cpp): one imu::node::Node for six channels fed by the
-// CAN receive interrupt through a lock-free ring, telemetry through a second ring to the CAN
-// controller, WFI when idle. The board implements imu/hal/mcu/board_hooks.hpp. What a board
-// shim or a debugger may read while the image runs: the node and the rings' counters.
-#ifndef IMU_M4_NODE_PROD_HPP
-#define IMU_M4_NODE_PROD_HPP
+// The node's main loop on a bare-metal MCU (imu_node_mcu, src/mcu_main.cpp): one
+// imu::node::Node for six channels fed by the CAN receive interrupt through a lock-free ring,
+// telemetry through a second ring to the CAN controller, WFI when idle. Built only with a
+// bare-metal toolchain; the board implements imu/hal/mcu/board_hooks.hpp and provides the
+// startup (imu/hal/mcu/startup.hpp: the reset handler calls this loop as imu_m4_main).
+// What a board shim or a debugger may read while the image runs: the node and the rings'
+// counters.
+#ifndef IMU_NODE_MCU_MAIN_HPP
+#define IMU_NODE_MCU_MAIN_HPP
 
 #include <cstddef>
 #include <cstdint>
 
 #include "imu/node/node.hpp"
 
-namespace imu::m4 {
+namespace imu::node::mcu {
 
-inline constexpr std::size_t kProdRxFrames = 16;  ///< receive ring (frames)
-inline constexpr std::size_t kProdTxFrames = 16;  ///< telemetry ring (frames)
-inline constexpr std::uint32_t kProdIdleMs = 200;  ///< bus idle: Node::on_idle()
+inline constexpr std::size_t kRxFrames = 16;   ///< receive ring (frames)
+inline constexpr std::size_t kTxFrames = 16;   ///< telemetry ring (frames)
+inline constexpr std::uint32_t kIdleMs = 200;  ///< bus idle: Node::on_idle()
 
-struct ProdCounters {
+struct LoopCounters {
   std::uint32_t rx_pending;
   std::uint32_t rx_overflows;  ///< frames dropped: receive ring full
   std::uint32_t tx_pending;
@@ -25,10 +28,10 @@ struct ProdCounters {
 };
 
 /// The image's node (read only; the main loop is its only writer).
-[[nodiscard]] const node::Node& prod_node();
+[[nodiscard]] const Node& image_node();
 /// A snapshot of the rings' counters. Any context.
-[[nodiscard]] ProdCounters prod_counters();
+[[nodiscard]] LoopCounters loop_counters();
 
-}  // namespace imu::m4
+}  // namespace imu::node::mcu
 
-#endif  // IMU_M4_NODE_PROD_HPP
+#endif  // IMU_NODE_MCU_MAIN_HPP
