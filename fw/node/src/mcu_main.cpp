@@ -83,35 +83,6 @@ bool process_rx() {
   return any;
 }
 
-/// The main loop (see the file comment). Returns 1 if the node refuses its configuration.
-int run() {
-  imu_board_init();
-  g_tx.set_wait(wait_tx, nullptr);
-  const NodeConfig cfg;  // defaults: status 1 s, full set 60 s at 100 Hz
-  if (g_node.configure(cfg, g_tx, nullptr, nullptr) != NodeStatus::kOk) {
-    return 1;
-  }
-  imu_board_can_init();
-  std::uint32_t last_rx_ms = imu_board_millis();
-  bool flushed = true;  // nothing received since the last idle flush
-  for (;;) {
-    if (process_rx()) {
-      last_rx_ms = imu_board_millis();
-      flushed = false;
-      continue;
-    }
-    (void)drain_tx();
-    if (!flushed && imu_board_millis() - last_rx_ms >= kIdleMs) {
-      g_node.on_idle();
-      ++g_idle_flushes;
-      flushed = true;
-      (void)drain_tx();
-      continue;
-    }
-    sleep_until_interrupt();
-  }
-}
-
 }  // namespace
 
 const Node& image_node() { return g_node; }
@@ -129,4 +100,32 @@ bool imu_node_can_rx(const imu::hal::CanFrame& f, std::uint32_t nbytes,
   return imu::node::mcu::g_rx.push_from_isr(f, nbytes, rx_time_ns);
 }
 
-extern "C" int imu_m4_main() { return imu::node::mcu::run(); }
+// The main loop (see the file comment). Returns 1 only if the node refuses its configuration.
+extern "C" int imu_m4_main() {
+  namespace mcu = imu::node::mcu;
+  imu_board_init();
+  mcu::g_tx.set_wait(mcu::wait_tx, nullptr);
+  const imu::node::NodeConfig cfg;  // defaults: status 1 s, full set 60 s at 100 Hz
+  if (mcu::g_node.configure(cfg, mcu::g_tx, nullptr, nullptr) != imu::node::NodeStatus::kOk) {
+    return 1;
+  }
+  imu_board_can_init();
+  std::uint32_t last_rx_ms = imu_board_millis();
+  bool flushed = true;  // nothing received since the last idle flush
+  for (;;) {
+    if (mcu::process_rx()) {
+      last_rx_ms = imu_board_millis();
+      flushed = false;
+      continue;
+    }
+    (void)mcu::drain_tx();
+    if (!flushed && imu_board_millis() - last_rx_ms >= mcu::kIdleMs) {
+      mcu::g_node.on_idle();
+      ++mcu::g_idle_flushes;
+      flushed = true;
+      (void)mcu::drain_tx();
+      continue;
+    }
+    mcu::sleep_until_interrupt();
+  }
+}
