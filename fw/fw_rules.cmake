@@ -1,5 +1,6 @@
 # imu_apply_fw_rules(<target> [SYMBOL_TEST <test name>]): the firmware rules, in one place, for
-# every target whose code runs on the co-processor (fw/, the node, the hal codec, the M4 image):
+# every target whose code runs on the co-processor (fw/, the node and its MCU main loop, the hal
+# codec, the hal MCU backend and its boards, the M4 images):
 #  * -fno-exceptions -fno-rtti;
 #  * -ffp-contract=off: no fused multiply-add contraction, so float/double results are the same
 #    bits on every target (the Cortex-M4's VFMA.F32 and aarch64's FMADD would otherwise round

@@ -1,6 +1,7 @@
 # Cross toolchain: Cortex-M4F bare metal (arm-none-eabi GCC 12, newlib-nano), hard float
 # (single-precision FPU; double is done in software). The top-level CMakeLists sees
-# CMAKE_SYSTEM_NAME "Generic" and builds only fw/ and the bare-metal program in toolchains/m4.
+# CMAKE_SYSTEM_NAME "Generic" and builds only fw/ (with the node's MCU main loop), the hal codec
+# and MCU backend (with its boards, hal/src/mcu/boards) and the images in toolchains/m4.
 #   cmake -S . -B build-m4 -DCMAKE_TOOLCHAIN_FILE=toolchains/arm-none-eabi-m4.cmake
 set(CMAKE_SYSTEM_NAME Generic)
 set(CMAKE_SYSTEM_PROCESSOR cortex-m4)

@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Builds both cross targets and runs what can run on this machine (CI calls this):
 #  1. aarch64-linux-gnu: the whole project, then the `unit` tests under qemu-aarch64 user mode;
-#  2. arm-none-eabi Cortex-M4F: fw/ and the bare-metal program (1 and 6 channels), heap check on
-#     the link maps, arm-none-eabi-size, the 6-channel budget (flash < 32 KiB, RAM < 48 KiB);
+#  2. arm-none-eabi Cortex-M4F: fw/, the hal MCU backend and board (hal/src/mcu/boards) and the
+#     M4 images (demo 1 and 6 channels, node, production node), heap check on the link maps,
+#     arm-none-eabi-size, the 6-channel demo's budget (flash < 32 KiB, RAM < 48 KiB);
 #  3. the 6-channel image under qemu-system-arm (mps2-an386, semihosting), every number it prints
 #     compared with the host twin (imu_m4_check) and a direct ADEV.
 # Usage: toolchains/cross-check.sh            (build dirs build-aarch64, build-m4, build-m4host)

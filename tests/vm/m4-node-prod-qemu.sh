@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# The production node image (imu_m4_node_prod.elf, toolchains/m4), built with
+# The production node image (imu_m4_node_prod.elf: the node's MCU main loop, fw/node, on the
+# mps2-an386 board of the hal MCU backend, hal/src/mcu/boards/mps2_an386; assembled in
+# toolchains/m4) and its smoke variant, built with
 # toolchains/arm-none-eabi-m4.cmake in M4_BUILD_DIR (the same folder as m4-node-qemu.sh).
 #   tests/vm/m4-node-prod-qemu.sh smoke SOURCE_DIR M4_BUILD_DIR
 #     builds the production image and its smoke variant, prints both sizes, runs the smoke

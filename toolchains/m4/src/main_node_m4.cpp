@@ -1,8 +1,9 @@
-// Bare-metal program of the node image (imu_m4_main, called by startup.cpp): runs the node
-// workload (node_workload.hpp), prints through semihosting, and measures the node's cost with
-// the SysTick counter. Under `qemu-system-arm -icount shift=0` the virtual clock advances one
-// step per guest instruction, so SysTick ticks are proportional to instructions executed; the
-// ratio is calibrated on a loop of known length (2 instructions per iteration: subs, bne).
+// Bare-metal program of the node image (imu_m4_main, called by the board's reset handler): runs
+// the node workload (node_workload.hpp), prints through semihosting, and measures the node's
+// cost with the SysTick counter. Under `qemu-system-arm -icount shift=0` the virtual clock
+// advances one step per guest instruction, so SysTick ticks are proportional to instructions
+// executed; the ratio is calibrated on a loop of known length (2 instructions per iteration:
+// subs, bne).
 // Extra lines (target only):
 //   IMU-NODE COST ticks=<samples phase> cal_ticks=<calibration loop> cal_insns=<its instructions>
 //   IMU-NODE STEADY-COST ticks=<ticks> samples=<S>: the same over S samples of a second node
@@ -14,13 +15,13 @@
 //   IMU-M4 STACK used=<bytes> of=<bytes>
 #include <cstdint>
 
+#include "imu/hal/mcu/startup.hpp"
 #include "imu/node/node.hpp"
 #include "imu/online_adev.hpp"
 
 #include "line.hpp"
 #include "node_workload.hpp"
 #include "semihost.hpp"
-#include "startup.hpp"
 
 namespace {
 
@@ -146,8 +147,8 @@ extern "C" int imu_m4_main() {
   line.str(" block_ticks=").u64(block_ticks).str(" samples=").u64(kAdevBlock).str("\n");
   imu::m4::semihost_write0(line.c_str());
   line.clear();
-  line.str("IMU-M4 STACK used=").u64(imu::m4::stack_high_water_bytes());
-  line.str(" of=").u64(imu::m4::stack_size_bytes()).str("\n");
+  line.str("IMU-M4 STACK used=").u64(imu::hal::mcu::stack_high_water_bytes());
+  line.str(" of=").u64(imu::hal::mcu::stack_size_bytes()).str("\n");
   imu::m4::semihost_write0(line.c_str());
   return st == imu::m4::NodeRunStatus::kOk && st_steady == imu::m4::NodeRunStatus::kOk ? 0 : 1;
 }

@@ -13,12 +13,12 @@
 
 #include "imu/hal/codec.hpp"
 #include "imu/hal/mcu/board_hooks.hpp"
+#include "imu/hal/mcu/startup.hpp"
+#include "imu/node/mcu_main.hpp"
 #include "largest_model.hpp"
 #include "line.hpp"
-#include "node_prod.hpp"
 #include "samples.hpp"
 #include "semihost.hpp"
-#include "startup.hpp"
 
 namespace {
 
@@ -91,8 +91,8 @@ void inject_next() {
 }
 
 [[noreturn]] void check_and_exit() {
-  const imu::node::NodeStats& st = imu::m4::prod_node().stats();
-  const imu::m4::ProdCounters pc = imu::m4::prod_counters();
+  const imu::node::NodeStats& st = imu::node::mcu::image_node().stats();
+  const imu::node::mcu::LoopCounters pc = imu::node::mcu::loop_counters();
   const std::uint32_t total = g_txc.total;
   const std::uint32_t stats = g_txc.stats;
   const std::uint32_t adev = g_txc.adev;
@@ -103,15 +103,15 @@ void inject_next() {
   line.str(" models=").u64(st.models_accepted).str(" rejected=").u64(st.model_rejected);
   line.str(" rx_overflows=").u64(pc.rx_overflows).str(" tx_overflows=").u64(pc.tx_overflows);
   line.str(" idle=").u64(pc.idle_flushes);
-  line.str(" stack_used=").u64(imu::m4::stack_high_water_bytes());
-  line.str(" of=").u64(imu::m4::stack_size_bytes()).str("\n");
+  line.str(" stack_used=").u64(imu::hal::mcu::stack_high_water_bytes());
+  line.str(" of=").u64(imu::hal::mcu::stack_size_bytes()).str("\n");
   imu::m4::semihost_write0(line.c_str());
   const bool ok = st.samples == kSmokeSamples && st.models_accepted == imu::hal::kChannels &&
                   st.model_rejected == 0 && pc.rx_overflows == 0 && pc.tx_overflows == 0 &&
                   pc.idle_flushes >= 1 && stats >= kSmokeSamples / 100 && adev > 0 &&
                   echo >= imu::hal::kChannels && !line.truncated() &&
-                  imu::m4::stack_high_water_bytes() + kStackGuardBytes <=
-                      imu::m4::stack_size_bytes();
+                  imu::hal::mcu::stack_high_water_bytes() + kStackGuardBytes <=
+                      imu::hal::mcu::stack_size_bytes();
   imu::m4::semihost_write0(ok ? "PROD-SMOKE PASS\n" : "PROD-SMOKE FAIL\n");
   imu::m4::semihost_exit(ok ? 0 : 1);
 }
@@ -121,7 +121,7 @@ void inject_next() {
 extern "C" void SysTick_Handler() {
   g_ms = g_ms + 1;
   if (g_next < kFrames) {
-    if (imu::m4::prod_counters().rx_pending < imu::m4::kProdRxFrames / 2) {
+    if (imu::node::mcu::loop_counters().rx_pending < imu::node::mcu::kRxFrames / 2) {
       inject_next();
       g_last_ms = g_ms;
     }

@@ -1,9 +1,11 @@
-// Reset and fault handlers and the vector table for the Cortex-M4F images (mps2-an386 and any
-// Cortex-M4F: nothing here is board specific).
+// Reset and fault handlers and the vector table of the mps2-an386 board (Arm MPS2 with the AN386
+// Cortex-M4F image; nothing here but the linker script's symbols ties it to the board, so it
+// serves any Cortex-M4F board folder as a starting point). Contract: imu/hal/mcu/startup.hpp.
 // Reset: enable the FPU, copy .data, zero .bss, paint the stack (for the high-water mark), run
 // static constructors, call imu_m4_main(), then imu_m4_exit() with its return value. Faults
 // call imu_m4_fault(). The image provides both: the test images exit through semihosting
-// (semihost.cpp), the production image resets (node_prod.cpp).
+// (toolchains/m4/src/semihost_exit.cpp), the production images through the board's fault hook
+// (board_hooks.cpp).
 // SysTick and PendSV handlers are weak (default: the fault handler), so an image may define
 // them; external interrupt vectors (the board's, e.g. the CAN controller's) follow the 16 core
 // vectors from input sections .isr_vector.irq (see mps2_an386.ld).
@@ -11,7 +13,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
 extern "C" {
 // Linker script symbols: addresses only, never read as values.
@@ -22,10 +24,10 @@ extern std::uint32_t _sbss[];
 extern std::uint32_t _ebss[];
 extern std::uint32_t _sstack[];
 extern std::uint32_t _estack[];
-extern void (*__init_array_start[])();
-extern void (*__init_array_end[])();
+// The linker's names for the constructor table (reserved identifiers, fixed by the toolchain).
+extern void (*__init_array_start[])();  // NOLINT(bugprone-reserved-identifier)
+extern void (*__init_array_end[])();    // NOLINT(bugprone-reserved-identifier)
 
-int imu_m4_main();  // the program (ISO C++ forbids calling main())
 [[noreturn]] void Reset_Handler();
 [[noreturn]] void Fault_Handler();
 void SysTick_Handler();
@@ -87,7 +89,7 @@ void Fault_Handler() { imu_m4_fault(); }
 __attribute__((weak)) void SysTick_Handler() { imu_m4_fault(); }
 __attribute__((weak)) void PendSV_Handler() { imu_m4_fault(); }
 
-namespace imu::m4 {
+namespace imu::hal::mcu {
 
 std::size_t stack_high_water_bytes() {
   const std::uint32_t* p = _sstack;
@@ -101,4 +103,4 @@ std::size_t stack_size_bytes() {
   return static_cast<std::size_t>(_estack - _sstack) * sizeof(std::uint32_t);
 }
 
-}  // namespace imu::m4
+}  // namespace imu::hal::mcu

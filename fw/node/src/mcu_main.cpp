@@ -1,34 +1,34 @@
-// The production node image's program (see node_prod.hpp and imu/hal/mcu/board_hooks.hpp).
-// Compiled under fw/'s rules. Static state only: the Node, two rings; no heap, no semihosting.
+// The node's main loop on a bare-metal MCU (see imu/node/mcu_main.hpp and
+// imu/hal/mcu/board_hooks.hpp). Compiled under fw/'s rules. Static state only: the Node, two
+// rings; no heap, no semihosting, no instruction named here (the core's are in the HAL).
 //
-// Main loop (imu_m4_main, called by startup.cpp; never returns):
+// Main loop (imu_m4_main, called by the board's reset handler; never returns):
 //   1. take received frames from the receive ring in small batches, hand each to
 //      Node::on_frame, publish the ring's drop count to the node (telemetry), pass queued
 //      telemetry to the controller (imu_board_can_send) until it is busy;
-//   2. after kProdIdleMs without a frame (board clock): Node::on_idle() once (the full set);
+//   2. after kIdleMs without a frame (board clock): Node::on_idle() once (the full set);
 //   3. nothing to do: WFI with interrupts masked around the emptiness check, so a frame that
 //      arrives between the check and the WFI still wakes the core.
 // The telemetry ring's consumer is the main loop (step 1 and the sink's wait function), never
 // an interrupt, so the ring has one consumer.
-#include "node_prod.hpp"
+#include "imu/node/mcu_main.hpp"
 
 #include "imu/hal/mcu/board_hooks.hpp"
+#include "imu/hal/mcu/cortex_m.hpp"
 #include "imu/hal/mcu/frame_ring.hpp"
-#include "startup.hpp"
+#include "imu/hal/mcu/startup.hpp"
 
-namespace imu::m4 {
+namespace imu::node::mcu {
 namespace {
 
 constexpr std::size_t kBatch = 4;              // frames taken from the ring per receive()
 constexpr std::uint32_t kMaxTxPolls = 1U << 16;  // bound of a wait without a board clock
-constexpr std::uintptr_t kScbAircr = 0xE000ED0CU;
-constexpr std::uint32_t kAircrSysReset = 0x05FA0004U;  // VECTKEY | SYSRESETREQ
 
-node::Node g_node;
-hal::mcu::IsrFrameSource<kProdRxFrames>::Ring g_rx_ring;  // .bss
-hal::mcu::RingFrameSink<kProdTxFrames>::Ring g_tx_ring;    // .bss
-hal::mcu::IsrFrameSource<kProdRxFrames> g_rx(g_rx_ring);
-hal::mcu::RingFrameSink<kProdTxFrames> g_tx(g_tx_ring);
+Node g_node;
+hal::mcu::IsrFrameSource<kRxFrames>::Ring g_rx_ring;  // .bss
+hal::mcu::RingFrameSink<kTxFrames>::Ring g_tx_ring;    // .bss
+hal::mcu::IsrFrameSource<kRxFrames> g_rx(g_rx_ring);
+hal::mcu::RingFrameSink<kTxFrames> g_tx(g_tx_ring);
 std::uint32_t g_idle_flushes = 0;
 
 /// Hands queued telemetry to the controller until it is busy or the ring is empty. Returns the
@@ -62,14 +62,9 @@ bool wait_tx(void* /*ctx*/, int timeout_ms) {
   return false;
 }
 
-/// Sleeps until an interrupt if no frame is queued. PRIMASK is set around the check: a pending
-/// interrupt still ends WFI, and is taken once PRIMASK is cleared.
+/// Sleeps until an interrupt if no frame is queued (see hal::mcu::sleep_until_interrupt_unless).
 void sleep_until_interrupt() {
-  asm volatile("cpsid i" ::: "memory");
-  if (g_rx.pending() == 0) {
-    asm volatile("dsb\n\twfi" ::: "memory");
-  }
-  asm volatile("cpsie i" ::: "memory");
+  hal::mcu::sleep_until_interrupt_unless([] { return g_rx.pending() != 0; });
 }
 
 /// Step 1 of the main loop: every queued frame through the node. True if there was any.
@@ -90,66 +85,47 @@ bool process_rx() {
 
 }  // namespace
 
-const node::Node& prod_node() { return g_node; }
+const Node& image_node() { return g_node; }
 
-ProdCounters prod_counters() {
-  return ProdCounters{static_cast<std::uint32_t>(g_rx.pending()), g_rx.overflows(),
+LoopCounters loop_counters() {
+  return LoopCounters{static_cast<std::uint32_t>(g_rx.pending()), g_rx.overflows(),
                       static_cast<std::uint32_t>(g_tx.pending()), g_tx.overflows(),
                       g_idle_flushes};
 }
 
-}  // namespace imu::m4
+}  // namespace imu::node::mcu
 
 bool imu_node_can_rx(const imu::hal::CanFrame& f, std::uint32_t nbytes,
                      std::uint64_t rx_time_ns) {
-  return imu::m4::g_rx.push_from_isr(f, nbytes, rx_time_ns);
+  return imu::node::mcu::g_rx.push_from_isr(f, nbytes, rx_time_ns);
 }
 
+// The main loop (see the file comment). Returns 1 only if the node refuses its configuration.
 extern "C" int imu_m4_main() {
-  using imu::m4::g_node;
+  namespace mcu = imu::node::mcu;
   imu_board_init();
-  imu::m4::g_tx.set_wait(imu::m4::wait_tx, nullptr);
+  mcu::g_tx.set_wait(mcu::wait_tx, nullptr);
   const imu::node::NodeConfig cfg;  // defaults: status 1 s, full set 60 s at 100 Hz
-  if (g_node.configure(cfg, imu::m4::g_tx, nullptr, nullptr) != imu::node::NodeStatus::kOk) {
+  if (mcu::g_node.configure(cfg, mcu::g_tx, nullptr, nullptr) != imu::node::NodeStatus::kOk) {
     return 1;
   }
   imu_board_can_init();
   std::uint32_t last_rx_ms = imu_board_millis();
   bool flushed = true;  // nothing received since the last idle flush
   for (;;) {
-    if (imu::m4::process_rx()) {
+    if (mcu::process_rx()) {
       last_rx_ms = imu_board_millis();
       flushed = false;
       continue;
     }
-    (void)imu::m4::drain_tx();
-    if (!flushed && imu_board_millis() - last_rx_ms >= imu::m4::kProdIdleMs) {
-      g_node.on_idle();
-      ++imu::m4::g_idle_flushes;
+    (void)mcu::drain_tx();
+    if (!flushed && imu_board_millis() - last_rx_ms >= mcu::kIdleMs) {
+      mcu::g_node.on_idle();
+      ++mcu::g_idle_flushes;
       flushed = true;
-      (void)imu::m4::drain_tx();
+      (void)mcu::drain_tx();
       continue;
     }
-    imu::m4::sleep_until_interrupt();
+    mcu::sleep_until_interrupt();
   }
 }
-
-// ---- weak board defaults (board_hooks.hpp) and the startup's exit and fault hooks ----------
-
-__attribute__((weak)) void imu_board_init() {}
-__attribute__((weak)) void imu_board_can_init() {}
-__attribute__((weak)) bool imu_board_can_send(const imu::hal::CanFrame& /*f*/) { return false; }
-__attribute__((weak)) std::uint32_t imu_board_millis() { return 0; }
-
-__attribute__((weak)) void imu_board_fault() {
-  asm volatile("dsb" ::: "memory");
-  *reinterpret_cast<volatile std::uint32_t*>(imu::m4::kScbAircr) =  // NOLINT: SCB register
-      imu::m4::kAircrSysReset;
-  asm volatile("dsb" ::: "memory");
-  for (;;) {
-    asm volatile("wfi");
-  }
-}
-
-extern "C" void imu_m4_exit(int /*rc*/) { imu_board_fault(); }
-extern "C" void imu_m4_fault() { imu_board_fault(); }
