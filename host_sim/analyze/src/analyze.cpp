@@ -3189,7 +3189,8 @@ class Analysis {
     }
     const bool ramp = (terms & kFitRamp) != 0U;
     const bool walk = (terms & kFitRrw) != 0U;
-    RrwLikelihoodTest lt = test_rrw(fit_record(), ts, cur_p, tb_max, ramp, step_at);
+    RrwLikelihoodTest lt =
+        walk_test.ok ? walk_test : test_rrw(fit_record(), ts, cur_p, tb_max, ramp, step_at);
     if (!lt.ok) {
       return;
     }
@@ -3241,12 +3242,14 @@ class Analysis {
       // never-worse rule on the ADEV does not remove it: one criterion decides).
       const RrwLikelihoodTest lt =
           test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+      walk_test = lt;
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
         const FitResult f = fit_terms(fit_pts, terms & ~kFitRrw, ts, tau_max, tb_max, &cur_p,
                                       white_filter_s);
         if (f.status == FitStatus::kOk) {
           terms &= ~kFitRrw;
           cur_p = with_sines(f.params, cur_p);
+          walk_test = RrwLikelihoodTest{};
           return;
         }
         time_ranges.pop_back();
@@ -3263,6 +3266,7 @@ class Analysis {
     } else {
       const RrwLikelihoodTest lt =
           test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+      walk_test = lt;
       // With bias instability in the model its flicker bank is in H0: lt is already the walk's
       // test beside it.
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
@@ -3284,6 +3288,7 @@ class Analysis {
           terms |= kFitRrw;
           walk_lr = lt.lr;
           cur_p = with_sines(f.params, cur_p);
+          walk_test = RrwLikelihoodTest{};
         }
       } else if (lt.ok) {
         out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
@@ -3759,6 +3764,9 @@ class Analysis {
   double cost_thr = 0.0;  // the ADEV cost drop a term must make
   double lr_thr = 0.0;    // the record likelihood's level (no inflation)
   double walk_lr = -1.0;  // the walk's 2 ln LR on the record (< 0: not tested)
+  // rrw_by_likelihood's test of the model as it then stands (ok = false once the model has
+  // changed since): warmup_transient_check reuses it rather than fitting the same test again.
+  RrwLikelihoodTest walk_test;
   NoiseLevelChange noise_change;             // of the white noise's level (find_noise_level_change)
   std::vector<UnexplainedRun> time_ranges;   // transients found by the step search
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
