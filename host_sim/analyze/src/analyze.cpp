@@ -1600,36 +1600,56 @@ struct WalkOnly {
 };
 
 // A level that decays from the start of the record (a warm-up transient, A exp(-t / tau)) by the
-// record's likelihood under the walk test's H0: the GLS 2 ln LR of the regressor at 24 taus from
-// two blocks to a fifth of the record, the best one (compared at alpha / 24).
+// record's likelihood under the test's H0: the GLS 2 ln LR of the regressor at kTransientTaus
+// taus from two blocks to a fifth of the record, H0's parameters fixed at their fit to the record
+// (which holds the decay: H0's slow terms take part of it, so the statistic errs low). At a fixed
+// tau it is chi-square(1) under H0; the best tau is compared at alpha / kTransientTaus
+// (Bonferroni over the grid; neighbouring taus are correlated, so the level is conservative).
+// detrend: the block means had their least-squares line removed (a ramp in the model), and the
+// regressor has it removed too.
 struct TransientLr {
   double lr = 0.0;
   double tau_s = 0.0;
+  double size = 0.0;  // A [unit]
 };
+constexpr int kTransientTaus = 24;
 
-TransientLr warmup_transient_lr(const RrwLikelihoodTest& lt) {
+// exp(-t / tau) at the block centres, less its mean, and with detrend its least-squares line
+// through the block centres, as test_rrw does to the block means.
+std::vector<double> decay_regressor(std::size_t nb, double block_s, double tau_s, bool detrend) {
+  std::vector<double> u(nb);
+  const double n = static_cast<double>(nb);
+  double su = 0.0;
+  double stu = 0.0;
+  double stt = 0.0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    const double t = static_cast<double>(k) - 0.5 * (n - 1.0);
+    u[k] = std::exp(-(static_cast<double>(k) + 0.5) * block_s / tau_s);
+    su += u[k];
+    stu += t * u[k];
+    stt += t * t;
+  }
+  const double slope = detrend && stt > 0.0 ? stu / stt : 0.0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    u[k] -= su / n + slope * (static_cast<double>(k) - 0.5 * (n - 1.0));
+  }
+  return u;
+}
+
+TransientLr warmup_transient_lr(const RrwLikelihoodTest& lt, bool detrend) {
   TransientLr best;
   const std::size_t nb = lt.means.size();
-  if (!lt.ok || nb < 64) {
+  if (!lt.ok || !lt.h0.ok || nb < 64) {
     return best;
   }
   const double lo = 2.0 * lt.block_s;
   const double hi = static_cast<double>(nb) * lt.block_s / 5.0;
-  std::vector<double> u(nb);
-  for (int g = 0; g < 24; ++g) {
-    const double tau = lo * std::pow(hi / lo, g / 23.0);
-    double mean = 0.0;
-    for (std::size_t k = 0; k < nb; ++k) {
-      u[k] = std::exp(-(static_cast<double>(k) + 0.5) * lt.block_s / tau);
-      mean += u[k];
-    }
-    mean /= static_cast<double>(nb);
-    for (auto& v : u) {
-      v -= mean;
-    }
-    const double lr = regressor_lr(lt, u);
+  for (int g = 0; g < kTransientTaus; ++g) {
+    const double tau = lo * std::pow(hi / lo, g / static_cast<double>(kTransientTaus - 1));
+    double size = 0.0;
+    const double lr = regressor_lr(lt, decay_regressor(nb, lt.block_s, tau, detrend), &size);
     if (lr > best.lr) {
-      best = TransientLr{lr, tau};
+      best = TransientLr{lr, tau, size};
     }
   }
   return best;
@@ -2231,6 +2251,7 @@ class Analysis {
       return false;
     }
     rrw_by_likelihood();
+    warmup_transient_check();
     after_model();
     return true;
   }
@@ -3116,29 +3137,96 @@ class Analysis {
     return out_lr;
   }
 
-  // A warm-up transient explains the record at least as well as the walk of lt (its tau is a
-  // second parameter: at least the walk's 2 ln LR less 2): reported as an unexplained time
-  // range with a note, and true; the walk is then not taken.
-  bool transient_for_walk(const RrwLikelihoodTest& lt) {
-    const TransientLr tr = warmup_transient_lr(lt);
-    const double tr_thr = chi2_quantile(1.0 - o.alpha / 24.0, 1.0);
-    if (!(tr.lr > tr_thr && tr.lr + 2.0 >= lt.lr)) {
-      return false;
-    }
+  // [0, 3 tau] of a warm-up transient found by its likelihood (tr, against `against`) as an
+  // unexplained time range, with its tau range from one block (the test's resolution).
+  [[nodiscard]] UnexplainedRun transient_range(const TransientLr& tr, double block_s,
+                                               const std::string& against) const {
     UnexplainedRun u;
     u.t_min_s = 0.0;
     u.t_max_s = std::min(3.0 * tr.tau_s, static_cast<double>(y.size()) * ts);
-    u.tau_min_s = lt.block_s;
+    u.tau_min_s = block_s;
     u.tau_max_s = u.t_max_s;
     u.max_abs_z = std::sqrt(tr.lr);
-    u.what = "a level decaying from the start of the record with a time constant of " +
-             fmt("%.3g", tr.tau_s) + " s (a warm-up transient), 2 ln LR " + fmt("%.1f", tr.lr) +
-             " against the walk's " + fmt("%.1f", lt.lr);
+    u.what = "a level decaying from the start of the record (A = " + fmt("%.3g", tr.size) +
+             ", time constant " + fmt("%.3g", tr.tau_s) +
+             " s: a warm-up transient), 2 ln LR " + fmt("%.1f", tr.lr) +
+             " against " + against;
+    return u;
+  }
+
+  // A warm-up transient explains the record better than the walk of lt (by AIC's 2 for its
+  // second parameter, tau, as a step must beat a walk): reported as an unexplained time range
+  // with a note, and true; the walk is then not taken. Otherwise the walk is a term, and the
+  // decay is tested beside it (warmup_transient_check).
+  bool transient_for_walk(const RrwLikelihoodTest& lt) {
+    const TransientLr tr = warmup_transient_lr(lt, (terms & kFitRamp) != 0U);
+    const double tr_thr = chi2_quantile(1.0 - o.alpha / kTransientTaus, 1.0);
+    constexpr double kAicPenalty = 2.0;
+    if (!(tr.lr > tr_thr && tr.lr > lt.lr + kAicPenalty)) {
+      return false;
+    }
+    const UnexplainedRun u = transient_range(tr, lt.block_s, "the walk's " + fmt("%.1f", lt.lr));
     time_ranges.push_back(u);
     out.notes.push_back("no rate_random_walk: the record's likelihood finds one (2 ln LR = " +
                         fmt("%.1f", lt.lr) + ") but " + u.what +
-                        " explains it as well: reported as unexplained");
+                        " explains it better: reported as unexplained");
     return true;
+  }
+
+  // A warm-up transient on every record, whether or not its likelihood asks for a walk: the
+  // decay's GLS 2 ln LR against the model's own H0 (white, its GMs and bias instability refitted
+  // to the block means, with its walk when it holds one, its line removed when it holds a ramp,
+  // its steps as level resets), the best of the tau grid above chi-square(1) at
+  // alpha / kTransientTaus. A walk or a line the model does not hold bends the record's slow
+  // part too: the decay must explain the record better than either (by 2, its tau being a
+  // parameter more), else it is not reported. Not a term: the model is unchanged, [0, 3 tau] is
+  // unexplained.
+  void warmup_transient_check() {
+    for (const auto& u : time_ranges) {
+      if (u.t_min_s <= 0.0) {
+        return;  // the start of the record is already an unexplained time range
+      }
+    }
+    const bool ramp = (terms & kFitRamp) != 0U;
+    const bool walk = (terms & kFitRrw) != 0U;
+    RrwLikelihoodTest lt =
+        walk_test.ok ? walk_test : test_rrw(fit_record(), ts, cur_p, tb_max, ramp, step_at);
+    if (!lt.ok) {
+      return;
+    }
+    const double walk_lr_here = walk ? 0.0 : lt.lr;
+    if (walk) {
+      lt.h0 = lt.h1;  // the decay against the model with its walk
+    }
+    const TransientLr tr = warmup_transient_lr(lt, ramp);
+    const double thr = chi2_quantile(1.0 - o.alpha / kTransientTaus, 1.0);
+    if (!(tr.lr > thr)) {
+      return;
+    }
+    double line_lr = 0.0;
+    if (!ramp) {
+      std::vector<double> line(lt.means.size());
+      for (std::size_t k = 0; k < line.size(); ++k) {
+        line[k] = static_cast<double>(k) - 0.5 * static_cast<double>(line.size() - 1);
+      }
+      line_lr = regressor_lr(lt, line);
+    }
+    constexpr double kAicPenalty = 2.0;
+    const double alt_lr = std::max(walk_lr_here, line_lr);
+    const UnexplainedRun u = transient_range(
+        tr, lt.block_s, std::string("the model's own likelihood") + (walk ? " (with its walk)" : ""));
+    if (!(tr.lr > alt_lr + kAicPenalty)) {
+      out.notes.push_back("not reported: " + u.what + " (> " + fmt("%.2f", thr) + "), but " +
+                          (walk_lr_here >= line_lr ? "a walk" : "a line") +
+                          " the model does not hold explains the record nearly as well (" +
+                          fmt("%.1f", alt_lr) + ", + 2 for the decay's tau)");
+      return;
+    }
+    time_ranges.push_back(u);
+    out.notes.push_back("warm-up transient: " + u.what + " > " + fmt("%.2f", thr) +
+                        " (chi-square(1) at alpha / " + std::to_string(kTransientTaus) +
+                        ", the taus tried) and > a walk's or a line's " +
+                        fmt("%.1f", alt_lr + kAicPenalty) + ": reported as unexplained");
   }
 
   void rrw_by_likelihood() {
@@ -3154,12 +3242,14 @@ class Analysis {
       // never-worse rule on the ADEV does not remove it: one criterion decides).
       const RrwLikelihoodTest lt =
           test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+      walk_test = lt;
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
         const FitResult f = fit_terms(fit_pts, terms & ~kFitRrw, ts, tau_max, tb_max, &cur_p,
                                       white_filter_s);
         if (f.status == FitStatus::kOk) {
           terms &= ~kFitRrw;
           cur_p = with_sines(f.params, cur_p);
+          walk_test = RrwLikelihoodTest{};
           return;
         }
         time_ranges.pop_back();
@@ -3176,6 +3266,7 @@ class Analysis {
     } else {
       const RrwLikelihoodTest lt =
           test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
+      walk_test = lt;
       // With bias instability in the model its flicker bank is in H0: lt is already the walk's
       // test beside it.
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
@@ -3197,6 +3288,7 @@ class Analysis {
           terms |= kFitRrw;
           walk_lr = lt.lr;
           cur_p = with_sines(f.params, cur_p);
+          walk_test = RrwLikelihoodTest{};
         }
       } else if (lt.ok) {
         out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
@@ -3672,6 +3764,9 @@ class Analysis {
   double cost_thr = 0.0;  // the ADEV cost drop a term must make
   double lr_thr = 0.0;    // the record likelihood's level (no inflation)
   double walk_lr = -1.0;  // the walk's 2 ln LR on the record (< 0: not tested)
+  // rrw_by_likelihood's test of the model as it then stands (ok = false once the model has
+  // changed since): warmup_transient_check reuses it rather than fitting the same test again.
+  RrwLikelihoodTest walk_test;
   NoiseLevelChange noise_change;             // of the white noise's level (find_noise_level_change)
   std::vector<UnexplainedRun> time_ranges;   // transients found by the step search
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)

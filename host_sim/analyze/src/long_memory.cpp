@@ -607,7 +607,10 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
   return out;
 }
 
-double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u) {
+double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u, double* size) {
+  if (size != nullptr) {
+    *size = 0.0;
+  }
   if (!test.ok || !test.h0.ok || u.size() != test.means.size()) {
     return 0.0;
   }
@@ -625,7 +628,13 @@ double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u)
     ae += a[k] * e[k];
     ee += e[k] * e[k];
   }
-  return ee > 0.0 ? ae * ae / ee : 0.0;
+  if (!(ee > 0.0)) {
+    return 0.0;
+  }
+  if (size != nullptr) {
+    *size = ae / ee;
+  }
+  return ae * ae / ee;
 }
 
 }  // namespace imu::analyze
