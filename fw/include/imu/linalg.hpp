@@ -101,21 +101,8 @@ template <typename T, std::size_t R, std::size_t C>
   x *= s;
   return x;
 }
-template <typename T, std::size_t R, std::size_t K, std::size_t C>
-[[nodiscard]] Mat<T, R, C> operator*(const Mat<T, R, K>& x, const Mat<T, K, C>& y) {
-  Mat<T, R, C> p{};
-  for (std::size_t i = 0; i < R; ++i) {
-    for (std::size_t k = 0; k < K; ++k) {
-      const T xik = x.a[i][k];
-      for (std::size_t j = 0; j < C; ++j) {
-        p.a[i][j] += xik * y.a[k][j];
-      }
-    }
-  }
-  return p;
-}
 
-/// out = x y, out distinct from x and y (the same sums in the same order as operator*).
+/// out = x y, out distinct from x and y.
 template <typename T, std::size_t R, std::size_t K, std::size_t C>
 void mul_into(const Mat<T, R, K>& x, const Mat<T, K, C>& y, Mat<T, R, C>& out) {
   out = Mat<T, R, C>{};
@@ -127,6 +114,13 @@ void mul_into(const Mat<T, R, K>& x, const Mat<T, K, C>& y, Mat<T, R, C>& out) {
       }
     }
   }
+}
+
+template <typename T, std::size_t R, std::size_t K, std::size_t C>
+[[nodiscard]] Mat<T, R, C> operator*(const Mat<T, R, K>& x, const Mat<T, K, C>& y) {
+  Mat<T, R, C> p{};
+  mul_into(x, y, p);
+  return p;
 }
 
 /// (A + A^T) / 2: removes the asymmetry rounding leaves in a covariance.
