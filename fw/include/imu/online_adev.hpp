@@ -262,32 +262,19 @@ class OnlineAdev {
   template <typename Visit>
   void for_each_point(Visit&& visit, int noise_alpha = 0) const {
     AdevPoint p{};
-    for (std::size_t i = 0; i < M; ++i) {
-      if (make_point(level0_, i, i + 1, 0, noise_alpha, p) && !visit(p)) {
-        return;
-      }
-    }
-    for (std::size_t lv = 0; lv < L; ++lv) {
-      for (std::size_t i = 0; i < kUpperTaus; ++i) {
-        if (make_point(upper_[lv], i, M / 2 + 1 + i, lv + 1, noise_alpha, p) && !visit(p)) {
-          return;
-        }
-      }
-    }
+    for_each_tau([&](const auto& lv, std::size_t i, std::size_t m, std::size_t level) {
+      return !make_point(lv, i, m, level, noise_alpha, p) || visit(p);
+    });
   }
 
   /// Number of points snapshot() would write with unlimited capacity (no EDF or interval
   /// computed). O(number of taus).
   [[nodiscard]] std::size_t point_count() const {
     std::size_t k = 0;
-    for (std::size_t i = 0; i < M; ++i) {
-      k += lv_terms(level0_, i, i + 1) > 0 ? 1U : 0U;
-    }
-    for (std::size_t lv = 0; lv < L; ++lv) {
-      for (std::size_t i = 0; i < kUpperTaus; ++i) {
-        k += lv_terms(upper_[lv], i, M / 2 + 1 + i) > 0 ? 1U : 0U;
-      }
-    }
+    for_each_tau([&](const auto& lv, std::size_t i, std::size_t m, std::size_t /*level*/) {
+      k += lv_terms(lv, i, m) > 0 ? 1U : 0U;
+      return true;
+    });
     return k;
   }
 
@@ -364,6 +351,23 @@ class OnlineAdev {
     const std::size_t top = tz < L ? tz : L;
     for (std::size_t k = 1; k <= top; ++k) {
       push_point(upper_[k - 1], n >> k, x_);
+    }
+  }
+
+  // Every tau in ascending order as (level, index in it, m, octave), until fn returns false.
+  template <typename Fn>
+  void for_each_tau(Fn&& fn) const {
+    for (std::size_t i = 0; i < M; ++i) {
+      if (!fn(level0_, i, i + 1, std::size_t{0})) {
+        return;
+      }
+    }
+    for (std::size_t lv = 0; lv < L; ++lv) {
+      for (std::size_t i = 0; i < kUpperTaus; ++i) {
+        if (!fn(upper_[lv], i, M / 2 + 1 + i, lv + 1)) {
+          return;
+        }
+      }
     }
   }
 
