@@ -581,6 +581,18 @@ bool discretize_dynamics(const ContinuousModel<kMaxStates>& c, bool averaged,
   return discretize_whole(c, averaged, d);
 }
 
+// The fields both discretisations take from c as they are, everything else zero.
+template <std::size_t kMaxStates>
+void start_discrete(const ContinuousModel<kMaxStates>& c, double ts_s, std::size_t n_states,
+                    DiscreteModel<kMaxStates>& out) {
+  out = DiscreteModel<kMaxStates>{};
+  out.n_states = n_states;
+  out.ts_s = ts_s;
+  out.r_white = c.sn / ts_s;
+  out.q = c.q;
+  out.params = c.params;
+}
+
 }  // namespace
 
 template <std::size_t kMaxStates>
@@ -589,14 +601,9 @@ ModelStatus discretize(const ContinuousModel<kMaxStates>& c, double ts_s,
   if (!positive_finite(ts_s)) {
     return ModelStatus::kBadParameter;
   }
-  out = DiscreteModel<kMaxStates>{};
-  out.n_states = c.n_states;
-  out.ts_s = ts_s;
+  start_discrete(c, ts_s, c.n_states, out);
   out.p0 = c.p0;
   out.h = c.h;
-  out.r_white = c.sn / ts_s;
-  out.q = c.q;
-  out.params = c.params;
   if (c.n_states > 0 && !discretize_dynamics(c, false, out)) {
     out.n_states = 0;
     return ModelStatus::kNumerical;
@@ -614,13 +621,8 @@ ModelStatus discretize_averaged(const ContinuousModel<kMaxStates>& c, double ts_
   if (n >= kMaxStates) {  // no room for the sample mean
     return ModelStatus::kCapacity;
   }
-  out = DiscreteModel<kMaxStates>{};
-  out.n_states = n + 1;
-  out.ts_s = ts_s;
+  start_discrete(c, ts_s, n + 1, out);
   out.h(0, n) = 1.0;
-  out.r_white = c.sn / ts_s;
-  out.q = c.q;
-  out.params = c.params;
   if (!discretize_dynamics(c, true, out)) {
     out.n_states = 0;
     return ModelStatus::kNumerical;
