@@ -1614,25 +1614,13 @@ struct TransientLr {
 };
 constexpr int kTransientTaus = 24;
 
-// exp(-t / tau) at the block centres, less its mean, and with detrend its least-squares line
-// through the block centres, as test_rrw does to the block means.
+// exp(-t / tau) at the block centres, prepared as test_rrw prepares the block means.
 std::vector<double> decay_regressor(std::size_t nb, double block_s, double tau_s, bool detrend) {
   std::vector<double> u(nb);
-  const double n = static_cast<double>(nb);
-  double su = 0.0;
-  double stu = 0.0;
-  double stt = 0.0;
   for (std::size_t k = 0; k < nb; ++k) {
-    const double t = static_cast<double>(k) - 0.5 * (n - 1.0);
     u[k] = std::exp(-(static_cast<double>(k) + 0.5) * block_s / tau_s);
-    su += u[k];
-    stu += t * u[k];
-    stt += t * t;
   }
-  const double slope = detrend && stt > 0.0 ? stu / stt : 0.0;
-  for (std::size_t k = 0; k < nb; ++k) {
-    u[k] -= su / n + slope * (static_cast<double>(k) - 0.5 * (n - 1.0));
-  }
+  remove_mean_and_line(u, detrend);
   return u;
 }
 

@@ -436,6 +436,23 @@ LikelihoodFit fit_block_model(const std::vector<double>& means, double block_s,
   return out;
 }
 
+void remove_mean_and_line(std::vector<double>& v, bool detrend) {
+  const double nb = static_cast<double>(v.size());
+  double sy = 0.0;
+  double sty = 0.0;
+  double stt = 0.0;
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const double t = static_cast<double>(k) - 0.5 * (nb - 1.0);
+    sy += v[k];
+    sty += t * v[k];
+    stt += t * t;
+  }
+  for (std::size_t k = 0; k < v.size(); ++k) {
+    const double t = static_cast<double>(k) - 0.5 * (nb - 1.0);
+    v[k] -= sy / nb + (detrend && stt > 0.0 ? sty / stt : 0.0) * t;
+  }
+}
+
 RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const ModelParams& start,
                            double tb_max_s, bool detrend,
                            const std::vector<std::uint64_t>& step_samples,
@@ -447,21 +464,8 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
   const std::size_t per_block = std::max<std::size_t>(1, y.size() / target_blocks);
   std::vector<double> m = block_means(y, per_block);
   const double h = static_cast<double>(per_block) * ts_s;
-  // Remove the mean, and with `detrend` the least-squares line through the block centres.
+  remove_mean_and_line(m, detrend);
   const double nb = static_cast<double>(m.size());
-  double sy = 0.0;
-  double sty = 0.0;
-  double stt = 0.0;
-  for (std::size_t k = 0; k < m.size(); ++k) {
-    const double t = static_cast<double>(k) - 0.5 * (nb - 1.0);
-    sy += m[k];
-    sty += t * m[k];
-    stt += t * t;
-  }
-  for (std::size_t k = 0; k < m.size(); ++k) {
-    const double t = static_cast<double>(k) - 0.5 * (nb - 1.0);
-    m[k] -= sy / nb + (detrend && stt > 0.0 ? sty / stt : 0.0) * t;
-  }
   // A step inside block b mixes two levels there: the level is reset before b and b + 1.
   std::vector<std::size_t> resets;
   for (const std::uint64_t i : step_samples) {

@@ -48,6 +48,10 @@ struct BlockModel {
 /// Means of consecutive blocks of `per_block` samples (a trailing partial block is dropped).
 [[nodiscard]] std::vector<double> block_means(const std::vector<double>& y, std::size_t per_block);
 
+/// Remove v's mean and, with detrend, its least-squares line through the points' centres (as
+/// test_rrw prepares the block means, and a regressor tested against them must be prepared).
+void remove_mean_and_line(std::vector<double>& v, bool detrend);
+
 /// Log-likelihood (without the 2 pi constant) of the block means under m, block length block_s.
 /// w0_var < 0: the walk starts diffuse and the first block is conditioned on (its term left
 /// out); w0_var >= 0: w(0) ~ N(0, w0_var) and every block counts (tests). resets: sorted block
