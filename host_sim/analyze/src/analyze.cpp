@@ -2238,8 +2238,7 @@ class Analysis {
     if (!select_terms()) {
       return false;
     }
-    rrw_by_likelihood();
-    warmup_transient_check();
+    warmup_transient_check(rrw_by_likelihood());
     after_model();
     return true;
   }
@@ -3168,8 +3167,8 @@ class Analysis {
   // alpha / kTransientTaus. A walk or a line the model does not hold bends the record's slow
   // part too: the decay must explain the record better than either (by 2, its tau being a
   // parameter more), else it is not reported. Not a term: the model is unchanged, [0, 3 tau] is
-  // unexplained.
-  void warmup_transient_check() {
+  // unexplained. walk_test: rrw_by_likelihood's test of the model as it stands, reused if ok.
+  void warmup_transient_check(const RrwLikelihoodTest& walk_test) {
     for (const auto& u : time_ranges) {
       if (u.t_min_s <= 0.0) {
         return;  // the start of the record is already an unexplained time range
@@ -3217,7 +3216,10 @@ class Analysis {
                         fmt("%.1f", alt_lr + kAicPenalty) + ": reported as unexplained");
   }
 
-  void rrw_by_likelihood() {
+  // Returns the walk's test of the model as it stands on return (ok = false when the model has
+  // changed since, or when nothing was tested): warmup_transient_check reuses it.
+  RrwLikelihoodTest rrw_by_likelihood() {
+    RrwLikelihoodTest now;
     // ---- rate random walk by the record's likelihood (when the ADEV up to T/10 did not need it).
     // The ADEV of a GM peaking near T/10 is the same curve as an RRW's there; the record itself is
     // not: a walk keeps wandering, a GM with tb <= tb_max reverts many times (long_memory.hpp).
@@ -3230,15 +3232,14 @@ class Analysis {
       // never-worse rule on the ADEV does not remove it: one criterion decides).
       const RrwLikelihoodTest lt =
           test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
-      walk_test = lt;
+      now = lt;
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
         const FitResult f = fit_terms(fit_pts, terms & ~kFitRrw, ts, tau_max, tb_max, &cur_p,
                                       white_filter_s);
         if (f.status == FitStatus::kOk) {
           terms &= ~kFitRrw;
           cur_p = with_sines(f.params, cur_p);
-          walk_test = RrwLikelihoodTest{};
-          return;
+          return {};
         }
         time_ranges.pop_back();
         out.notes.pop_back();
@@ -3254,7 +3255,7 @@ class Analysis {
     } else {
       const RrwLikelihoodTest lt =
           test_rrw(fit_record(), ts, cur_p, tb_max, (terms & kFitRamp) != 0U, step_at);
-      walk_test = lt;
+      now = lt;
       // With bias instability in the model its flicker bank is in H0: lt is already the walk's
       // test beside it.
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
@@ -3276,13 +3277,14 @@ class Analysis {
           terms |= kFitRrw;
           walk_lr = lt.lr;
           cur_p = with_sines(f.params, cur_p);
-          walk_test = RrwLikelihoodTest{};
+          now = RrwLikelihoodTest{};
         }
       } else if (lt.ok) {
         out.notes.push_back("no rate_random_walk in the record's likelihood: 2 ln LR = " +
                             fmt("%.1f", lt.lr) + " <= " + fmt("%.2f", lr_thr));
       }
     }
+    return now;
   }
 
   // One story: a term the report does not name leaves the model (a wrong name is worse than
@@ -3752,9 +3754,6 @@ class Analysis {
   double cost_thr = 0.0;  // the ADEV cost drop a term must make
   double lr_thr = 0.0;    // the record likelihood's level (no inflation)
   double walk_lr = -1.0;  // the walk's 2 ln LR on the record (< 0: not tested)
-  // rrw_by_likelihood's test of the model as it then stands (ok = false once the model has
-  // changed since): warmup_transient_check reuses it rather than fitting the same test again.
-  RrwLikelihoodTest walk_test;
   NoiseLevelChange noise_change;             // of the white noise's level (find_noise_level_change)
   std::vector<UnexplainedRun> time_ranges;   // transients found by the step search
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
