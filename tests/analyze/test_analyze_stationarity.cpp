@@ -50,6 +50,25 @@ const ia::UnexplainedRun* time_range(const ia::Report& r) {
   return nullptr;
 }
 
+// A control record (the first-order model) plus a bias decaying from its start:
+// gm_sigmas x the GM's sigma, time constant T / t_over_tau.
+struct WarmUp {
+  std::vector<double> y;
+  double t_rec_s = 0.0;
+  double tau_s = 0.0;
+};
+WarmUp warm_up_record(std::uint64_t seed, double gm_sigmas, double t_over_tau) {
+  const ia::SynthSpec spec = tc::make_case("control", seed);
+  WarmUp w;
+  w.y = ia::synthesize(spec);
+  w.t_rec_s = static_cast<double>(w.y.size()) / spec.fs_hz;
+  w.tau_s = w.t_rec_s / t_over_tau;
+  for (std::size_t k = 0; k < w.y.size(); ++k) {
+    w.y[k] += gm_sigmas * tc::kGmSigma * std::exp(-static_cast<double>(k) / spec.fs_hz / w.tau_s);
+  }
+  return w;
+}
+
 }  // namespace
 
 // From 40 % of the record on, the white noise's std is 2.5 x (independent white noise added).
@@ -90,14 +109,9 @@ TEST(AnalyzeStationarity, AWarmUpTransientIsATimeRangeNotAWalk) {
   int ok = 0;
   for (int i = 0; i < kSeeds; ++i) {
     const std::uint64_t seed = 311 + static_cast<std::uint64_t>(i);
-    const ia::SynthSpec spec = tc::make_case("control", seed);
-    std::vector<double> y = ia::synthesize(spec);
-    const double t_rec = static_cast<double>(y.size()) / spec.fs_hz;
-    const double tau_w = t_rec / 30.0;
-    for (std::size_t k = 0; k < y.size(); ++k) {
-      y[k] += 20.0 * tc::kGmSigma * std::exp(-static_cast<double>(k) / spec.fs_hz / tau_w);
-    }
-    const ia::Report r = analyse(y, "warm_up", seed);
+    const WarmUp w = warm_up_record(seed, 20.0, 30.0);
+    const double t_rec = w.t_rec_s;
+    const ia::Report r = analyse(w.y, "warm_up", seed);
     const ia::UnexplainedRun* u = time_range(r);
     const bool good = u != nullptr && u->t_min_s <= 0.0 && u->t_max_s < 0.5 * t_rec &&
                       !named(r, "rate_random_walk");
@@ -137,14 +151,10 @@ TEST(AnalyzeStationarity, ASmallSlowWarmUpIsATimeRange) {
   constexpr int kSmallSeeds = 3;
   for (int i = 0; i < kSmallSeeds; ++i) {
     const std::uint64_t seed = 351 + static_cast<std::uint64_t>(i);
-    const ia::SynthSpec spec = tc::make_case("control", seed);
-    std::vector<double> y = ia::synthesize(spec);
-    const double t_rec = static_cast<double>(y.size()) / spec.fs_hz;
-    const double tau_w = t_rec / 20.0;
-    for (std::size_t k = 0; k < y.size(); ++k) {
-      y[k] += 5.0 * tc::kGmSigma * std::exp(-static_cast<double>(k) / spec.fs_hz / tau_w);
-    }
-    const ia::Report r = analyse(y, "small_warm_up", seed);
+    const WarmUp w = warm_up_record(seed, 5.0, 20.0);
+    const double t_rec = w.t_rec_s;
+    const double tau_w = w.tau_s;
+    const ia::Report r = analyse(w.y, "small_warm_up", seed);
     const ia::UnexplainedRun* u = time_range(r);
     const bool good = u != nullptr && u->t_min_s <= 0.0 && u->t_max_s > tau_w &&
                       u->t_max_s < 0.5 * t_rec && !named(r, "rate_random_walk");
