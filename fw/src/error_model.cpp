@@ -2,6 +2,7 @@
 // The templates are defined here and instantiated for kMaxStates = 1, 2, 4, 6, 16 (the sizes the
 // project uses); add a line at the bottom for another size.
 #include "imu/error_model.hpp"
+#include "imu/terms.hpp"
 
 #include <cmath>
 
@@ -188,34 +189,10 @@ double avar_flicker_bank(double b, double tau_lo_s, double tau_hi_s, double tau_
 
 double model_avar(const ModelParams& p, double tau_s) {
   double v = 0.0;
-  if (p.n > 0.0) {
-    v += avar_white_filtered(p.n, p.n_filter_s, tau_s);
-  }
-  if (p.q > 0.0) {
-    v += avar_quantization(p.q, tau_s);
-  }
-  for (std::size_t i = 0; i < p.n_gm && i < kMaxGmTerms; ++i) {
-    if (p.gm[i].sb > 0.0 && p.gm[i].tb_s > 0.0) {
-      v += avar_gauss_markov(p.gm[i].sb, p.gm[i].tb_s, tau_s);
+  for (const TermInfo& t : kTermTable) {
+    for (std::size_t i = 0; i < t.max_instances; ++i) {
+      v += term_avar(p, t.kind, i, tau_s);
     }
-  }
-  if (p.k > 0.0) {
-    v += avar_rrw(p.k, tau_s);
-  }
-  if (p.r > 0.0) {
-    v += avar_ramp(p.r, tau_s);
-  }
-  if (p.sin_a > 0.0 && p.sin_f0_hz > 0.0) {
-    v += avar_sinusoid(p.sin_a, p.sin_f0_hz, tau_s);
-  }
-  if (p.sin2_a > 0.0 && p.sin2_f0_hz > 0.0) {
-    v += avar_sinusoid(p.sin2_a, p.sin2_f0_hz, tau_s);
-  }
-  if (p.bi > 0.0) {
-    v += avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau_s);
-  }
-  if (p.osc_sigma > 0.0 && p.osc_beta_per_s > 0.0) {
-    v += avar_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s, tau_s);
   }
   return v;
 }

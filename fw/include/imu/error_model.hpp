@@ -160,7 +160,8 @@ struct ModelParams {
 [[nodiscard]] double avar_flicker_ideal(double b);
 /// AVAR of flicker_bank(b, tau_lo_s, tau_hi_s) at tau_s (0 for a bad range).
 [[nodiscard]] double avar_flicker_bank(double b, double tau_lo_s, double tau_hi_s, double tau_s);
-/// Sum of the terms present in p.
+/// Sum of the terms present in p, over the term registry (imu/terms.hpp): every instance of
+/// every kind, in the registry's order.
 [[nodiscard]] double model_avar(const ModelParams& p, double tau_s);
 
 /// Continuous model with at most kMaxStates states. Terms are appended; a term that does not fit

@@ -1,0 +1,81 @@
+// The term registry: one row per kind of noise term of an IMU channel's error model (its name,
+// parameters with units, states, Allan variance, fit basis), and the accessors that read a
+// term's instances out of a ModelParams. The model's AVAR (model_avar), the fit's term names,
+// the analysis's effects and its report iterate over this table instead of spelling each term.
+//
+// Parameters are in the channel's unit u (m/s^2 or rad/s) and seconds; a term's "main"
+// parameter is the one that says its size (N, Q, sigma, K, R, A, B) and is > 0 when the term is
+// present (the ramp: != 0). A ModelParams holds up to max_instances of a kind: two GMs, two
+// sinusoids, one of every other kind.
+//
+// AVAR of each kind: MODELS.md (error_model.hpp avar_*). No heap; every accessor O(1) but
+// term_avar (that of the AVAR formula, a few exp()).
+#ifndef IMU_TERMS_HPP
+#define IMU_TERMS_HPP
+
+#include <cstddef>
+#include <cstdint>
+
+#include "imu/error_model.hpp"
+
+namespace imu {
+
+enum class TermKind : std::uint8_t {
+  kWhite = 0,       ///< velocity / angle random walk N (through the sensor's output filter)
+  kQuantization,    ///< Q
+  kGaussMarkov,     ///< first-order Gauss-Markov (sigma, Tb)
+  kRateRandomWalk,  ///< K
+  kRamp,            ///< R
+  kSinusoid,        ///< A sin(2 pi f0 t + phase)
+  kBiasInstability, ///< B, realised by a flicker bank of GMs
+  kOscillation,     ///< narrowband (damped, randomly driven) oscillation
+};
+inline constexpr std::size_t kTermKinds = 8;
+inline constexpr std::size_t kMaxTermParams = 3;
+
+struct TermParamInfo {
+  const char* key;     ///< JSON key of the parameter in a report's effect and its interval
+  const char* symbol;  ///< its symbol in text
+  const char* unit;    ///< its unit; u is the channel's unit
+};
+
+struct TermInfo {
+  const char* name;            ///< the term's name in reports and JSON ("rate_random_walk")
+  const char* label;           ///< its name for people (plot legends: "rate random walk")
+  const char* avar;            ///< its Allan variance (MODELS.md), for help and reports
+  TermParamInfo params[kMaxTermParams];
+  std::uint32_t fit_bit;       ///< its basis in the ADEV fit (FitTerm); the first GM's bit
+  TermKind kind;
+  std::uint8_t states;         ///< filter states of one instance (bias instability: per GM)
+  std::uint8_t max_instances;  ///< how many a ModelParams holds
+  bool deterministic;          ///< a signal of the record (a regressor), not a noise process
+  std::uint8_t main_param;     ///< index of the parameter that says its size
+  std::uint8_t n_params;
+};
+
+/// The registry, indexed by TermKind. Every row's kind is its index (test_terms checks it).
+extern const TermInfo kTermTable[kTermKinds];
+
+[[nodiscard]] inline const TermInfo& term_info(TermKind k) {
+  return kTermTable[static_cast<std::size_t>(k)];
+}
+/// The row whose name is `name`; nullptr if none.
+[[nodiscard]] const TermInfo* term_by_name(const char* name);
+/// The row whose fit basis is `bit` (kFitGm2: the Gauss-Markov row); nullptr if none.
+[[nodiscard]] const TermInfo* term_by_fit_bit(std::uint32_t bit);
+
+/// Instances of kind k present in p (main parameter > 0; a GM counts up to p.n_gm).
+[[nodiscard]] std::size_t term_instances(const ModelParams& p, TermKind k);
+/// Parameter `param` (the row's order) of instance `instance` of kind k in p; 0 if absent.
+[[nodiscard]] double term_param(const ModelParams& p, TermKind k, std::size_t instance,
+                                std::size_t param);
+/// AVAR at tau_s of instance `instance` of kind k in p (0 if absent or incomplete, e.g. a
+/// sinusoid without a frequency).
+[[nodiscard]] double term_avar(const ModelParams& p, TermKind k, std::size_t instance,
+                               double tau_s);
+/// Remove the instances of kind k from `instance` on (0: all of them).
+void remove_term(ModelParams& p, TermKind k, std::size_t from_instance = 0);
+
+}  // namespace imu
+
+#endif  // IMU_TERMS_HPP
