@@ -65,29 +65,29 @@ bool present(const ModelParams& p, TermKind k, std::size_t i) {
 // NOLINTBEGIN(cppcoreguidelines-avoid-c-arrays)
 const TermInfo kTermTable[kTermKinds] = {
     // name, label, AVAR, parameters {key, symbol, unit}, fit basis, kind, states, instances,
-    // deterministic, main parameter, parameters
+    // instances in the first-order model, deterministic, main parameter, parameters
     {"white", "white noise", "N^2 / tau", {{"n", "N", "u/sqrt(Hz)"}, {"tf_s", "Tf", "s"}, {}},
-     kFitWhite, TermKind::kWhite, 0, 1, false, 0, 2},
+     kFitWhite, TermKind::kWhite, 0, 1, 1, false, 0, 2},
     {"quantization", "quantization", "3 Q^2 / tau^2", {{"q", "Q", "u s"}, {}, {}},
-     kFitQuantization, TermKind::kQuantization, 0, 1, false, 0, 1},
+     kFitQuantization, TermKind::kQuantization, 0, 1, 0, false, 0, 1},
     {"gauss_markov", "Gauss-Markov",
      "(Sb Tb^2 / tau)(1 - (Tb / 2 tau)(3 - 4 e^(-tau/Tb) + e^(-2 tau/Tb))), Sb = 2 sigma^2 / Tb",
      {{"sigma", "sigma", "u"}, {"tb_s", "Tb", "s"}, {}}, kFitGm1, TermKind::kGaussMarkov, 1,
-     kMaxGmTerms, false, 0, 2},
+     kMaxGmTerms, 1, false, 0, 2},
     {"rate_random_walk", "rate random walk", "K^2 tau / 3", {{"k", "K", "u/sqrt(s)"}, {}, {}},
-     kFitRrw, TermKind::kRateRandomWalk, 1, 1, false, 0, 1},
+     kFitRrw, TermKind::kRateRandomWalk, 1, 1, 0, false, 0, 1},
     {"ramp", "ramp", "R^2 tau^2 / 2", {{"r", "R", "u/s"}, {}, {}}, kFitRamp, TermKind::kRamp, 2,
-     1, true, 0, 1},
+     1, 0, true, 0, 1},
     {"sinusoid", "sinusoid", "A^2 sin^4(pi f0 tau) / (pi f0 tau)^2",
-     {{"freq_hz", "f0", "Hz"}, {"amplitude", "A", "u"}, {}}, 0, TermKind::kSinusoid, 2, 2, true,
+     {{"freq_hz", "f0", "Hz"}, {"amplitude", "A", "u"}, {}}, 0, TermKind::kSinusoid, 2, 2, 0, true,
      1, 2},
     {"bias_instability", "bias instability", "(2 ln 2 / pi) B^2 over [tau_lo, tau_hi]",
      {{"b", "B", "u"}, {"tau_lo_s", "tau_lo", "s"}, {"tau_hi_s", "tau_hi", "s"}}, kFitFlicker,
-     TermKind::kBiasInstability, 1, 1, false, 0, 3},
+     TermKind::kBiasInstability, 1, 1, 0, false, 0, 3},
     {"oscillation", "narrowband oscillation",
      "sigma^2 Re{2 g(x) / x}, x = (beta - i 2 pi f0) tau",
      {{"freq_hz", "f0", "Hz"}, {"sigma", "sigma", "u"}, {"bandwidth_hz", "beta/pi", "Hz"}},
-     kFitOscillation, TermKind::kOscillation, 2, 1, false, 1, 3},
+     kFitOscillation, TermKind::kOscillation, 2, 1, 0, false, 1, 3},
 };
 // NOLINTEND(cppcoreguidelines-avoid-c-arrays)
 

@@ -115,7 +115,7 @@ TEST_F(AnalyzeCli, WritesCsvPlot) {
   const std::string csv = slurp(dir + "/analyze_acc_x_adev.csv");
   EXPECT_EQ(csv.rfind("tau_s,adev_raw,", 0), 0U);
   EXPECT_NE(csv.find(",after_white,"), std::string::npos);
-  EXPECT_NE(csv.find(",before_GM 1,"), std::string::npos);
+  EXPECT_NE(csv.find(",before_gauss_markov_1,"), std::string::npos);
   if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
     GTEST_SKIP() << "gnuplot not installed: the SVG/PNG part is not checked";
   }

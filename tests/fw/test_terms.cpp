@@ -127,6 +127,20 @@ TEST(Terms, StatesPerInstanceAreThoseOfTheBuiltModel) {
   }
 }
 
+// The first-order model of Farrell's example (N, B, Tp): white noise and one GM, as the
+// first_order column says.
+TEST(Terms, TheFirstOrderColumnIsTheExamplesModel) {
+  imu::FirstOrderGm gm{};
+  ASSERT_EQ(imu::first_order_gm_from_asd(3.3e-3, 9e-4, 300.0, 100.0, gm), imu::ModelStatus::kOk);
+  imu::ModelParams p;
+  p.n = gm.n;
+  p.n_gm = 1;
+  p.gm[0] = {gm.sb, gm.tb_s};
+  for (const imu::TermInfo& t : imu::kTermTable) {
+    EXPECT_EQ(imu::term_instances(p, t.kind), t.first_order) << t.name;
+  }
+}
+
 TEST(Terms, ParametersAreReadInTheRowsOrderAndUnits) {
   const imu::ModelParams p = every_term();
   using imu::TermKind;

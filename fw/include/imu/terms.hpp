@@ -48,6 +48,7 @@ struct TermInfo {
   TermKind kind;
   std::uint8_t states;         ///< filter states of one instance (bias instability: per GM)
   std::uint8_t max_instances;  ///< how many a ModelParams holds
+  std::uint8_t first_order;    ///< how many the first-order model (white noise + one GM) holds
   bool deterministic;          ///< a signal of the record (a regressor), not a noise process
   std::uint8_t main_param;     ///< index of the parameter that says its size
   std::uint8_t n_params;

@@ -1514,28 +1514,24 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
   return best;
 }
 
+// The name of one term bit (a FitTerm bit or kSineBit).
 const char* term_name(std::uint32_t t) {
-  switch (t) {
-    case kFitQuantization: return "quantization";
-    case kFitGm2: return "gauss_markov";
-    case kFitRrw: return "rate_random_walk";
-    case kFitRamp: return "ramp";
-    case kFitFlicker: return "bias_instability";
-    case kFitOscillation: return "oscillation";
-    default: return "sinusoid";
+  if (t == kSineBit) {
+    return term_info(TermKind::kSinusoid).name;
   }
+  const TermInfo* row = term_by_fit_bit(t);
+  return row != nullptr ? row->name : "unknown term";
 }
 
 // The after-model is accepted only if its RMS and max error over every tau up to T/10 are no
 // higher than the before-model's; otherwise terms are removed one at a time (backward
-// elimination: at each round the preferred removal), and every removal is said. kSines stands for the sinusoids
-// (removed together).
+// elimination: at each round the preferred removal), and every removal is said. kSineBit stands
+// for the sinusoids (removed together).
 AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const ModelParams& cur,
                          const ModelParams& before_model, std::vector<std::string>& notes) {
-  constexpr std::uint32_t kSines = 1U << 31;
   const std::uint32_t base = kFitWhite | kFitGm1 | (terms & c.required);
-  std::uint32_t set = terms | (cur.sin_a > 0.0 ? kSines : 0U);
-  AfterChoice best = fit_after(c, terms, cur, (set & kSines) != 0U);
+  std::uint32_t set = terms | (cur.sin_a > 0.0 ? kSineBit : 0U);
+  AfterChoice best = fit_after(c, terms, cur, (set & kSineBit) != 0U);
   while (!(best.ok && not_worse(best.e, c.before)) && (set & ~base) != 0U) {
     AfterChoice next;
     std::uint32_t removed = 0;
@@ -1544,7 +1540,7 @@ AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const Model
         continue;
       }
       const std::uint32_t s2 = set & ~bit;
-      const AfterChoice ch = fit_after(c, s2 & ~kSines, cur, (s2 & kSines) != 0U);
+      const AfterChoice ch = fit_after(c, s2 & ~kSineBit, cur, (s2 & kSineBit) != 0U);
       if (!ch.ok) {
         continue;
       }
@@ -1723,27 +1719,20 @@ WalkOnly walk_only_k(const AfterContext& c, const std::vector<double>& y_fit, bo
 // rest take their parameters from the final model.
 void drop_unmodelled_effects(const ModelParams& p, Report& out) {
   std::vector<Effect> kept;
-  int sines = 0;
-  for (auto e : out.effects) {
+  std::size_t sines = 0;
+  for (const Effect& found : out.effects) {
+    Effect e = found;  // with the final model's parameters
     double v = 1.0;
-    if (e.type == "quantization") {
-      v = e.q = p.q;
-    } else if (e.type == "rate_random_walk") {
-      v = e.k = p.k;
-    } else if (e.type == "ramp") {
-      v = e.r = p.r;
-    } else if (e.type == "bias_instability") {
-      v = e.b = p.bi;
-    } else if (e.type == "oscillation") {
-      e.freq_hz = p.osc_f0_hz;
-      e.bandwidth_hz = p.osc_beta_per_s / kPi;
-      v = e.amplitude = p.osc_sigma;
-    } else if (e.type == "sinusoid") {
-      e.freq_hz = sines == 0 ? p.sin_f0_hz : p.sin2_f0_hz;
-      v = e.amplitude = sines == 0 ? p.sin_a : p.sin2_a;
-      ++sines;
-    } else if (e.type == "gauss_markov") {
-      v = 1.0;  // name_extra_gms (below) makes these the model's GMs beyond the first
+    const TermInfo* t = effect_term(e);
+    // name_extra_gms (below) makes the gauss_markov effects the model's GMs beyond the first
+    if (t != nullptr && t->kind != TermKind::kGaussMarkov) {
+      const std::size_t inst = t->kind == TermKind::kSinusoid ? sines++ : 0U;
+      for (std::size_t j = 0; j < t->n_params; ++j) {
+        if (double Effect::*f = effect_field(t->params[j])) {
+          e.*f = term_param(p, t->kind, inst, j);
+        }
+      }
+      v = term_param(p, t->kind, inst, t->main_param);
     }
     if (v > 0.0) {
       kept.push_back(e);
@@ -1795,36 +1784,9 @@ std::vector<UnexplainedRun> unexplained_runs(const AfterContext& c, const ModelP
   return out;
 }
 
-double term_avar(const std::string& type, const ModelParams& p, double tau) {
-  if (type == "quantization") {
-    return avar_quantization(p.q, tau);
-  }
-  if (type == "rate_random_walk") {
-    return avar_rrw(p.k, tau);
-  }
-  if (type == "ramp") {
-    return avar_ramp(p.r, tau);
-  }
-  if (type == "bias_instability") {
-    return avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau);
-  }
-  if (type == "oscillation") {
-    return p.osc_sigma > 0.0 ? avar_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s, tau)
-                             : 0.0;
-  }
-  if (type == "gauss_markov") {
-    double v = 0.0;
-    for (std::size_t i = 1; i < p.n_gm; ++i) {
-      v += avar_gauss_markov(p.gm[i].sb, p.gm[i].tb_s, tau);
-    }
-    return v;
-  }
-  return -1.0;  // not an ADEV term
-}
-
 // The term of effect type `type` dominates the model at tau: at least half its AVAR.
 bool term_dominates(const std::string& type, const ModelParams& p, double tau) {
-  return term_avar(type, p, tau) >= 0.5 * model_avar(p, tau);
+  return effect_term_avar(type, p, tau) >= 0.5 * model_avar(p, tau);
 }
 
 // Before naming an ADEV term: it must dominate the model (>= half its AVAR) somewhere in
@@ -1834,18 +1796,9 @@ bool term_dominates(const std::string& type, const ModelParams& p, double tau) {
 // The model without the term of effect type `type`.
 ModelParams without(const ModelParams& p, const std::string& type) {
   ModelParams q = p;
-  if (type == "quantization") {
-    q.q = 0.0;
-  } else if (type == "rate_random_walk") {
-    q.k = 0.0;
-  } else if (type == "ramp") {
-    q.r = 0.0;
-  } else if (type == "bias_instability") {
-    q.bi = 0.0;
-  } else if (type == "oscillation") {
-    q.osc_sigma = 0.0;
-  } else if (type == "gauss_markov") {
-    q.n_gm = std::min<std::size_t>(q.n_gm, 1);
+  const TermInfo* t = term_by_name(type.c_str());
+  if (t != nullptr) {
+    remove_term(q, t->kind, base_instances(t->kind));
   }
   return q;
 }
@@ -1857,7 +1810,7 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
   std::vector<Effect> kept;
   const double bend_thr = chi2_quantile(1.0 - c.o.alpha, 1.0);
   for (const auto& e : out.effects) {
-    if (term_avar(e.type, p, 1.0) < 0.0) {
+    if (effect_term_avar(e.type, p, 1.0) < 0.0) {
       kept.push_back(e);
       continue;
     }
@@ -1941,18 +1894,8 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
 void drop_degenerate_effects(double ts, double n_d, Report& out) {
   std::vector<Effect> kept;
   for (const auto& e : out.effects) {
-    double v = 0.0;
-    if (e.type == "quantization") {
-      v = e.q;
-    } else if (e.type == "rate_random_walk") {
-      v = e.k;
-    } else if (e.type == "ramp") {
-      v = e.r;
-    } else if (e.type == "bias_instability") {
-      v = e.b;
-    } else if (e.type == "sinusoid" || e.type == "oscillation" || e.type == "gauss_markov") {
-      v = e.amplitude;
-    } else if (e.type == "bias_step") {
+    double v = effect_size(e);
+    if (e.type == "bias_step") {
       v = e.size;
     } else if (e.type == "outliers") {
       v = static_cast<double>(e.count);
@@ -1987,26 +1930,19 @@ std::vector<Effect> without_type(const std::vector<Effect>& effects, const std::
   return without_types(effects, {type});
 }
 
-// The fit terms of p (and its sinusoids, kSineBit) that no effect of `effects` names.
-constexpr std::uint32_t kSineBit = 1U << 31;
-
+// The terms of p beyond the base model (analysis_bit: FitTerm bits, kSineBit) that fewer
+// effects of `effects` name than p holds.
 std::uint32_t unnamed_terms(const ModelParams& p, const std::vector<Effect>& effects) {
-  const auto named = [&effects](const char* type) {
-    std::size_t n = 0;
-    for (const auto& e : effects) {
-      n += e.type == type ? 1U : 0U;
-    }
-    return n;
-  };
   std::uint32_t bits = 0;
-  bits |= p.q > 0.0 && named("quantization") == 0 ? kFitQuantization : 0U;
-  bits |= p.n_gm >= 2 && named("gauss_markov") + 1 < p.n_gm ? kFitGm2 : 0U;
-  bits |= p.k > 0.0 && named("rate_random_walk") == 0 ? kFitRrw : 0U;
-  bits |= std::fabs(p.r) > 0.0 && named("ramp") == 0 ? kFitRamp : 0U;
-  bits |= p.bi > 0.0 && named("bias_instability") == 0 ? kFitFlicker : 0U;
-  bits |= p.osc_sigma > 0.0 && named("oscillation") == 0 ? kFitOscillation : 0U;
-  const std::size_t sines = (p.sin_a > 0.0 ? 1U : 0U) + (p.sin2_a > 0.0 ? 1U : 0U);
-  bits |= named("sinusoid") < sines ? kSineBit : 0U;
+  for (const TermInfo& t : kTermTable) {
+    std::size_t named = 0;
+    for (const auto& e : effects) {
+      named += e.type == t.name ? 1U : 0U;
+    }
+    if (named + base_instances(t.kind) < term_instances(p, t.kind)) {
+      bits |= analysis_bit(t);
+    }
+  }
   return bits;
 }
 
@@ -2014,7 +1950,7 @@ std::string term_list(std::uint32_t bits) {
   std::string s;
   for (std::uint32_t b = 1; b != 0U; b <<= 1U) {
     if ((bits & b) != 0U) {
-      s += (s.empty() ? "" : ", ") + std::string(b == kSineBit ? "sinusoid" : term_name(b));
+      s += (s.empty() ? "" : ", ") + std::string(term_name(b));
     }
   }
   return s;
@@ -2031,19 +1967,18 @@ void remove_unnamed_terms(const AfterContext& c, AfterChoice& choice, Report& ou
     }
     ModelParams sines = choice.p;
     if ((bits & kSineBit) != 0U) {
-      sines.sin_a = sines.sin2_a = sines.sin_f0_hz = sines.sin2_f0_hz = 0.0;
+      remove_term(sines, TermKind::kSinusoid);
     }
     const std::uint32_t keep = choice.terms & ~bits;
     AfterChoice ch = fit_after(c, keep, sines, sines.sin_a > 0.0);
     if (!ch.ok) {
       ch = choice;
       ch.p = sines;
-      ch.p.q = (bits & kFitQuantization) != 0U ? 0.0 : ch.p.q;
-      ch.p.n_gm = (bits & kFitGm2) != 0U ? std::min<std::size_t>(ch.p.n_gm, 1) : ch.p.n_gm;
-      ch.p.k = (bits & kFitRrw) != 0U ? 0.0 : ch.p.k;
-      ch.p.r = (bits & kFitRamp) != 0U ? 0.0 : ch.p.r;
-      ch.p.bi = (bits & kFitFlicker) != 0U ? 0.0 : ch.p.bi;
-      ch.p.osc_sigma = (bits & kFitOscillation) != 0U ? 0.0 : ch.p.osc_sigma;
+      for (const TermInfo& t : kTermTable) {
+        if ((bits & analysis_bit(t)) != 0U) {
+          remove_term(ch.p, t.kind, base_instances(t.kind));
+        }
+      }
       ch.terms = keep;
       fill_errors(points_for_model(c.clean, ch.p), ch.p, c.o, c.ts, c.tau_max, ch.e);
     }
@@ -3579,7 +3514,7 @@ class Analysis {
     const Points pts = in_range(points_for_model(adev_of(c, g, ts, lsb), cur_p), tmax);
     const Residual r = residual(pts, cur_p, o, ts, tmax);
     for (const auto& eff : out.effects) {
-      if (term_avar(eff.type, cur_p, 1.0) < 0.0) {
+      if (effect_term_avar(eff.type, cur_p, 1.0) < 0.0) {
         continue;
       }
       PartMiss m{eff.type, b, e, 0.0, 0.0, 0.0, 0, 0.0};

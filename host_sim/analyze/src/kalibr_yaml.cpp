@@ -9,6 +9,7 @@
 #include "imu/cli/file_out.hpp"
 #include "imu/cli/json.hpp"
 #include "imu/model_fit.hpp"
+#include "imu/terms.hpp"
 
 namespace imu::analyze {
 namespace {
@@ -56,7 +57,7 @@ KalibrAxis project(const Report& r) {
   // A walk the analysis named is Kalibr's term itself: its K (the record's likelihood estimate
   // when a slow GM beside it was not needed) is taken over the projection.
   for (const Effect& e : r.effects) {
-    if (e.type == "rate_random_walk" && e.k > 0.0) {
+    if (e.type == term_info(TermKind::kRateRandomWalk).name && e.k > 0.0) {
       a.k = e.k;
       a.k_named = true;
     }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "imu/analyze/analyze.hpp"
+#include "effects.hpp"
 #include "imu/cli/file_out.hpp"
 #include "imu/cli/json.hpp"
 #include "imu/cli/sensors.hpp"
@@ -94,21 +95,12 @@ std::string intervals_text(const std::vector<ParamInterval>& ci) {
 std::string effect_json(const Effect& e) {
   std::ostringstream s;
   s << "{\"type\": " << quoted(e.type);
-  if (e.type == "quantization") {
-    s << ", \"q\": " << num(e.q);
-  } else if (e.type == "rate_random_walk") {
-    s << ", \"k\": " << num(e.k);
-  } else if (e.type == "ramp") {
-    s << ", \"r\": " << num(e.r);
-  } else if (e.type == "bias_instability") {
-    s << ", \"b\": " << num(e.b);
-  } else if (e.type == "sinusoid") {
-    s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"amplitude\": " << num(e.amplitude);
-  } else if (e.type == "oscillation") {
-    s << ", \"freq_hz\": " << num(e.freq_hz) << ", \"sigma\": " << num(e.amplitude)
-      << ", \"bandwidth_hz\": " << num(e.bandwidth_hz);
-  } else if (e.type == "gauss_markov") {
-    s << ", \"sigma\": " << num(e.amplitude) << ", \"tb_s\": " << num(e.tb_s);
+  if (const TermInfo* t = effect_term(e)) {
+    for (std::size_t j = 0; j < t->n_params; ++j) {
+      if (double Effect::*f = effect_field(t->params[j])) {
+        s << ", " << quoted(t->params[j].key) << ": " << num(e.*f);
+      }
+    }
   } else if (e.type == "bias_step") {
     s << ", \"time_s\": " << num(e.time_s) << ", \"size\": " << num(e.size);
   } else if (e.type == "outliers") {
@@ -250,38 +242,15 @@ struct NamedTerm {
 // The terms of a model beyond white noise and its first GM, each with its main parameter.
 std::vector<NamedTerm> terms_beyond_first_order(const ModelParams& m) {
   std::vector<NamedTerm> t;
-  const auto add = [&t](bool in, const char* type, double v) {
-    if (in) {
-      t.push_back(NamedTerm{type, v});
+  for (const TermInfo& row : kTermTable) {
+    for (std::size_t i = base_instances(row.kind); i < row.max_instances; ++i) {
+      const double v = term_param(m, row.kind, i, row.main_param);
+      if (std::fabs(v) > 0.0) {
+        t.push_back(NamedTerm{row.name, v});
+      }
     }
-  };
-  add(m.q > 0.0, "quantization", m.q);
-  for (std::size_t i = 1; i < m.n_gm; ++i) {
-    add(true, "gauss_markov", std::sqrt(m.gm[i].sb * m.gm[i].tb_s / 2.0));
   }
-  add(m.k > 0.0, "rate_random_walk", m.k);
-  add(std::fabs(m.r) > 0.0, "ramp", m.r);
-  add(m.sin_a > 0.0, "sinusoid", m.sin_a);
-  add(m.sin2_a > 0.0, "sinusoid", m.sin2_a);
-  add(m.bi > 0.0, "bias_instability", m.bi);
-  add(m.osc_sigma > 0.0, "oscillation", m.osc_sigma);
   return t;
-}
-
-double effect_value(const Effect& e) {
-  if (e.type == "quantization") {
-    return e.q;
-  }
-  if (e.type == "rate_random_walk") {
-    return e.k;
-  }
-  if (e.type == "ramp") {
-    return e.r;
-  }
-  if (e.type == "bias_instability") {
-    return e.b;
-  }
-  return e.amplitude;  // sinusoid, oscillation (sigma), gauss_markov (sigma)
 }
 
 }  // namespace
@@ -290,7 +259,7 @@ bool report_consistent(const Report& r, std::string& why) {
   std::vector<NamedTerm> named;
   for (const auto& e : r.effects) {
     if (e.type != "bias_step" && e.type != "outliers") {
-      named.push_back(NamedTerm{e.type, effect_value(e)});
+      named.push_back(NamedTerm{e.type, effect_size(e)});
     }
   }
   for (const auto& t : terms_beyond_first_order(r.model_after)) {
@@ -488,29 +457,37 @@ std::string to_text(const Report& r) {
 
 namespace {
 
-// The ADEV of each term of a model at tau (0 where the term is absent), in the order of
-// term_names: the components the plots draw under the total.
-constexpr const char* kTermNames[] = {"white",       "quantization", "GM 1", "GM 2",
-                                      "rate random walk", "ramp", "sinusoids",
-                                      "bias instability", "oscillation"};
-constexpr std::size_t kTerms = sizeof(kTermNames) / sizeof(kTermNames[0]);
+// The components the plots draw under the total: one per instance of each row of the term
+// registry (a row that holds two, e.g. the GMs, gets two, numbered).
+struct TermColumn {
+  TermKind kind;
+  std::size_t instance;
+  std::string name;   // CSV column (after_NAME, before_NAME)
+  std::string title;  // plot key
+};
 
-void term_adevs(const ModelParams& p, double tau, double (&out)[kTerms]) {
-  out[0] = p.n > 0.0 ? std::sqrt(avar_white_filtered(p.n, p.n_filter_s, tau)) : 0.0;
-  out[1] = p.q > 0.0 ? std::sqrt(avar_quantization(p.q, tau)) : 0.0;
-  out[2] = p.n_gm > 0 ? std::sqrt(avar_gauss_markov(p.gm[0].sb, p.gm[0].tb_s, tau)) : 0.0;
-  out[3] = p.n_gm > 1 ? std::sqrt(avar_gauss_markov(p.gm[1].sb, p.gm[1].tb_s, tau)) : 0.0;
-  out[4] = p.k > 0.0 ? std::sqrt(avar_rrw(p.k, tau)) : 0.0;
-  out[5] = p.r > 0.0 ? std::sqrt(avar_ramp(p.r, tau)) : 0.0;
-  double sines = 0.0;
-  sines += p.sin_a > 0.0 ? avar_sinusoid(p.sin_a, p.sin_f0_hz, tau) : 0.0;
-  sines += p.sin2_a > 0.0 ? avar_sinusoid(p.sin2_a, p.sin2_f0_hz, tau) : 0.0;
-  out[6] = std::sqrt(sines);
-  out[7] = p.bi > 0.0 ? std::sqrt(avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau))
-                      : 0.0;
-  out[8] = p.osc_sigma > 0.0
-               ? std::sqrt(avar_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s, tau))
-               : 0.0;
+const std::vector<TermColumn>& term_columns() {
+  static const std::vector<TermColumn> columns = [] {
+    std::vector<TermColumn> c;
+    for (const TermInfo& t : kTermTable) {
+      for (std::size_t i = 0; i < t.max_instances; ++i) {
+        const std::string n = t.max_instances > 1 ? std::to_string(i + 1) : std::string();
+        c.push_back(TermColumn{t.kind, i, std::string(t.name) + (n.empty() ? "" : "_" + n),
+                               std::string(t.label) + (n.empty() ? "" : " " + n)});
+      }
+    }
+    return c;
+  }();
+  return columns;
+}
+
+// The ADEV of each term column of a model at tau (0 where the term is absent).
+std::vector<double> term_adevs(const ModelParams& p, double tau) {
+  std::vector<double> out;
+  for (const TermColumn& c : term_columns()) {
+    out.push_back(std::sqrt(term_avar(p, c.kind, c.instance, tau)));
+  }
+  return out;
 }
 
 // A path made absolute (so the .gp script works from any directory).
@@ -538,11 +515,11 @@ bool write_plots(const Report& r, const std::string& dir, const std::string& ste
     std::ostringstream f;
     f << "tau_s,adev_raw,ci_lo_raw,ci_hi_raw,adev_clean,ci_lo_clean,ci_hi_clean,model_before,"
          "model_after";
-    for (const char* t : kTermNames) {
-      f << ",after_" << t;
+    for (const TermColumn& t : term_columns()) {
+      f << ",after_" << t.name;
     }
-    for (const char* t : kTermNames) {
-      f << ",before_" << t;
+    for (const TermColumn& t : term_columns()) {
+      f << ",before_" << t.name;
     }
     f << "\n";
     for (std::size_t i = 0; i < r.adev.size(); ++i) {
@@ -552,14 +529,10 @@ bool write_plots(const Report& r, const std::string& dir, const std::string& ste
         << num(c.adev) << ',' << num(c.ci_lo) << ',' << num(c.ci_hi) << ','
         << num(model_adev(r.model_before, p.tau_s)) << ','
         << num(model_adev(r.model_after, p.tau_s));
-      double after[kTerms];
-      double before[kTerms];
-      term_adevs(r.model_after, p.tau_s, after);
-      term_adevs(r.model_before, p.tau_s, before);
-      for (const double v : after) {
+      for (const double v : term_adevs(r.model_after, p.tau_s)) {
         f << ',' << num(v);
       }
-      for (const double v : before) {
+      for (const double v : term_adevs(r.model_before, p.tau_s)) {
         f << ',' << num(v);
       }
       f << '\n';
@@ -594,9 +567,7 @@ bool write_plots(const Report& r, const std::string& dir, const std::string& ste
     // Only the terms the model holds are drawn (and keyed).
     const auto present = [&r](const ModelParams& m, std::size_t t) {
       for (const AdevPoint& p : r.adev) {
-        double v[kTerms];
-        term_adevs(m, p.tau_s, v);
-        if (v[t] > 0.0) {
+        if (term_adevs(m, p.tau_s)[t] > 0.0) {
           return true;
         }
       }
@@ -612,18 +583,18 @@ bool write_plots(const Report& r, const std::string& dir, const std::string& ste
           << "plot " << gq(csv) << " skip 1 using 1:" << data_col << ":" << data_col + 1 << ":"
           << data_col + 2 << " with yerrorbars title 'data (68 % interval)', '' skip 1 using 1:"
           << model_col << " with lines lw 2 title 'model'";
-        for (std::size_t t = 0; t < kTerms; ++t) {
+        for (std::size_t t = 0; t < term_columns().size(); ++t) {
           if (!present(m, t)) {
             continue;
           }
           g << ", '' skip 1 using 1:($" << first_term + static_cast<int>(t) << " > 0 ? $"
             << first_term + static_cast<int>(t) << " : 1/0) with lines dt 2 title "
-            << gq(kTermNames[t]);
+            << gq(term_columns()[t].title);
         }
         g << "\n";
       }
     };
-    figure("before", 2, 8, 10 + static_cast<int>(kTerms), r.model_before,
+    figure("before", 2, 8, 10 + static_cast<int>(term_columns().size()), r.model_before,
            "before (white + GM over [Ts, 100 s])");
     figure("after", 5, 9, 10, r.model_after,
            "after (joint fit with the effects found; data cleaned)");
