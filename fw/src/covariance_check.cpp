@@ -193,6 +193,8 @@ template ModelStatus predict_integral_std<4>(const DiscreteModel<4>&, std::size_
                                              double*, CovPrediction);
 template ModelStatus predict_integral_std<6>(const DiscreteModel<6>&, std::size_t, std::size_t,
                                              double*, CovPrediction);
+template ModelStatus predict_integral_std<8>(const DiscreteModel<8>&, std::size_t, std::size_t,
+                                             double*, CovPrediction);  // a model the node runs
 template ModelStatus predict_integral_std<16>(const DiscreteModel<16>&, std::size_t,
                                               std::size_t, double*, CovPrediction);
 

@@ -3,9 +3,11 @@
 // the loopback bus through the firmware node, compared with imu-sim adev on the same file.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -359,6 +361,48 @@ TEST(SimCli, RunModelSendsTheOutputFilterAndTheOscillation) {
   EXPECT_EQ(echoed("oscillation", "beta_per_s"), 1.57F);
   EXPECT_EQ(simtest::json_number_in(node, "model", "n_states"), 4.0);
   EXPECT_EQ(simtest::json_number_in(node, "node", "model_rejected"), 0.0);
+  // Fig. 1 draws every kind of term the node runs, each from its own column of the model CSV:
+  // the oscillation's ADEV is there (its bump near 1 / (2 f0)), the walk's (K = 0) is not.
+  std::istringstream csv(simtest::read_text(dir.file("o") + "/fig1_adev_model.csv"));
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  std::vector<std::string> header;
+  for (std::istringstream h(line); std::getline(h, line, ',');) {
+    header.push_back(line);
+  }
+  const auto column = [&header](const char* name) {
+    return static_cast<std::size_t>(std::find(header.begin(), header.end(), name) - header.begin());
+  };
+  const std::size_t osc = column("oscillation");
+  const std::size_t walk = column("rate_random_walk");
+  ASSERT_LT(osc, header.size());
+  ASSERT_LT(walk, header.size());
+  double osc_max = 0.0;
+  double walk_max = 0.0;
+  while (std::getline(csv, line)) {
+    std::vector<double> v;
+    for (std::istringstream row(line); std::getline(row, line, ',');) {
+      v.push_back(std::stod(line));
+    }
+    ASSERT_EQ(v.size(), header.size());
+    osc_max = std::max(osc_max, v[osc]);
+    walk_max = std::max(walk_max, v[walk]);
+  }
+  EXPECT_GT(osc_max, 0.0);
+  EXPECT_EQ(walk_max, 0.0);
+  const std::string gp = simtest::read_text(dir.file("o") + "/fig1_adev.gp");
+  const std::string osc_line = "using 1:($" + std::to_string(osc + 1) + ">0?$" +
+                               std::to_string(osc + 1) + ":1/0)";
+  EXPECT_NE(gp.find(osc_line), std::string::npos) << gp;
+  EXPECT_NE(gp.find("title 'model: narrowband oscillation'"), std::string::npos) << gp;
+  EXPECT_EQ(gp.find("title 'model: rate random walk'"), std::string::npos) << gp;
+  // The text is about the same model: the node's, its oscillation with its parameters.
+  EXPECT_NE(report.find("(the model pushed to the node, as it echoes it"), std::string::npos)
+      << report;
+  EXPECT_NE(report.find("Beyond the first-order model: narrowband oscillation f0 = 6.0000e+00 Hz, "
+                        "sigma = 2.0000e-02 m/s^2"),
+            std::string::npos)
+      << report;
 }
 
 /// A model with more states than the node's filter holds once the oscillation is added (2 GM +

@@ -14,15 +14,19 @@
 #include "imu/model_fit.hpp"
 #include "imu/model_text.hpp"
 #include "imu/noise_sim.hpp"
+#include "imu/terms.hpp"
 
 namespace imu::sim {
 namespace {
 
-constexpr std::size_t kStates = 4;  // white + quantization + GM + RRW need 2 states
+// The fitted model (white + quantization + GM + RRW) needs 2 states, a model the node runs at
+// most node::kNodeProcessStates (8).
+constexpr std::size_t kStates = 8;
 
 struct Curve {
   std::vector<double> tau_s;
-  std::vector<double> white, quant, gm, rrw, total;  // ADEV of each term and of the sum
+  std::vector<double> term[kTermKinds];  // ADEV of each kind of term (its instances together)
+  std::vector<double> total;             // ADEV of the model
 };
 
 Curve model_curve(const ModelParams& p, double ts_s, double tau_max_s) {
@@ -33,14 +37,13 @@ Curve model_curve(const ModelParams& p, double ts_s, double tau_max_s) {
   for (int i = 0; i <= n; ++i) {
     const double tau = std::pow(10.0, lo + (hi - lo) * i / n);
     c.tau_s.push_back(tau);
-    c.white.push_back(std::sqrt(avar_white(p.n, tau)));
-    c.quant.push_back(std::sqrt(avar_quantization(p.q, tau)));
-    double g = 0.0;
-    for (std::size_t k = 0; k < p.n_gm; ++k) {
-      g += avar_gauss_markov(p.gm[k].sb, p.gm[k].tb_s, tau);
+    for (const TermInfo& t : kTermTable) {
+      double v = 0.0;
+      for (std::size_t k = 0; k < t.max_instances; ++k) {
+        v += term_avar(p, t.kind, k, tau);
+      }
+      c.term[static_cast<std::size_t>(t.kind)].push_back(std::sqrt(v));
     }
-    c.gm.push_back(std::sqrt(g));
-    c.rrw.push_back(std::sqrt(avar_rrw(p.k, tau)));
     c.total.push_back(std::sqrt(model_avar(p, tau)));
   }
   return c;
@@ -181,7 +184,10 @@ bool report_model(const ReportInput& in, const ReportOptions& opt, ReportState& 
   fo.edf_cap = 1000.0;  // neighbouring taus are correlated: keep the short taus from deciding alone
   fr = fit(pts.data(), pts.size(), fo);
 
-  if (opt.given_model) {
+  if (in.node_model_pushed) {
+    mp = in.node_model;
+    model_origin = "the model pushed to the node, as it echoes it";
+  } else if (opt.given_model) {
     if (first_order_gm_from_asd(opt.n, opt.b, opt.tp_s, in.fs_hz, gm) != ModelStatus::kOk ||
         opt.k < 0.0) {
       err = "model parameters rejected (N, B, Tp must be > 0, K >= 0)";
@@ -197,18 +203,29 @@ bool report_model(const ReportInput& in, const ReportOptions& opt, ReportState& 
   } else if (fr.status == FitStatus::kOk) {
     mp = fr.params;
     model_origin = "fitted: white + quantization + first-order GM + rate random walk";
-    if (mp.n > 0.0 && mp.n_gm >= 1 && mp.gm[0].sb > 0.0) {
-      const double b = kGmPeakAdevFactor * std::sqrt(mp.gm[0].sb * mp.gm[0].tb_s);
-      have_gm = first_order_gm_from_asd(mp.n, b, kGmPeakTauFactor * mp.gm[0].tb_s, in.fs_hz,
-                                        gm) == ModelStatus::kOk;
-    }
   } else {
     err = "no model: the fit failed (status " +
           std::to_string(static_cast<int>(fr.status)) + ") and no --N/--B/--Tp were given";
     return false;
   }
+  // The example's layout of the first GM (given: already made from N, B, Tp).
+  if (!have_gm && mp.n > 0.0 && mp.n_gm >= 1 && mp.gm[0].sb > 0.0) {
+    const double b = kGmPeakAdevFactor * std::sqrt(mp.gm[0].sb * mp.gm[0].tb_s);
+    have_gm = first_order_gm_from_asd(mp.n, b, kGmPeakTauFactor * mp.gm[0].tb_s, in.fs_hz, gm) ==
+              ModelStatus::kOk;
+  }
+  // The simulation takes point samples: through the sensor's output filter their variance
+  // would be N^2 / 2 Tf, not the node's averaged N^2 / Ts, so the filter is drawn (the model's
+  // AVAR) but not simulated.
+  ModelParams simulated = mp;
+  if (simulated.n_filter_s > 0.0) {
+    appendf(model_origin, "; its output filter (Tf = %.3g s) is in the model's ADEV but not "
+            "simulated (point samples)", simulated.n_filter_s);
+    simulated.n_filter_s = 0.0;
+  }
   ContinuousModel<kStates> cm;
-  if (build_model(mp, cm) != ModelStatus::kOk || discretize(cm, ts_s, dm) != ModelStatus::kOk) {
+  if (build_model(simulated, cm) != ModelStatus::kOk ||
+      discretize(cm, ts_s, dm) != ModelStatus::kOk) {
     err = "the model could not be built or discretised";
     return false;
   }
@@ -293,6 +310,29 @@ bool report_covariance(const ReportInput& in, const ReportOptions& opt, ReportSt
   return true;
 }
 
+// The model's terms beyond white noise and its first GM (the example's layout), one line each
+// with its parameters and units from the term registry.
+std::string beyond_first_order(const ModelParams& mp, const char* unit) {
+  std::string t;
+  for (const TermInfo& row : kTermTable) {
+    for (std::size_t i = row.first_order; i < row.max_instances; ++i) {
+      if (!(std::fabs(term_param(mp, row.kind, i, row.main_param)) > 0.0)) {
+        continue;
+      }
+      appendf(t, "%sBeyond the first-order model: %s", t.empty() ? "\n" : "", row.label);
+      for (std::size_t j = 0; j < row.n_params; ++j) {
+        const TermParamInfo& par = row.params[j];
+        // the registry's "u" is the channel's unit
+        const std::string u = par.unit[0] == 'u' ? unit + std::string(par.unit + 1) : par.unit;
+        appendf(t, "%s %s = %.4e %s", j == 0 ? "" : ",", par.symbol,
+                term_param(mp, row.kind, i, j), u.c_str());
+      }
+      appendf(t, " (AVAR %s).\n", row.avar);
+    }
+  }
+  return t;
+}
+
 // The text report (report.txt) up to the plots' line.
 void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& rs) {
   const double ts_s = rs.ts_s;
@@ -319,14 +359,7 @@ void report_text(const ReportInput& in, const ReportOptions& opt, ReportState& r
   } else {
     t += "(no first-order Gauss-Markov term: the example's layout does not apply)\n";
   }
-  if (mp.q > 0.0) {
-    appendf(t, "\nBeyond the first-order model: quantization Q = %.4e %s s (AVAR 3 Q^2 / tau^2).\n",
-            mp.q, unit);
-  }
-  if (mp.k > 0.0) {
-    appendf(t, "%sBeyond the first-order model: rate random walk K = %.4e %s/sqrt(s) "
-               "(AVAR K^2 tau / 3; state r' = w, PSD K^2).\n", mp.q > 0.0 ? "" : "\n", mp.k, unit);
-  }
+  t += beyond_first_order(mp, unit);
   appendf(t, "\n== Weighted least-squares fit of the ADEV (white + quantization + GM + RRW, tau in [%.4g, %.4g] s,\n   weights 1/var with the EDF capped at %.0f)\n\n",
           fo.tau_min_s, fo.tau_max_s, fo.edf_cap);
   if (fr.status == FitStatus::kOk) {
@@ -428,10 +461,17 @@ bool report_csvs(const ReportInput& in, const ReportOptions& opt, ReportState& r
       return false;
     }
     const Curve mc = model_curve(mp, ts_s, tau_max_s * 2.0);
-    c = "tau_s,white,quantization,gauss_markov,rate_random_walk,total\n";
+    c = "tau_s";
+    for (const TermInfo& t : kTermTable) {
+      c += std::string(",") + t.name;
+    }
+    c += ",total\n";
     for (std::size_t i = 0; i < mc.tau_s.size(); ++i) {
-      appendf(c, "%.10g,%.10g,%.10g,%.10g,%.10g,%.10g\n", mc.tau_s[i], mc.white[i], mc.quant[i],
-              mc.gm[i], mc.rrw[i], mc.total[i]);
+      appendf(c, "%.10g", mc.tau_s[i]);
+      for (const std::vector<double>& v : mc.term) {
+        appendf(c, ",%.10g", v[i]);
+      }
+      appendf(c, ",%.10g\n", mc.total[i]);
     }
     if (!write_file(d + "/fig1_adev_model.csv", c, err)) {
       return false;
@@ -511,26 +551,22 @@ bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& 
             unit, title_chan.c_str());
     // One dashed line per term present in the model (a term absent from the model would be a
     // curve without a single defined point, which gnuplot rejects).
-    struct Term {
-      bool present;
-      int column;
-      const char* color;
-      const char* title;
-    };
-    const Term terms[] = {{mp.n > 0.0, 2, "#2ca02c", "white noise"},
-                          {mp.q > 0.0, 3, "#8c564b", "quantization"},
-                          {mp.n_gm > 0, 4, "#ff7f0e", "Gauss-Markov"},
-                          {mp.k > 0.0, 5, "#9467bd", "rate random walk"}};
-    for (const Term& term : terms) {
-      if (term.present) {
+    // Columns: tau, one per registry row, total.
+    constexpr const char* kColors[kTermKinds] = {"#2ca02c", "#8c564b", "#ff7f0e", "#9467bd",
+                                                 "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"};
+    for (const TermInfo& row : kTermTable) {
+      const std::size_t k = static_cast<std::size_t>(row.kind);
+      if (term_instances(mp, row.kind) > 0) {
         appendf(g1,
-                ", \\\n  'fig1_adev_model.csv' skip 1 using 1:($%d>0?$%d:1/0) with lines dt 2 "
+                ", \\\n  'fig1_adev_model.csv' skip 1 using 1:($%zu>0?$%zu:1/0) with lines dt 2 "
                 "lw 2 lc rgb '%s' title 'model: %s'",
-                term.column, term.column, term.color, term.title);
+                k + 2, k + 2, kColors[k], row.label);
       }
     }
-    g1 += ", \\\n  'fig1_adev_model.csv' skip 1 using 1:6 with lines lw 2 lc rgb 'black' "
-          "title 'model: total'";
+    appendf(g1,
+            ", \\\n  'fig1_adev_model.csv' skip 1 using 1:%zu with lines lw 2 lc rgb 'black' "
+            "title 'model: total'",
+            kTermKinds + 2);
     if (!sim_rows.empty()) {
       g1 += ", \\\n  'fig1_adev_sim.csv' skip 1 using 1:2 with points pt 6 ps 0.8 lc rgb "
             "'#d62728' title 'simulated model'";

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "imu/cli/json.hpp"
+#include "imu/error_model.hpp"
 #include "imu/online_adev.hpp"
 
 namespace imu::sim {
@@ -82,6 +83,11 @@ struct ReportInput {
   std::vector<Timing> timing_s;
   std::vector<std::string> notes;  ///< printed at the end
   std::string node_json;           ///< the run JSON's "node" object (empty: left out)
+  /// The model the node runs for the channel when it is a pushed one (read back from its
+  /// echo): the report's model under test is then this one, so that the text, Fig. 1, the
+  /// simulation and the covariance check are about the filter on the node.
+  bool node_model_pushed = false;
+  ModelParams node_model{};
   std::string node_text;           ///< the node's per-channel monitors, a text table
 };
 

@@ -1496,6 +1496,9 @@ ReportInput report_input(const RunOptions& o, const SensorData& sd, const SendPl
     ri.notes.push_back(model_note);
   }
   ri.node_json = node_json(o, tel, vs);
+  if (tel.have_model_echo[o.chan] && (tel.model_echo[o.chan].flags & hal::kModelPushed) != 0U) {
+    ri.node_model_pushed = node::model_record_valid(tel.model_echo[o.chan], ri.node_model);
+  }
   ri.node_text = node_channels_text(o, vs);
   return ri;
 }
