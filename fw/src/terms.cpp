@@ -127,27 +127,30 @@ double term_param(const ModelParams& p, TermKind k, std::size_t instance, std::s
   return values_of(p, k, instance).v[param];
 }
 
+// The same presence rule as present(), written out per kind: model_avar calls this for every
+// row and instance at every tau of every fit, so it reads the fields directly.
 double term_avar(const ModelParams& p, TermKind k, std::size_t i, double tau_s) {
-  if (!present(p, k, i)) {
-    return 0.0;
-  }
   switch (k) {
-    case TermKind::kWhite: return avar_white_filtered(p.n, p.n_filter_s, tau_s);
-    case TermKind::kQuantization: return avar_quantization(p.q, tau_s);
+    case TermKind::kWhite:
+      return i == 0 && p.n > 0.0 ? avar_white_filtered(p.n, p.n_filter_s, tau_s) : 0.0;
+    case TermKind::kQuantization: return i == 0 && p.q > 0.0 ? avar_quantization(p.q, tau_s) : 0.0;
     case TermKind::kGaussMarkov:
-      return p.gm[i].sb > 0.0 && p.gm[i].tb_s > 0.0
+      return i < p.n_gm && i < kMaxGmTerms && p.gm[i].sb > 0.0 && p.gm[i].tb_s > 0.0
                  ? avar_gauss_markov(p.gm[i].sb, p.gm[i].tb_s, tau_s)
                  : 0.0;
-    case TermKind::kRateRandomWalk: return avar_rrw(p.k, tau_s);
-    case TermKind::kRamp: return avar_ramp(p.r, tau_s);
+    case TermKind::kRateRandomWalk: return i == 0 && p.k > 0.0 ? avar_rrw(p.k, tau_s) : 0.0;
+    case TermKind::kRamp: return i == 0 && std::fabs(p.r) > 0.0 ? avar_ramp(p.r, tau_s) : 0.0;
     case TermKind::kSinusoid: {
+      const double a = i == 0 ? p.sin_a : p.sin2_a;
       const double f0 = i == 0 ? p.sin_f0_hz : p.sin2_f0_hz;
-      return f0 > 0.0 ? avar_sinusoid(i == 0 ? p.sin_a : p.sin2_a, f0, tau_s) : 0.0;
+      return i < 2 && a > 0.0 && f0 > 0.0 ? avar_sinusoid(a, f0, tau_s) : 0.0;
     }
     case TermKind::kBiasInstability:
-      return avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau_s);
+      return i == 0 && p.bi > 0.0
+                 ? avar_flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, tau_s)
+                 : 0.0;
     case TermKind::kOscillation:
-      return p.osc_beta_per_s > 0.0
+      return i == 0 && p.osc_sigma > 0.0 && p.osc_beta_per_s > 0.0
                  ? avar_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s, tau_s)
                  : 0.0;
   }
