@@ -26,7 +26,7 @@ dump() {
   done
 }
 result() {
-  echo "VMTEST $1 $2 $3"
+  echo "VMTEST $1 $2 $3 (uptime $(cut -d' ' -f1 /proc/uptime) s)"
   case $2 in
     PASS) pass=$((pass + 1)) ;;
     SKIP) skip=$((skip + 1)) ;;

@@ -7,7 +7,8 @@
 #   IMU_VM_CACHE    cache for kernel and modules (default /var/cache/imu-vm, see vm-prepare.sh)
 #   IMU_SHARED_DIR  shared data folder; an excerpt of its first data/*.mat goes to /data
 #   IMU_VM_MAT_SAMPLES  samples of that excerpt (default 50000; "all": the whole file)
-#   IMU_VM_TIMEOUT  seconds before the guest is killed (default 600)
+#   IMU_VM_TIMEOUT  seconds before the guest is killed (default 1200: the checks take 6 to 11
+#                   minutes under TCG, depending on the host CPU and its load)
 #   IMU_VM_TESTS    run only these guest checks (space-separated names, see guest-init.sh)
 # Exit 0 when the guest printed its marker with fail=0, 77 (skip) when a prerequisite is
 # missing, 1 otherwise. Prints "VM-TEST PASS|FAIL ..." with the total time.
@@ -93,7 +94,7 @@ t_initrd=$(ms)
 log="$work/vm-console.log"
 echo "vm-run: kernel $ABI, initramfs $(du -h "$initrd" | cut -f1), booting (TCG)..."
 rc=0
-timeout "${IMU_VM_TIMEOUT:-600}" qemu-system-x86_64 -accel tcg -cpu max -m 512 -nographic \
+timeout "${IMU_VM_TIMEOUT:-1200}" qemu-system-x86_64 -accel tcg -cpu max -m 512 -nographic \
   -no-reboot -nic none -kernel "$KROOT/boot/vmlinuz-$ABI" -initrd "$initrd" \
   -append "console=ttyS0 panic=-1 quiet${IMU_VM_TESTS:+ imu_tests=${IMU_VM_TESTS// /,}}" \
   </dev/null >"$log" 2>&1 || rc=$?
