@@ -520,7 +520,8 @@ bool TimeGrid::place(double t_s, std::uint64_t row, const std::string& column,
     return false;
   }
   if (k >= 2.0) {
-    const auto whole = static_cast<std::uint64_t>(k);
+    // (a step of more periods than 2^62 is a gap like any other: one run key for all of them)
+    const auto whole = static_cast<std::uint64_t>(std::min(k, 4.6e18));
     run_ = whole == run_k_ ? run_ + 1 : 1;
     run_k_ = whole;
     if (run_ >= kRateRunSteps) {
