@@ -566,8 +566,9 @@ bool write_plots(const Report& r, const std::string& dir, const std::string& ste
       << "set label 1 'fitted range' at " << num(tau_fit_lo) << ", graph 0.97 offset 1,0\n";
     // Only the terms the model holds are drawn (and keyed).
     const auto present = [&r](const ModelParams& m, std::size_t t) {
+      const TermColumn& c = term_columns()[t];
       for (const AdevPoint& p : r.adev) {
-        if (term_adevs(m, p.tau_s)[t] > 0.0) {
+        if (term_avar(m, c.kind, c.instance, p.tau_s) > 0.0) {
           return true;
         }
       }
