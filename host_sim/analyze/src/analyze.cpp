@@ -2537,6 +2537,50 @@ class Analysis {
     }
   }
 
+  // The alternatives to a significant level shift with one parameter each: a walk (K) and bias
+  // instability (B, started from the data's ADEV at T/100 taken as its floor); the step has one
+  // parameter more (its time) and must beat them by AIC's penalty of 2 per parameter. When the
+  // walk explains the record better, the step is still taken if it is significant beside the
+  // walk (the profile again, H0 the walk's model: a walk does not make one increment that
+  // stands out at the level over all positions) at the same place, within kSameStepFraction of
+  // the record (elsewhere it is another event, e.g. a transient the walk's model leaves at the
+  // start); the walk is then tested beside the step.
+  // sl: the step taken (its time and size beside the walk in that case); lr_alt: what it beat.
+  static constexpr double kSameStepFraction = 0.05;
+  bool step_beats_alternatives(const RrwLikelihoodTest& lt, const ModelParams& b0, double thr,
+                               std::size_t margin, StepLikelihood& sl, double& lr_alt) {
+    const double lr_bi = bias_instability_lr(y, ts, b0, tb_max, step_at, adev_y, lt);
+    constexpr double kAicPenalty = 2.0;
+    lr_alt = std::max(lt.lr, lr_bi) + kAicPenalty;
+    if (sl.lr > lr_alt) {
+      return true;
+    }
+    const std::string at = "a level shift at t = " +
+                           fmt("%.1f", static_cast<double>(sl.sample) * ts) +
+                           " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but ";
+    if (lt.lr >= lr_bi && lt.h1.ok) {
+      RrwLikelihoodTest beside = lt;
+      beside.h0 = lt.h1;
+      const StepLikelihood sw = profile_step(beside, margin);
+      const double moved = std::fabs(static_cast<double>(sw.sample) - static_cast<double>(sl.sample));
+      if (sw.ok && std::isfinite(sw.size) && sw.lr > thr &&
+          moved <= kSameStepFraction * static_cast<double>(y.size())) {
+        out.notes.push_back(at + "a walk explains the record better (" + fmt("%.1f", lt.lr) +
+                            "); beside the walk it is still significant (2 ln LR = " +
+                            fmt("%.1f", sw.lr) + " > " + fmt("%.1f", thr) + " at t = " +
+                            fmt("%.1f", static_cast<double>(sw.sample) * ts) + " s)");
+        sl = sw;
+        lr_alt = 0.0;
+        return true;
+      }
+    }
+    out.notes.push_back(at + (lt.lr >= lr_bi ? "a walk" : "bias instability") +
+                        " explains the record nearly as well (" +
+                        fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 2 for the step's time):"
+                        " not named a step");
+    return false;
+  }
+
   void find_steps_by_likelihood() {
     // ---- bias steps by the record's likelihood: a level shift at the best block boundary
     // (profile over the boundaries) against H0 (white + GMs, tb <= tb_max), taken when it is
@@ -2549,7 +2593,7 @@ class Analysis {
       }
       const RrwLikelihoodTest lt = test_rrw(y, ts, b0.params, tb_max, false, step_at, kAuxBlocks);
       const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
-      const StepLikelihood sl = profile_step(lt, margin);
+      StepLikelihood sl = profile_step(lt, margin);
       if (!sl.ok || sl.positions == 0) {
         break;
       }
@@ -2577,21 +2621,8 @@ class Analysis {
       if (sl.lr <= thr) {
         break;
       }
-      // The alternatives with one parameter each: a walk (K) and bias instability (B, started from
-      // the data's ADEV at T/100 taken as its floor); the step must explain the record better.
-      const double lr_bi = bias_instability_lr(y, ts, b0.params, tb_max, step_at, adev_y, lt);
-      // The step has one parameter more than K or B (its time): it must beat them by AIC's
-      // penalty of 2 per parameter.
-      constexpr double kAicPenalty = 2.0;
-      const double lr_alt = std::max(lt.lr, lr_bi) + kAicPenalty;
-      if (sl.lr <= lr_alt) {
-        out.notes.push_back("a level shift at t = " +
-                            fmt("%.1f", static_cast<double>(sl.sample) * ts) +
-                            " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but " +
-                            (lt.lr >= lr_bi ? "a walk" : "bias instability") +
-                            " explains the record nearly as well (" +
-                            fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 2 for the step's time):"
-                            " not named a step");
+      double lr_alt = 0.0;
+      if (!step_beats_alternatives(lt, b0.params, thr, margin, sl, lr_alt)) {
         break;
       }
       step_at.push_back(sl.sample);
@@ -2605,8 +2636,10 @@ class Analysis {
       out.notes.push_back("bias step at t = " + fmt("%.1f", e.time_s) +
                           " s from the record's profile likelihood (2 ln LR = " +
                           fmt("%.1f", sl.lr) + " > " + fmt("%.1f", thr) + " over " +
-                          fmt("%.0f", eff_positions) + " independent positions, and > a walk's or bias "
-                          "instability's " + fmt("%.1f", lr_alt) + ")");
+                          fmt("%.0f", eff_positions) + " independent positions, and " +
+                          (lr_alt > 0.0 ? "> a walk's or bias instability's " + fmt("%.1f", lr_alt)
+                                        : std::string("beside the walk, above")) +
+                          ")");
       for (std::size_t i = sl.sample; i < y.size(); ++i) {
         y[i] -= e.size;
       }
@@ -2920,6 +2953,22 @@ class Analysis {
     return p;
   }
 
+  // 2 ln LR of a line in the test's block means against its H1 (against_walk) or its H0.
+  [[nodiscard]] static double line_lr(RrwLikelihoodTest t, bool against_walk) {
+    if (!t.ok) {
+      return 0.0;
+    }
+    if (against_walk) {
+      t.h0 = t.h1;
+    }
+    const double nb = static_cast<double>(t.means.size());
+    std::vector<double> u(t.means.size());
+    for (std::size_t k = 0; k < u.size(); ++k) {
+      u[k] = static_cast<double>(k) - 0.5 * (nb - 1.0);
+    }
+    return regressor_lr(t, u);
+  }
+
   // Ramp or rate random walk: over a record that holds few of its time scales a walk looks like
   // a line on the ADEV, and a line like a walk. When both pass the ADEV test each must be
   // needed beside the other by the record's likelihood: the walk on the record with the line
@@ -2937,17 +2986,8 @@ class Analysis {
     }
     const RrwLikelihoodTest detrended = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at);
     const double lr_walk = detrended.ok ? detrended.lr : 0.0;
-    double lr_line = 0.0;
-    RrwLikelihoodTest with_walk = test_rrw(fit_record(), ts, cur_p, tb_max, false, step_at);
-    if (with_walk.ok) {
-      with_walk.h0 = with_walk.h1;  // the line against the model with the walk
-      const double nb = static_cast<double>(with_walk.means.size());
-      std::vector<double> u(with_walk.means.size());
-      for (std::size_t k = 0; k < u.size(); ++k) {
-        u[k] = static_cast<double>(k) - 0.5 * (nb - 1.0);
-      }
-      lr_line = regressor_lr(with_walk, u);
-    }
+    const double lr_line =
+        line_lr(test_rrw(fit_record(), ts, cur_p, tb_max, false, step_at), true);
     const bool need_walk = lr_walk > lr_thr;
     const bool need_line = lr_line > lr_thr;
     const std::string why = "(the record's likelihood: the walk beside the line 2 ln LR = " +
@@ -3125,21 +3165,14 @@ class Analysis {
     if (!(tr.lr > thr)) {
       return;
     }
-    double line_lr = 0.0;
-    if (!ramp) {
-      std::vector<double> line(lt.means.size());
-      for (std::size_t k = 0; k < line.size(); ++k) {
-        line[k] = static_cast<double>(k) - 0.5 * static_cast<double>(line.size() - 1);
-      }
-      line_lr = regressor_lr(lt, line);
-    }
+    const double lr_line = ramp ? 0.0 : line_lr(lt, false);
     constexpr double kAicPenalty = 2.0;
-    const double alt_lr = std::max(walk_lr_here, line_lr);
+    const double alt_lr = std::max(walk_lr_here, lr_line);
     const UnexplainedRun u = transient_range(
         tr, lt.block_s, std::string("the model's own likelihood") + (walk ? " (with its walk)" : ""));
     if (!(tr.lr > alt_lr + kAicPenalty)) {
       out.notes.push_back("not reported: " + u.what + " (> " + fmt("%.2f", thr) + "), but " +
-                          (walk_lr_here >= line_lr ? "a walk" : "a line") +
+                          (walk_lr_here >= lr_line ? "a walk" : "a line") +
                           " the model does not hold explains the record nearly as well (" +
                           fmt("%.1f", alt_lr) + ", + 2 for the decay's tau)");
       return;
@@ -3184,6 +3217,14 @@ class Analysis {
         out.notes.push_back("rate_random_walk in the record's likelihood: 2 ln LR = " +
                             fmt("%.1f", lt.lr) + (lt.lr > lr_thr ? " > " : " <= ") +
                             fmt("%.2f", lr_thr) + (lt.lr > lr_thr ? " (required)" : ""));
+        if (!(lt.lr > lr_thr)) {
+          if (withdraw_walk("the record's likelihood does not need it beside the model's "
+                            "other terms")) {
+            return {};
+          }
+        } else if (walk_is_a_line(lt)) {
+          return {};
+        }
       }
     } else if (walk_ruled_out) {
       out.notes.emplace_back("no rate_random_walk by the record's likelihood: ruled out above");
@@ -3195,6 +3236,8 @@ class Analysis {
       // test beside it.
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
         // reported as unexplained (transient_for_walk)
+      } else if (lt.ok && lt.lr > lr_thr && walk_is_a_line(lt)) {
+        // a line explains the rise as well (walk_is_a_line)
       } else if (lt.ok && lt.lr > lr_thr) {
         const FitResult f =
             fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p, white_filter_s);
@@ -3220,6 +3263,70 @@ class Analysis {
       }
     }
     return now;
+  }
+
+  // The walk's model without it (the ADEV fit refitted): false when that fit fails.
+  bool withdraw_walk(const std::string& why) {
+    const FitResult f =
+        fit_terms(fit_pts, terms & ~kFitRrw, ts, tau_max, tb_max, &cur_p, white_filter_s);
+    if (f.status != FitStatus::kOk) {
+      return false;
+    }
+    terms &= ~kFitRrw;
+    cur_p = with_sines(f.params, cur_p);
+    walk_lr = -1.0;
+    out.notes.push_back("rate_random_walk withdrawn: " + why +
+                        "; what it fitted on the ADEV is left to the residual check");
+    return true;
+  }
+
+  // A walk the record's likelihood needs (lt: the walk against the model without it) must also
+  // be needed beside a line: over a record a few of its time scales long, a deterministic ramp
+  // raises the block means' likelihood of a walk as much as a walk does. Not needed beside the
+  // line: the walk is withdrawn (or not added) and, when the line is needed beside the walk (a
+  // walk's increments have no mean; flicker's long excursions look like a line against a model
+  // without either), the ramp is taken in its place. True when the walk is out of the model.
+  bool walk_is_a_line(const RrwLikelihoodTest& lt) {
+    if ((terms & kFitRamp) != 0U) {
+      return false;  // lt is already the walk beside the line
+    }
+    // Beside the line the walk must pay for its one parameter (AIC: 2 ln LR > 2); a line that
+    // holds the whole rise leaves it near 0. (A walk over a few of its time scales is also
+    // partly a line: the test's level alpha would lose walks the record does hold.)
+    constexpr double kAicOneParameter = 2.0;
+    const RrwLikelihoodTest detr = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at);
+    if (!detr.ok || detr.lr > kAicOneParameter) {
+      return false;
+    }
+    const double lr_line = line_lr(lt, true);
+    const std::string why = "the walk beside a line 2 ln LR = " + fmt("%.1f", detr.lr) +
+                            " <= 2 (AIC's price of its parameter; the line beside the walk " +
+                            fmt("%.1f", lr_line) + ")";
+    if ((terms & kFitRrw) != 0U) {
+      if (!withdraw_walk(why)) {
+        return false;
+      }
+    } else {
+      out.notes.push_back("no rate_random_walk: " + why);
+    }
+    if (!(lr_line > lr_thr)) {
+      return true;
+    }
+    const FitResult f =
+        fit_terms(fit_pts, terms | kFitRamp, ts, tau_max, tb_max, &cur_p, white_filter_s);
+    if (f.status != FitStatus::kOk || !(std::abs(f.params.r) > 0.0)) {
+      return true;
+    }
+    Effect e;
+    e.type = "ramp";
+    e.statistic = lr_line;
+    e.threshold = lr_thr;
+    out.effects.push_back(e);
+    terms |= kFitRamp;
+    cur_p = with_sines(f.params, cur_p);
+    out.notes.push_back("ramp from the record's likelihood, in place of a walk: the line beside "
+                        "the walk 2 ln LR = " + fmt("%.1f", lr_line) + " > " + fmt("%.2f", lr_thr));
+    return true;
   }
 
   // One story: a term the report does not name leaves the model (a wrong name is worse than
@@ -3538,17 +3645,18 @@ class Analysis {
     }
   }
 
-  void check_terms_on_halves() {
+  std::vector<UnexplainedRun> check_terms_on_halves() {
+    std::vector<UnexplainedRun> runs;
     const std::size_t n = counts.size();
     if (n < 2 * kMinPartSamples) {
-      return;
+      return runs;
     }
     std::vector<PartMiss> misses;
     std::size_t tested = 0;
     part_misses(0, n / 2, misses, tested);
     part_misses(n / 2, n, misses, tested);
     if (tested == 0) {
-      return;
+      return runs;
     }
     const double z_thr = two_sided_normal_threshold(o.alpha / static_cast<double>(tested));
     for (const auto& m : misses) {
@@ -3567,14 +3675,56 @@ class Analysis {
                (m.sign > 0 ? "above" : "below") + " the half's ADEV by up to " +
                fmt("%.0f", 100.0 * m.rel) + " % where the term dominates";
       out.unexplained.push_back(u);
+      runs.push_back(u);
       out.notes.push_back("stationarity: " + u.what + " (tau " + fmt("%.3g", m.dom_lo) + "-" +
                           fmt("%.3g", m.dom_hi) + " s, |z| " + fmt("%.1f", m.zmax) + " > " +
                           fmt("%.2f", z_thr) + ", the Bonferroni level over " +
                           std::to_string(tested) + " taus of both halves)");
     }
+    return runs;
   }
 
+  // The model after, its errors and its unexplained remainder. A walk that does not hold on a
+  // half of the record (check_terms_on_halves: the halves' ADEV where the walk dominates miss
+  // the whole record's model beyond their intervals) is not named: a walk is stationary in
+  // its increments, and a rise at the long taus made by one part of the record (a level shift
+  // or a drift there) is what it stands in for. The walk leaves the model, the model after is
+  // chosen again, and the half where the rise fails stays unexplained with its time range.
   void after_model() {
+    const Report start = out;
+    const double white_filter0_s = white_filter_s;
+    const std::vector<UnexplainedRun> parts = settle_after();
+    for (const auto& u : parts) {
+      if (u.what.rfind("rate_random_walk ", 0) != 0 || (terms & kFitRrw) == 0U) {
+        continue;
+      }
+      Report settled = std::move(out);
+      const double white_filter_settled_s = white_filter_s;
+      out = start;
+      white_filter_s = white_filter0_s;
+      const double k = cur_p.k;
+      if (!withdraw_walk("it does not hold on the " +
+                         std::string(u.t_min_s <= 0.0 ? "first" : "second") +
+                         " half of the record (stationarity, below)")) {
+        out = std::move(settled);
+        white_filter_s = white_filter_settled_s;
+        break;
+      }
+      out.effects.erase(std::remove_if(out.effects.begin(), out.effects.end(),
+                                       [](const Effect& e) { return e.type == "rate_random_walk"; }),
+                        out.effects.end());
+      UnexplainedRun w = u;
+      w.what = "the rise at the long taus (a walk of K = " + fmt("%.3g", k) +
+               " over the whole record) " + u.what.substr(std::string("rate_random_walk ").size());
+      (void)settle_after();
+      out.unexplained.push_back(w);
+      break;
+    }
+    finish_after();
+  }
+
+  // after_model's choice; returns the stationarity check's runs.
+  std::vector<UnexplainedRun> settle_after() {
     // ---- after: never worse than before, every named effect real, the remainder said.
     const AdevSet& clean = adev_y;
     out.adev_clean = clean.by_alpha[2];
@@ -3593,7 +3743,7 @@ class Analysis {
     out.error_after = choice.e;
     out.unexplained = unexplained_runs(ac, cur_p);
     add_time_ranges();
-    check_terms_on_halves();
+    const std::vector<UnexplainedRun> parts = check_terms_on_halves();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
     for (const auto& w : withdrawn) {
       bool covered = false;
@@ -3604,6 +3754,10 @@ class Analysis {
         out.unexplained.push_back(w);
       }
     }
+    return parts;
+  }
+
+  void finish_after() {
     if (!not_worse(out.error_after, out.error_before)) {
       out.notes.push_back("the model after is worse than the model before on the ADEV (RMS " +
                           fmt("%.3f", out.error_after.adev_rms_rel) + " / max " +
