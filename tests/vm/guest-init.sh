@@ -388,18 +388,23 @@ t_imu_model_push() {
   fi
 }
 
-# The whole IMU over the real kernel's vcan0: imu-sim analyze --channel all fits a model to
-# each channel of the recorded excerpt; imu-sim run --model pushes the six to imu-fw (external
-# node) and reads back each channel's monitors (ChannelMonitorRecord, 0x260): the run's JSON
-# must list six channels, each running its pushed model, none refused.
+# The whole IMU over the real kernel's vcan0: imu-sim analyze --channel all's model of each
+# channel of the recorded excerpt (/data/models.json, fitted by vm-run.sh on the host; else
+# analysed here); imu-sim run --model pushes the six to imu-fw (external node) and reads back
+# each channel's monitors (ChannelMonitorRecord, 0x260): the run's JSON must list six channels,
+# each running its pushed model, none refused.
 t_imu_model_push_all() {
   have imu-sim && have imu-fw ||
     { result imu_model_push_all SKIP "imu-sim/imu-fw not built"; return; }
   [ -n "$MAT" ] || { result imu_model_push_all SKIP "no MAT-file in /data"; return; }
-  imu-sim analyze "$MAT" --channel all --json /tmp/all_a.json >/tmp/all_a.txt 2>&1 ||
-    { dump /tmp/all_a.txt; result imu_model_push_all FAIL "analyze exit $?"; return; }
+  local models=/data/models.json
+  if [ ! -s "$models" ]; then
+    models=/tmp/all_a.json
+    imu-sim analyze "$MAT" --channel all --json "$models" >/tmp/all_a.txt 2>&1 ||
+      { dump /tmp/all_a.txt; result imu_model_push_all FAIL "analyze exit $?"; return; }
+  fi
   start_fw /tmp/fw_all.txt
-  sim_run "$MAT" /tmp/run_all --rate max --channel acc_x --model /tmp/all_a.json
+  sim_run "$MAT" /tmp/run_all --rate max --channel acc_x --model "$models"
   local sim_rc=$?
   wait $FW_PID
   local fw_rc=$?
