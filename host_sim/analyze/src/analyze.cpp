@@ -3237,7 +3237,8 @@ class Analysis {
       if (lt.ok && lt.lr > lr_thr && transient_for_walk(lt)) {
         // reported as unexplained (transient_for_walk)
       } else if (lt.ok && lt.lr > lr_thr && walk_is_a_line(lt)) {
-        // a line explains the rise as well (walk_is_a_line)
+        // A line explains the rise as well; with the ramp taken in its place the test is stale.
+        return (terms & kFitRamp) != 0U ? RrwLikelihoodTest{} : lt;
       } else if (lt.ok && lt.lr > lr_thr) {
         const FitResult f =
             fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p, white_filter_s);
@@ -3743,7 +3744,7 @@ class Analysis {
     out.error_after = choice.e;
     out.unexplained = unexplained_runs(ac, cur_p);
     add_time_ranges();
-    const std::vector<UnexplainedRun> parts = check_terms_on_halves();
+    std::vector<UnexplainedRun> parts = check_terms_on_halves();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
     for (const auto& w : withdrawn) {
       bool covered = false;
