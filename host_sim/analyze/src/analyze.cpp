@@ -3706,7 +3706,7 @@ class Analysis {
       const double k = cur_p.k;
       if (!withdraw_walk("it does not hold on the " +
                          std::string(u.t_min_s <= 0.0 ? "first" : "second") +
-                         " half of the record (stationarity, below)")) {
+                         " half of the record (reported as unexplained over that half)")) {
         out = std::move(settled);
         white_filter_s = white_filter_settled_s;
         break;
