@@ -13,6 +13,7 @@
 
 #include "imu/analyze/analyze.hpp"
 #include "imu/analyze/synth.hpp"
+#include "analyse_checked.hpp"
 #include "synth_cases.hpp"
 
 namespace {
@@ -23,22 +24,10 @@ namespace tc = imu::analyze::test;
 constexpr int kSeeds = 10;
 
 ia::Report analyse(const std::vector<double>& y, const std::string& name, std::uint64_t seed) {
-  ia::Report r;
-  std::string err;
-  EXPECT_TRUE(ia::analyze(y, name, ia::Options{}, r, err)) << err;
-  std::string why;
-  EXPECT_TRUE(ia::report_consistent(r, why)) << name << " seed " << seed << ": " << why;
-  return r;
+  return tc::analyse_checked(y, name, seed);
 }
 
-bool named(const ia::Report& r, const std::string& type) {
-  for (const auto& e : r.effects) {
-    if (e.type == type) {
-      return true;
-    }
-  }
-  return false;
-}
+using tc::named;
 
 // The first unexplained entry with a time range, or nullptr.
 const ia::UnexplainedRun* time_range(const ia::Report& r) {

@@ -12,6 +12,7 @@
 
 #include "imu/analyze/analyze.hpp"
 #include "imu/analyze/synth.hpp"
+#include "analyse_checked.hpp"
 #include "synth_cases.hpp"
 
 namespace {
@@ -22,22 +23,10 @@ namespace tc = imu::analyze::test;
 constexpr int kSeeds = 8;
 
 ia::Report analyse(const ia::SynthSpec& spec, const std::string& name) {
-  ia::Report r;
-  std::string err;
-  EXPECT_TRUE(ia::analyze(ia::synthesize(spec), name, ia::Options{}, r, err)) << err;
-  std::string why;
-  EXPECT_TRUE(ia::report_consistent(r, why)) << name << " seed " << spec.seed << ": " << why;
-  return r;
+  return tc::analyse_checked(ia::synthesize(spec), name, spec.seed);
 }
 
-bool named(const ia::Report& r, const std::string& type) {
-  for (const auto& e : r.effects) {
-    if (e.type == type) {
-      return true;
-    }
-  }
-  return false;
-}
+using tc::named;
 
 void show(const ia::Report& r, const char* what, std::uint64_t seed) {
   std::printf("%s seed %llu:\n%s", what, static_cast<unsigned long long>(seed),
