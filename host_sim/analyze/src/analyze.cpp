@@ -3646,8 +3646,13 @@ class Analysis {
     }
   }
 
-  std::vector<UnexplainedRun> check_terms_on_halves() {
-    std::vector<UnexplainedRun> runs;
+  // A term that does not hold on a part: its name and the unexplained run said for it.
+  struct TermPart {
+    std::string type;
+    UnexplainedRun run;
+  };
+  std::vector<TermPart> check_terms_on_halves() {
+    std::vector<TermPart> runs;
     const std::size_t n = counts.size();
     if (n < 2 * kMinPartSamples) {
       return runs;
@@ -3676,7 +3681,7 @@ class Analysis {
                (m.sign > 0 ? "above" : "below") + " the half's ADEV by up to " +
                fmt("%.0f", 100.0 * m.rel) + " % where the term dominates";
       out.unexplained.push_back(u);
-      runs.push_back(u);
+      runs.push_back(TermPart{m.type, u});
       out.notes.push_back("stationarity: " + u.what + " (tau " + fmt("%.3g", m.dom_lo) + "-" +
                           fmt("%.3g", m.dom_hi) + " s, |z| " + fmt("%.1f", m.zmax) + " > " +
                           fmt("%.2f", z_thr) + ", the Bonferroni level over " +
@@ -3694,9 +3699,9 @@ class Analysis {
   void after_model() {
     const Report start = out;
     const double white_filter0_s = white_filter_s;
-    const std::vector<UnexplainedRun> parts = settle_after();
-    for (const auto& u : parts) {
-      if (u.what.rfind("rate_random_walk ", 0) != 0 || (terms & kFitRrw) == 0U) {
+    const std::vector<TermPart> parts = settle_after();
+    for (const auto& [type, u] : parts) {
+      if (type != "rate_random_walk" || (terms & kFitRrw) == 0U) {
         continue;
       }
       Report settled = std::move(out);
@@ -3716,7 +3721,7 @@ class Analysis {
                         out.effects.end());
       UnexplainedRun w = u;
       w.what = "the rise at the long taus (a walk of K = " + fmt("%.3g", k) +
-               " over the whole record) " + u.what.substr(std::string("rate_random_walk ").size());
+               " over the whole record) " + u.what.substr(type.size() + 1);
       (void)settle_after();
       out.unexplained.push_back(w);
       break;
@@ -3725,7 +3730,7 @@ class Analysis {
   }
 
   // after_model's choice; returns the stationarity check's runs.
-  std::vector<UnexplainedRun> settle_after() {
+  std::vector<TermPart> settle_after() {
     // ---- after: never worse than before, every named effect real, the remainder said.
     const AdevSet& clean = adev_y;
     out.adev_clean = clean.by_alpha[2];
@@ -3744,7 +3749,7 @@ class Analysis {
     out.error_after = choice.e;
     out.unexplained = unexplained_runs(ac, cur_p);
     add_time_ranges();
-    std::vector<UnexplainedRun> parts = check_terms_on_halves();
+    std::vector<TermPart> parts = check_terms_on_halves();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
     for (const auto& w : withdrawn) {
       bool covered = false;
