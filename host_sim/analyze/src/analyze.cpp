@@ -2163,12 +2163,12 @@ class Analysis {
       return false;
     }
     noise_change = find_noise_level_change(y0, gap, o.alpha);
-    find_outliers();
-    find_steps_by_windows();
     // Over [Ts, T/10] the GM must show its ADEV peak (1.89 Tb) and one octave of its falling side
     // inside the range: a GM whose peak lies at or beyond the end is, on these taus, the same curve
     // as a rate random walk (AVAR ~ Sb tau / 3), and the one-parameter RRW is the name for it.
     tb_max = tau_max / (2.0 * kGmPeakTauFactor);
+    find_outliers();
+    find_steps_by_windows();
     find_steps_by_likelihood();
     if (!select_terms()) {
       return false;
@@ -2520,6 +2520,9 @@ class Analysis {
         near_previous_step(best, best_window);  // either way the search ends here
         break;
       }
+      if (!window_step_beats_decay(best.sample_index)) {
+        break;
+      }
       const double size = best.size_counts * lsb;  // the difference of its two window means
       step_at.push_back(best.sample_index);
       Effect e;
@@ -2581,6 +2584,85 @@ class Analysis {
     return false;
   }
 
+  // A level that decays from the start of the record (a warm-up transient, A e^(-t / tau): two
+  // parameters, as the step has its size and time) raises the step profile too, at a boundary
+  // inside the decay. When the decay explains the record at least as well as the step (and is
+  // significant over its tau grid, and the shift lies within three of its time constants), the
+  // step is taken only if it is still significant beside the
+  // decay (the block means less the fitted decay, H0 unchanged) at the same place, within
+  // kSameStepFraction of the record; sl is then the step beside the decay. Otherwise no step is
+  // named here and the decay is left to the transient check (an unexplained time range).
+  bool step_beats_decay(const RrwLikelihoodTest& lt, double thr, std::size_t margin,
+                        StepLikelihood& sl) {
+    const TransientLr tr = warmup_transient_lr(lt, false);
+    const double tr_thr = chi2_quantile(1.0 - o.alpha / kTransientTaus, 1.0);
+    // Beyond three time constants the decay has fallen to 5 %: it does not make a shift there.
+    // A decay that a walk or a line explains nearly as well (by AIC's 2 for its tau, as in
+    // warmup_transient_check) is slow wander, not a transient: the step's rivals above decide.
+    const double at_s = static_cast<double>(sl.sample) * ts;
+    constexpr double kAicPenalty = 2.0;
+    if (!(tr.lr > tr_thr) || tr.lr < sl.lr || at_s > 3.0 * tr.tau_s ||
+        !(tr.lr > std::max(lt.lr, line_lr(lt, false)) + kAicPenalty)) {
+      return true;
+    }
+    RrwLikelihoodTest beside = lt;
+    const std::vector<double> u = decay_regressor(lt.means.size(), lt.block_s, tr.tau_s, false);
+    for (std::size_t k = 0; k < u.size(); ++k) {
+      beside.means[k] -= tr.size * u[k];
+    }
+    const StepLikelihood sd = profile_step(beside, margin);
+    const double moved = std::fabs(static_cast<double>(sd.sample) - static_cast<double>(sl.sample));
+    const std::string at = "a level shift at t = " + fmt("%.1f", at_s) +
+                           " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) +
+                           ") but a level decaying from the start of the record (time constant " +
+                           fmt("%.3g", tr.tau_s) + " s) explains it as well (" +
+                           fmt("%.1f", tr.lr) + ")";
+    if (sd.ok && std::isfinite(sd.size) && sd.lr > thr &&
+        moved <= kSameStepFraction * static_cast<double>(y.size())) {
+      out.notes.push_back(at + "; beside the decay it is still significant (2 ln LR = " +
+                          fmt("%.1f", sd.lr) + " > " + fmt("%.1f", thr) + " at t = " +
+                          fmt("%.1f", static_cast<double>(sd.sample) * ts) + " s)");
+      sl = sd;
+      return true;
+    }
+    out.notes.push_back(at + ": not named a step");
+    return false;
+  }
+
+  // The step profile's positions counted four per slowest correlation time of H0 (see
+  // find_steps_by_likelihood).
+  [[nodiscard]] static double independent_positions(const RrwLikelihoodTest& lt,
+                                                    std::size_t positions) {
+    double tb_slow = lt.block_s;
+    for (std::size_t g = 0; g < lt.h0.model.n_gm; ++g) {
+      tb_slow = std::max(tb_slow, lt.h0.model.gm[g].tb_s);
+    }
+    return std::max(1.0, 4.0 * static_cast<double>(positions) * lt.block_s / tb_slow);
+  }
+
+  // A step the two windows found, against a decay from the start of the record
+  // (step_beats_decay), on the record's likelihood at its block boundary; H0 as in
+  // find_steps_by_likelihood. True when the step stands (or cannot be tested).
+  bool window_step_beats_decay(std::uint64_t sample) {
+    const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
+    if (b0.status != FitStatus::kOk) {
+      return true;
+    }
+    const RrwLikelihoodTest lt = test_rrw(y, ts, b0.params, tb_max, false, step_at, kAuxBlocks);
+    if (!lt.ok || lt.per_block == 0) {
+      return true;
+    }
+    const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
+    // (at its own boundary, also one inside the profile's margin: the windows place it there)
+    StepLikelihood sl = profile_step(lt, 1, static_cast<std::size_t>(sample / lt.per_block));
+    if (!sl.ok || lt.means.size() <= 2 * margin) {
+      return true;
+    }
+    const double eff_positions = independent_positions(lt, lt.means.size() - 2 * margin);
+    return step_beats_decay(lt, chi2_quantile(1.0 - o.cost_alpha / eff_positions, 1.0), margin,
+                            sl);
+  }
+
   void find_steps_by_likelihood() {
     // ---- bias steps by the record's likelihood: a level shift at the best block boundary
     // (profile over the boundaries) against H0 (white + GMs, tb <= tb_max), taken when it is
@@ -2611,18 +2693,14 @@ class Analysis {
       // correlation time of H0: the statistics at boundaries closer than that are nearly the
       // same (counting every block boundary made the test blind to a 3-sigma step; one per
       // correlation time gave false steps on 2 of 20 controls); level: the ADEV tests' 1 %.
-      double tb_slow = lt.block_s;
-      for (std::size_t g = 0; g < lt.h0.model.n_gm; ++g) {
-        tb_slow = std::max(tb_slow, lt.h0.model.gm[g].tb_s);
-      }
-      const double eff_positions =
-          std::max(1.0, 4.0 * static_cast<double>(sl.positions) * lt.block_s / tb_slow);
+      const double eff_positions = independent_positions(lt, sl.positions);
       const double thr = chi2_quantile(1.0 - o.cost_alpha / eff_positions, 1.0);
       if (sl.lr <= thr) {
         break;
       }
       double lr_alt = 0.0;
-      if (!step_beats_alternatives(lt, b0.params, thr, margin, sl, lr_alt)) {
+      if (!step_beats_alternatives(lt, b0.params, thr, margin, sl, lr_alt) ||
+          !step_beats_decay(lt, thr, margin, sl)) {
         break;
       }
       step_at.push_back(sl.sample);
@@ -3168,8 +3246,9 @@ class Analysis {
     const double lr_line = ramp ? 0.0 : line_lr(lt, false);
     constexpr double kAicPenalty = 2.0;
     const double alt_lr = std::max(walk_lr_here, lr_line);
-    const UnexplainedRun u = transient_range(
-        tr, lt.block_s, std::string("the model's own likelihood") + (walk ? " (with its walk)" : ""));
+    const UnexplainedRun u = transient_range(tr, lt.block_s,
+                                             walk ? "the model's likelihood with a rate random walk"
+                                                  : "the model's own likelihood");
     if (!(tr.lr > alt_lr + kAicPenalty)) {
       out.notes.push_back("not reported: " + u.what + " (> " + fmt("%.2f", thr) + "), but " +
                           (walk_lr_here >= lr_line ? "a walk" : "a line") +
