@@ -1803,6 +1803,12 @@ ModelParams without(const ModelParams& p, const std::string& type) {
   return q;
 }
 
+// The term of effect type `type` is one the record's likelihood requires (c.required).
+bool required_by_record(const AfterContext& c, const std::string& type) {
+  const TermInfo* t = term_by_name(type.c_str());
+  return t != nullptr && (analysis_bit(*t) & c.required) != 0U;
+}
+
 void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr,
                 Report& out, std::vector<std::string>& dominates_nowhere) {
   Points pts;
@@ -1862,6 +1868,23 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
       why = "after removing the line the record still bends: quadratic 2 ln LR = " +
             fmt("%.1f", ramp_bend_lr) + " > " + fmt("%.2f", bend_thr) +
             "; the drift is not a straight line";
+    } else if (worst_run >= c.o.min_run && required_by_record(c, e.type)) {
+      // The record's likelihood decided this term (one criterion): it stays named, and where
+      // the model still misses the data the run is unexplained beside it.
+      double zrun = 0.0;  // the run's largest |z|, signed
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const bool in = pts[i].tau_s >= tau_lo && pts[i].tau_s <= tau_hi;
+        zrun = in && std::fabs(z[i]) > std::fabs(zrun) ? z[i] : zrun;
+      }
+      out.notes.push_back(e.type + " named: the record's likelihood requires it (2 ln LR = " +
+                          fmt("%.1f", c.required_lr) + "); where it dominates the model still " +
+                          "misses the data at tau " + fmt("%.3g", tau_lo) + "-" +
+                          fmt("%.3g", tau_hi) + " s, by up to " +
+                          fmt("%.0f", 100.0 * worst_rel) + " %: reported as unexplained");
+      out.unexplained.push_back(
+          UnexplainedRun{tau_lo, tau_hi, std::fabs(zrun), zrun > 0.0 ? 1 : -1, 0.0, 0.0, {}});
+      kept.push_back(e);
+      continue;
     } else if (worst_run >= c.o.min_run && e.type != "gauss_markov") {
       // (A second GM claims no mechanism beyond the base family's own kind, correlated noise of
       // time Tb: where it still misses, the miss is reported as unexplained, the GM kept.)
