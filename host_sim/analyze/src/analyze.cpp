@@ -1809,6 +1809,31 @@ bool required_by_record(const AfterContext& c, const std::string& type) {
   return t != nullptr && (analysis_bit(*t) & c.required) != 0U;
 }
 
+// A residual run over the taus [lo_s, hi_s] where the model misses the data by up to rel.
+struct TauRun {
+  double lo_s;
+  double hi_s;
+  double rel;
+};
+
+// A term of effect type `type` that the record's likelihood requires stays named where the
+// ADEV residual still runs (run, z over pts): the run is unexplained beside it, with a note.
+void keep_required(const AfterContext& c, const Points& pts, const std::vector<double>& z,
+                   const std::string& type, const TauRun& run, Report& out) {
+  double zrun = 0.0;  // the run's largest |z|, signed
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const bool in = pts[i].tau_s >= run.lo_s && pts[i].tau_s <= run.hi_s;
+    zrun = in && std::fabs(z[i]) > std::fabs(zrun) ? z[i] : zrun;
+  }
+  out.notes.push_back(type + " named: the record's likelihood requires it (2 ln LR = " +
+                      fmt("%.1f", c.required_lr) + "); where it dominates the model still " +
+                      "misses the data at tau " + fmt("%.3g", run.lo_s) + "-" +
+                      fmt("%.3g", run.hi_s) + " s, by up to " + fmt("%.0f", 100.0 * run.rel) +
+                      " %: reported as unexplained");
+  out.unexplained.push_back(
+      UnexplainedRun{run.lo_s, run.hi_s, std::fabs(zrun), zrun > 0.0 ? 1 : -1, 0.0, 0.0, {}});
+}
+
 void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr,
                 Report& out, std::vector<std::string>& dominates_nowhere) {
   Points pts;
@@ -1869,20 +1894,8 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
             fmt("%.1f", ramp_bend_lr) + " > " + fmt("%.2f", bend_thr) +
             "; the drift is not a straight line";
     } else if (worst_run >= c.o.min_run && required_by_record(c, e.type)) {
-      // The record's likelihood decided this term (one criterion): it stays named, and where
-      // the model still misses the data the run is unexplained beside it.
-      double zrun = 0.0;  // the run's largest |z|, signed
-      for (std::size_t i = 0; i < pts.size(); ++i) {
-        const bool in = pts[i].tau_s >= tau_lo && pts[i].tau_s <= tau_hi;
-        zrun = in && std::fabs(z[i]) > std::fabs(zrun) ? z[i] : zrun;
-      }
-      out.notes.push_back(e.type + " named: the record's likelihood requires it (2 ln LR = " +
-                          fmt("%.1f", c.required_lr) + "); where it dominates the model still " +
-                          "misses the data at tau " + fmt("%.3g", tau_lo) + "-" +
-                          fmt("%.3g", tau_hi) + " s, by up to " +
-                          fmt("%.0f", 100.0 * worst_rel) + " %: reported as unexplained");
-      out.unexplained.push_back(
-          UnexplainedRun{tau_lo, tau_hi, std::fabs(zrun), zrun > 0.0 ? 1 : -1, 0.0, 0.0, {}});
+      // The record's likelihood decided this term (one criterion): it stays named.
+      keep_required(c, pts, z, e.type, TauRun{tau_lo, tau_hi, worst_rel}, out);
       kept.push_back(e);
       continue;
     } else if (worst_run >= c.o.min_run && e.type != "gauss_markov") {
