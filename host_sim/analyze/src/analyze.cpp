@@ -2586,6 +2586,23 @@ class Analysis {
   // start); the walk is then tested beside the step.
   // sl: the step taken (its time and size beside the walk in that case); lr_alt: what it beat.
   static constexpr double kSameStepFraction = 0.05;
+
+  // The step profile beside a rival (sb: the profile with the rival in H0 or removed from the
+  // means) still holds the step sl: significant (> thr) within kSameStepFraction of it.
+  [[nodiscard]] bool step_stands_beside(const StepLikelihood& sb, const StepLikelihood& sl,
+                                        double thr) const {
+    const double moved = std::fabs(static_cast<double>(sb.sample) - static_cast<double>(sl.sample));
+    return sb.ok && std::isfinite(sb.size) && sb.lr > thr &&
+           moved <= kSameStepFraction * static_cast<double>(y.size());
+  }
+
+  // "beside the <rival> it is still significant (2 ln LR = .. > thr at t = .. s)"
+  [[nodiscard]] std::string still_significant(const char* rival, const StepLikelihood& sb,
+                                              double thr) const {
+    return std::string("beside the ") + rival + " it is still significant (2 ln LR = " +
+           fmt("%.1f", sb.lr) + " > " + fmt("%.1f", thr) + " at t = " +
+           fmt("%.1f", static_cast<double>(sb.sample) * ts) + " s)";
+  }
   bool step_beats_alternatives(const RrwLikelihoodTest& lt, const ModelParams& b0, double thr,
                                std::size_t margin, StepLikelihood& sl, double& lr_alt) {
     const double lr_bi = bias_instability_lr(y, ts, b0, tb_max, step_at, adev_y, lt);
@@ -2601,13 +2618,9 @@ class Analysis {
       RrwLikelihoodTest beside = lt;
       beside.h0 = lt.h1;
       const StepLikelihood sw = profile_step(beside, margin);
-      const double moved = std::fabs(static_cast<double>(sw.sample) - static_cast<double>(sl.sample));
-      if (sw.ok && std::isfinite(sw.size) && sw.lr > thr &&
-          moved <= kSameStepFraction * static_cast<double>(y.size())) {
+      if (step_stands_beside(sw, sl, thr)) {
         out.notes.push_back(at + "a walk explains the record better (" + fmt("%.1f", lt.lr) +
-                            "); beside the walk it is still significant (2 ln LR = " +
-                            fmt("%.1f", sw.lr) + " > " + fmt("%.1f", thr) + " at t = " +
-                            fmt("%.1f", static_cast<double>(sw.sample) * ts) + " s)");
+                            "); " + still_significant("walk", sw, thr));
         sl = sw;
         lr_alt = 0.0;
         return true;
@@ -2624,14 +2637,13 @@ class Analysis {
   // parameters, as the step has its size and time) raises the step profile too, at a boundary
   // inside the decay. When the decay explains the record at least as well as the step (and is
   // significant over its tau grid, and the shift lies within three of its time constants), the
-  // step is taken only if it is still significant beside the
-  // decay (the block means less the fitted decay, H0 unchanged) at the same place, within
-  // kSameStepFraction of the record; sl is then the step beside the decay. Otherwise no step is
+  // step is taken only if it stands beside the decay (step_stands_beside; the block means less
+  // the fitted decay, H0 unchanged); sl is then the step beside the decay. Otherwise no step is
   // named here and the decay is left to the transient check (an unexplained time range).
   bool step_beats_decay(const RrwLikelihoodTest& lt, double thr, std::size_t margin,
                         StepLikelihood& sl) {
     const TransientLr tr = warmup_transient_lr(lt, false);
-    const double tr_thr = chi2_quantile(1.0 - o.alpha / kTransientTaus, 1.0);
+    const double tr_thr = transient_threshold();
     // Beyond three time constants the decay has fallen to 5 %: it does not make a shift there.
     // A decay that a walk or a line explains nearly as well (by AIC's 2 for its tau, as in
     // warmup_transient_check) is slow wander, not a transient: the step's rivals above decide.
@@ -2647,17 +2659,13 @@ class Analysis {
       beside.means[k] -= tr.size * u[k];
     }
     const StepLikelihood sd = profile_step(beside, margin);
-    const double moved = std::fabs(static_cast<double>(sd.sample) - static_cast<double>(sl.sample));
     const std::string at = "a level shift at t = " + fmt("%.1f", at_s) +
                            " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) +
                            ") but a level decaying from the start of the record (time constant " +
                            fmt("%.3g", tr.tau_s) + " s) explains it as well (" +
                            fmt("%.1f", tr.lr) + ")";
-    if (sd.ok && std::isfinite(sd.size) && sd.lr > thr &&
-        moved <= kSameStepFraction * static_cast<double>(y.size())) {
-      out.notes.push_back(at + "; beside the decay it is still significant (2 ln LR = " +
-                          fmt("%.1f", sd.lr) + " > " + fmt("%.1f", thr) + " at t = " +
-                          fmt("%.1f", static_cast<double>(sd.sample) * ts) + " s)");
+    if (step_stands_beside(sd, sl, thr)) {
+      out.notes.push_back(at + "; " + still_significant("decay", sd, thr));
       sl = sd;
       return true;
     }
@@ -3213,6 +3221,12 @@ class Analysis {
     return out_lr;
   }
 
+  // The level a decay's best 2 ln LR over its tau grid must pass: chi-square(1) at
+  // alpha / kTransientTaus (warmup_transient_lr).
+  [[nodiscard]] double transient_threshold() const {
+    return chi2_quantile(1.0 - o.alpha / kTransientTaus, 1.0);
+  }
+
   // [0, 3 tau] of a warm-up transient found by its likelihood (tr, against `against`) as an
   // unexplained time range, with its tau range from one block (the test's resolution).
   [[nodiscard]] UnexplainedRun transient_range(const TransientLr& tr, double block_s,
@@ -3236,7 +3250,7 @@ class Analysis {
   // decay is tested beside it (warmup_transient_check).
   bool transient_for_walk(const RrwLikelihoodTest& lt) {
     const TransientLr tr = warmup_transient_lr(lt, (terms & kFitRamp) != 0U);
-    const double tr_thr = chi2_quantile(1.0 - o.alpha / kTransientTaus, 1.0);
+    const double tr_thr = transient_threshold();
     constexpr double kAicPenalty = 2.0;
     if (!(tr.lr > tr_thr && tr.lr > lt.lr + kAicPenalty)) {
       return false;
@@ -3275,7 +3289,7 @@ class Analysis {
       lt.h0 = lt.h1;  // the decay against the model with its walk
     }
     const TransientLr tr = warmup_transient_lr(lt, ramp);
-    const double thr = chi2_quantile(1.0 - o.alpha / kTransientTaus, 1.0);
+    const double thr = transient_threshold();
     if (!(tr.lr > thr)) {
       return;
     }
