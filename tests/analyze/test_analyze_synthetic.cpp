@@ -306,6 +306,39 @@ TEST(AnalyzeSynthetic, StepOfThreeGmSigmasLateInALongRecordIsAStep) {
   EXPECT_GE(found, 9);
 }
 
+// A flicker floor far above the white noise and a faint GM (B = 0.01, N = 0.003, 2e6 samples
+// at 100 Hz; seeds 900001..900006). Where the record's likelihood requires bias instability,
+// it stays named even where its bank (within a few % of the ideal floor) and one realisation
+// leave a residual run: the run is unexplained beside it. Removing it for that run left a
+// model that missed the ADEV by up to 90 % (3 of these 6 seeds before).
+TEST(AnalyzeSynthetic, ADominantFlickerTheRecordRequiresStaysNamed) {
+  int named = 0;
+  for (std::uint64_t seed = 900001; seed <= 900006; ++seed) {
+    ia::SynthSpec spec;
+    spec.fs_hz = 100.0;
+    spec.samples = 2000000;
+    spec.n = 3e-3;
+    spec.b = 1e-6;
+    spec.tp_s = 10.0;
+    spec.flicker_b = 1e-2;
+    spec.seed = seed;
+    ia::Report r;
+    std::string err;
+    ASSERT_TRUE(ia::analyze(ia::synthesize(spec), "flicker", ia::Options{}, r, err)) << err;
+    std::string why;
+    EXPECT_TRUE(ia::report_consistent(r, why)) << why;
+    const bool ok = is_named(r, "bias_instability") && !is_named(r, "rate_random_walk");
+    named += ok ? 1 : 0;
+    EXPECT_LE(r.error_after.adev_max_rel, r.error_before.adev_max_rel) << describe(r);
+    if (!ok) {
+      std::printf("flicker seed %llu:\n%s", static_cast<unsigned long long>(seed),
+                  describe(r).c_str());
+    }
+  }
+  std::printf("dominant flicker: bias_instability named (no walk) on %d of 6\n", named);
+  EXPECT_GE(named, 5);
+}
+
 TEST(AnalyzeSynthetic, TwentyControlsGiveNoEffect) {
   int clean = 0;
   for (std::uint64_t seed = 201; seed <= 220; ++seed) {

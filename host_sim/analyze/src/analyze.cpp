@@ -1420,11 +1420,32 @@ struct AfterContext {
   const ErrorStats& before;
   double cost_thr;         // the ADEV cost drop a term must make (the search's test)
   double white_filter_s;   // the sensor's output filter on the white noise (0: none)
-  // Terms the record's likelihood requires (kFitRrw when its 2 ln LR passed the test): the ADEV
-  // never-worse rule does not remove them; a model worse on the ADEV is kept and said.
+  // Terms the record's likelihood requires (kFitRrw, kFitFlicker when its 2 ln LR beside the
+  // model's other terms passed the test): the ADEV never-worse rule does not remove them, and a
+  // residual run where one dominates does not un-name it; a model worse on the ADEV is kept and
+  // said.
   std::uint32_t required = 0;
-  double required_lr = 0.0;
+  double required_lr = 0.0;     // the walk's 2 ln LR
+  double required_bi_lr = 0.0;  // bias instability's 2 ln LR beside the model's other terms
 };
+
+// The 2 ln LR by which the record requires the term of FitTerm bit `bit` (0: not tested).
+double required_lr_of(const AfterContext& c, std::uint32_t bit) {
+  return bit == kFitRrw ? c.required_lr : bit == kFitFlicker ? c.required_bi_lr : 0.0;
+}
+
+// "rate_random_walk (2 ln LR = 33.7), bias_instability (2 ln LR = 12.0)": the required bits
+// of `bits`.
+std::string required_list(const AfterContext& c, std::uint32_t bits) {
+  std::string s;
+  for (const std::uint32_t bit : {kFitRrw, kFitFlicker}) {
+    if ((bits & c.required & bit) != 0U) {
+      s += (s.empty() ? "" : ", ") + std::string(term_by_fit_bit(bit)->name) + " (2 ln LR = " +
+           fmt("%.1f", required_lr_of(c, bit)) + ")";
+    }
+  }
+  return s;
+}
 
 struct AfterChoice {
   std::uint32_t terms = 0;
@@ -1561,10 +1582,10 @@ AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const Model
     best = next;
   }
   if (best.ok && !not_worse(best.e, c.before) && (base & c.required) != 0U) {
-    notes.push_back(std::string("kept: ") + term_name(base & c.required) +
-                    ", which the record's likelihood requires (2 ln LR = " +
-                    fmt("%.1f", c.required_lr) + "), although the model after is worse than "
-                    "before on the ADEV over [Ts, T/10] (RMS " + fmt("%.3f", best.e.adev_rms_rel) +
+    notes.push_back("kept: " + required_list(c, base) +
+                    ", which the record's likelihood requires, although the model after is worse "
+                    "than before on the ADEV over [Ts, T/10] (RMS " +
+                    fmt("%.3f", best.e.adev_rms_rel) +
                     " / max " + fmt("%.3f", best.e.adev_max_rel) + " against " +
                     fmt("%.3f", c.before.adev_rms_rel) + " / " +
                     fmt("%.3f", c.before.adev_max_rel) + ")");
@@ -1809,6 +1830,12 @@ bool required_by_record(const AfterContext& c, const std::string& type) {
   return t != nullptr && (analysis_bit(*t) & c.required) != 0U;
 }
 
+// The 2 ln LR by which the record requires the term of effect type `type` (0: not required).
+double required_lr_of(const AfterContext& c, const std::string& type) {
+  const TermInfo* t = term_by_name(type.c_str());
+  return t != nullptr ? required_lr_of(c, analysis_bit(*t) & c.required) : 0.0;
+}
+
 // A residual run over the taus [lo_s, hi_s] where the model misses the data by up to rel.
 struct TauRun {
   double lo_s;
@@ -1826,9 +1853,10 @@ void keep_required(const AfterContext& c, const Points& pts, const std::vector<d
     zrun = in && std::fabs(z[i]) > std::fabs(zrun) ? z[i] : zrun;
   }
   out.notes.push_back(type + " named: the record's likelihood requires it (2 ln LR = " +
-                      fmt("%.1f", c.required_lr) + "); where it dominates the model still " +
-                      "misses the data at tau " + fmt("%.3g", run.lo_s) + "-" +
-                      fmt("%.3g", run.hi_s) + " s, by up to " + fmt("%.0f", 100.0 * run.rel) +
+                      fmt("%.1f", required_lr_of(c, type)) +
+                      "); where it dominates the model still misses the data at tau " +
+                      fmt("%.3g", run.lo_s) + "-" + fmt("%.3g", run.hi_s) + " s, by up to " +
+                      fmt("%.0f", 100.0 * run.rel) +
                       " %: reported as unexplained");
   out.unexplained.push_back(
       UnexplainedRun{run.lo_s, run.hi_s, std::fabs(zrun), zrun > 0.0 ? 1 : -1, 0.0, 0.0, {}});
@@ -3183,6 +3211,7 @@ class Analysis {
   struct LongTauPair {
     double k_beside_b = 0.0;  // 2 ln LR of a walk against the model with bias instability
     double b_beside_k = 0.0;  // 2 ln LR of bias instability against the model with a walk
+    double b_alone = 0.0;     // 2 ln LR of bias instability against the model without either
   };
   // The record's block-mean likelihoods (long_memory.hpp) of the current model with a walk, with
   // bias instability, and with both (the flicker bank reaching the record's length). B starts
@@ -3218,6 +3247,7 @@ class Analysis {
     const double l_both = std::max(with_b.h1.loglik, without_b.h1.loglik);
     out_lr.k_beside_b = std::max(0.0, 2.0 * (l_both - with_b.h0.loglik));
     out_lr.b_beside_k = std::max(0.0, 2.0 * (l_both - without_b.h1.loglik));
+    out_lr.b_alone = std::max(0.0, 2.0 * (with_b.h0.loglik - without_b.h0.loglik));
     return out_lr;
   }
 
@@ -3863,16 +3893,25 @@ class Analysis {
     // ---- after: never worse than before, every named effect real, the remainder said.
     const AdevSet& clean = adev_y;
     out.adev_clean = clean.by_alpha[2];
-    const std::uint32_t required = walk_lr > lr_thr ? kFitRrw : 0U;
-    const AfterContext ac0{o,        ts,       tau_max, tb_max, clean, fit_set, out.error_before,
-                           cost_thr, 0.0,      required, walk_lr};
+    // Bias instability in the model: the record's likelihood of it beside the model's other
+    // terms (with the walk when the model has one) decides whether it is required, as the
+    // walk's test does for K.
+    double bi_lr = 0.0;
+    if ((terms & kFitFlicker) != 0U && cur_p.bi > 0.0) {
+      const LongTauPair lp = long_tau_pair(&cur_p, (terms & kFitRamp) != 0U);
+      bi_lr = (terms & kFitRrw) != 0U ? lp.b_beside_k : lp.b_alone;
+    }
+    const std::uint32_t required =
+        (walk_lr > lr_thr ? kFitRrw : 0U) | (bi_lr > lr_thr ? kFitFlicker : 0U);
+    const AfterContext ac0{o,        ts,       tau_max,  tb_max, clean, fit_set, out.error_before,
+                           cost_thr, 0.0,      required, walk_lr, bi_lr};
     // The base family alone (no ADEV term accepted) is refitted over [Ts, T/10] too, under the
     // same never-worse rule: the before-model was fitted over [Ts, 100 s] only.
     AfterChoice choice = choose_after(ac0, terms, cur_p, out.model_before, out.notes);
     std::vector<UnexplainedRun> withdrawn;
     settle_terms_and_filter(ac0, choice, withdrawn);
     const AfterContext ac{o,        ts,       tau_max, tb_max, clean, fit_set, out.error_before,
-                          cost_thr, white_filter_s, required, walk_lr};
+                          cost_thr, white_filter_s, required, walk_lr, bi_lr};
     cur_p = choice.p;
     out.model_after = cur_p;
     out.error_after = choice.e;
