@@ -528,6 +528,7 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
     } else if (e.type == "gauss_markov" && m.n_gm > 0) {
       gm_intervals(lc, m, gm_index(m, e.tb_s), "", c);
     } else if (e.type == "bias_step" && e.statistic > 0.0) {
+      // statistic: the size's |z| (its standard error is |size| / |z|)
       const double half = 1.96 * std::fabs(e.size) / e.statistic;
       c.push_back(ParamInterval{"size", e.size - half, e.size + half});
     }
@@ -2780,8 +2781,8 @@ class Analysis {
       e.type = "bias_step";
       e.time_s = static_cast<double>(sl.sample) * ts;
       e.size = sl.size;
-      e.statistic = sl.lr;
-      e.threshold = thr;
+      e.statistic = std::sqrt(sl.lr);  // |z| of the GLS size, as the window detector's
+      e.threshold = std::sqrt(thr);
       out.effects.push_back(e);
       out.notes.push_back("bias step at t = " + fmt("%.1f", e.time_s) +
                           " s from the record's profile likelihood (2 ln LR = " +
