@@ -602,7 +602,7 @@ bool write_csv(const char* path, const std::vector<Record>& recs,
     return false;
   }
   std::fprintf(f, "seed,fs_hz,samples,gyro,true,dominant,named,second_gm,output_filter,"
-                  "unexplained,transient,noise_change,step,outcome\n");
+                  "unexplained,transient,noise_change,step,outcome,estimates\n");
   for (std::size_t i = 0; i < recs.size(); ++i) {
     const Record& r = recs[i];
     std::string has;
@@ -632,11 +632,21 @@ bool write_csv(const char* path, const std::vector<Record>& recs,
     if (r.has[kStep]) {  // its time [s] and size [unit]
       std::snprintf(step, sizeof step, "%.6g %.4g", r.spec.step_time_s, r.spec.step_size);
     }
-    std::fprintf(f, "%llu,%g,%zu,%d,%s,%s,%s,%d,%d,%d,%s,%s,%s,%s\n",
+    std::string estimates;  // per named, present term: truth estimate [lo95 hi95]
+    for (std::size_t t = 0; t < kTerms; ++t) {
+      if (r.has[t] && outs[i].named[t]) {
+        char one[160];
+        std::snprintf(one, sizeof one, "%s %.4g %.4g [%.4g %.4g] ", kName[t], r.truth[t],
+                      outs[i].estimate[t], outs[i].lo95[t], outs[i].hi95[t]);
+        estimates += one;
+      }
+    }
+    std::fprintf(f, "%llu,%g,%zu,%d,%s,%s,%s,%d,%d,%d,%s,%s,%s,%s,%s\n",
                  static_cast<unsigned long long>(r.spec.seed), r.spec.fs_hz, r.spec.samples,
                  r.gyro ? 1 : 0, has.c_str(), dom.c_str(), named.c_str(),
                  outs[i].second_gm ? 1 : 0, outs[i].output_filter ? 1 : 0,
-                 outs[i].unexplained ? 1 : 0, transient, change, step, outcome.c_str());
+                 outs[i].unexplained ? 1 : 0, transient, change, step, outcome.c_str(),
+                 estimates.c_str());
   }
   return std::fclose(f) == 0;
 }
