@@ -336,7 +336,7 @@ TEST(AnalyzeSynthetic, StepSizeIntervalHoldsTheTrueSize) {
 // at 100 Hz; seeds 900001..900006). Where the record's likelihood requires bias instability,
 // it stays named even where its bank (within a few % of the ideal floor) and one realisation
 // leave a residual run: the run is unexplained beside it. Removing it for that run left a
-// model that missed the ADEV by up to 90 % (3 of these 6 seeds before).
+// model that missed the ADEV by up to 94 % (3 of these 6 seeds before).
 TEST(AnalyzeSynthetic, ADominantFlickerTheRecordRequiresStaysNamed) {
   int named = 0;
   for (std::uint64_t seed = 900001; seed <= 900006; ++seed) {
