@@ -1207,8 +1207,9 @@ const Cand* long_tau_choice(const LongTauInput& in, const std::vector<Cand>& can
     }
     bi = c.type == "bias_instability" ? &c : bi;
     rw = c.type == "rate_random_walk" ? &c : rw;
-    // a second GM slow enough for the block means (the test's blocks: T / 2048)
-    const double block_s = static_cast<double>(in.y.size()) * in.ts / 2048.0;
+    // a second GM slow enough for the block means (the test's blocks: T / kRrwTestBlocks)
+    const double block_s =
+        static_cast<double>(in.y.size()) * in.ts / static_cast<double>(kRrwTestBlocks);
     if (c.type == "second_gm" && c.p.n_gm == 2 && c.p.gm[1].tb_s >= 2.0 * block_s) {
       gm = &c;
     }
@@ -2881,7 +2882,8 @@ class Analysis {
     // two of the likelihood's blocks: not a candidate).
     try_term("second_gm", kFitGm2);
     if ((terms & kFitFlicker) != 0U && !cands.empty() && cands.back().type == "second_gm" &&
-        cands.back().p.n_gm == 2 && cands.back().p.gm[0].tb_s >= 2.0 * t_rec / 2048.0) {
+        cands.back().p.n_gm == 2 &&
+        cands.back().p.gm[0].tb_s >= 2.0 * t_rec / static_cast<double>(kRrwTestBlocks)) {
       cands.pop_back();
     }
     // Bias instability comes with a second GM free for the short taus: fitted with one GM only,
@@ -3219,7 +3221,9 @@ class Analysis {
   // from `bi_start`'s, else the model's own, else the data's ADEV at T/100 taken as the flicker
   // floor; B and K are fitted. With `detrend` on the record less its least-squares line. Zeros
   // where a likelihood cannot be computed.
-  [[nodiscard]] LongTauPair long_tau_pair(const ModelParams* bi_start, bool detrend) const {
+  // with_walk = false: only b_alone (the walk's fits skipped; k_beside_b, b_beside_k stay 0).
+  [[nodiscard]] LongTauPair long_tau_pair(const ModelParams* bi_start, bool detrend,
+                                          bool with_walk = true) const {
     LongTauPair out_lr;
     ModelParams h0 = cur_p;
     h0.k = 0.0;
@@ -3240,15 +3244,20 @@ class Analysis {
     ModelParams no_b = cur_p;
     no_b.k = 0.0;
     no_b.bi = 0.0;
-    const RrwLikelihoodTest with_b = test_rrw(fit_record(), ts, h0, tb_max, detrend, step_at);
-    const RrwLikelihoodTest without_b = test_rrw(fit_record(), ts, no_b, tb_max, detrend, step_at);
+    const RrwLikelihoodTest with_b =
+        test_rrw(fit_record(), ts, h0, tb_max, detrend, step_at, kRrwTestBlocks, with_walk);
+    const RrwLikelihoodTest without_b =
+        test_rrw(fit_record(), ts, no_b, tb_max, detrend, step_at, kRrwTestBlocks, with_walk);
     if (!with_b.ok || !without_b.ok) {
+      return out_lr;
+    }
+    out_lr.b_alone = std::max(0.0, 2.0 * (with_b.h0.loglik - without_b.h0.loglik));
+    if (!with_walk) {
       return out_lr;
     }
     const double l_both = std::max(with_b.h1.loglik, without_b.h1.loglik);
     out_lr.k_beside_b = std::max(0.0, 2.0 * (l_both - with_b.h0.loglik));
     out_lr.b_beside_k = std::max(0.0, 2.0 * (l_both - without_b.h1.loglik));
-    out_lr.b_alone = std::max(0.0, 2.0 * (with_b.h0.loglik - without_b.h0.loglik));
     return out_lr;
   }
 
@@ -3899,8 +3908,9 @@ class Analysis {
     // walk's test does for K.
     double bi_lr = 0.0;
     if ((terms & kFitFlicker) != 0U && cur_p.bi > 0.0) {
-      const LongTauPair lp = long_tau_pair(&cur_p, (terms & kFitRamp) != 0U);
-      bi_lr = (terms & kFitRrw) != 0U ? lp.b_beside_k : lp.b_alone;
+      const bool walk = (terms & kFitRrw) != 0U;
+      const LongTauPair lp = long_tau_pair(&cur_p, (terms & kFitRamp) != 0U, walk);
+      bi_lr = walk ? lp.b_beside_k : lp.b_alone;
     }
     const std::uint32_t required =
         (walk_lr > lr_thr ? kFitRrw : 0U) | (bi_lr > lr_thr ? kFitFlicker : 0U);

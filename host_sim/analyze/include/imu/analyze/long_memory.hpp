@@ -113,6 +113,9 @@ inline constexpr std::size_t kEveryBlock = static_cast<std::size_t>(-1);
                                           std::size_t margin_blocks,
                                           std::size_t only_block = kEveryBlock);
 
+/// Block means the walk's test uses by default (test_rrw's target_blocks).
+inline constexpr std::size_t kRrwTestBlocks = 2048;
+
 /// The test on the record y (sample period ts_s), in about target_blocks blocks. start: the
 /// ADEV fit's parameters (its GMs, at least one, B and K if any), tb_max_s: the largest GM
 /// correlation time H0 may use (a GM beyond it is what the record calls a random walk).
@@ -123,7 +126,7 @@ inline constexpr std::size_t kEveryBlock = static_cast<std::size_t>(-1);
 [[nodiscard]] RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s,
                                          const ModelParams& start, double tb_max_s, bool detrend,
                                          const std::vector<std::uint64_t>& step_samples = {},
-                                         std::size_t target_blocks = 2048,
+                                         std::size_t target_blocks = kRrwTestBlocks,
                                          bool with_walk = true);
 
 }  // namespace imu::analyze
