@@ -156,6 +156,31 @@ double avar_oscillation(double sigma, double f0_hz, double beta_per_s, double ta
   return v > 0.0 ? v : 0.0;
 }
 
+double avar_oscillation_sampled(double sigma, double f0_hz, double beta_per_s, double ts_s,
+                                double tau_s) {
+  const double m_real = ts_s > 0.0 ? tau_s / ts_s : 0.0;
+  const double m_round = std::round(m_real);
+  if (!(m_round >= 1.0) || std::fabs(m_real - m_round) > 1e-6 * m_round || !(beta_per_s > 0.0)) {
+    return avar_oscillation(sigma, f0_hz, beta_per_s, tau_s);
+  }
+  // R(d) = sigma^2 Re z^d, z = e^(-beta Ts) e^(i 2 pi f0 Ts). V(n) = var(sum of n samples) =
+  // sigma^2 (n + 2 Re sum_{d=1}^{n-1} (n - d) z^d), the sum = (n - (n + 1) z + z^(n+1)) /
+  // (1 - z)^2 - n. Adjacent sums S1, S2 of m samples: E (S2 - S1)^2 = 4 V(m) - V(2m).
+  const double rho = std::exp(-beta_per_s * ts_s);
+  const double th = 2.0 * kPi * f0_hz * ts_s;
+  const Cx z{rho * std::cos(th), rho * std::sin(th)};
+  const Cx one_minus_z{1.0 - z.re, -z.im};
+  const Cx den = cmul(one_minus_z, one_minus_z);
+  const auto v_of = [&](double n) {
+    const Cx zn1 = cexp_neg(Cx{beta_per_s * ts_s * (n + 1.0), -th * (n + 1.0)});  // z^(n+1)
+    const Cx num{n - (n + 1.0) * z.re + zn1.re, -(n + 1.0) * z.im + zn1.im};
+    const double g = cdiv(num, den).re - n;
+    return n + 2.0 * g;
+  };
+  const double v = (4.0 * v_of(m_round) - v_of(2.0 * m_round)) / (2.0 * m_round * m_round);
+  return v > 0.0 ? sigma * sigma * v : 0.0;
+}
+
 std::size_t flicker_bank(double b, double tau_lo_s, double tau_hi_s,
                          GmParam (&out)[kMaxFlickerGm]) {
   if (!positive_finite(b) || !positive_finite(tau_lo_s) || !std::isfinite(tau_hi_s) ||

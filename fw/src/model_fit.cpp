@@ -32,6 +32,7 @@ struct Problem {
   double osc[kMaxFitPoints] = {};      // oscillation AVAR at sigma = 1 (shape fixed)
   double osc_f0_hz = 0.0;
   double osc_beta_per_s = 0.0;
+  double osc_ts_s = 0.0;
   double flicker_lo_s = 0.0;
   double flicker_hi_s = 0.0;
   double white_filter_s = 0.0;
@@ -321,6 +322,7 @@ ModelParams to_params(const Problem& pb, const Solution& s) {
     p.osc_sigma = std::sqrt(s.theta[kSlotOsc]);
     p.osc_f0_hz = pb.osc_f0_hz;
     p.osc_beta_per_s = pb.osc_beta_per_s;
+    p.osc_ts_s = pb.osc_ts_s;
   }
   p.n = std::sqrt(s.theta[kSlotWhite]);
   p.n_filter_s = p.n > 0.0 ? pb.white_filter_s : 0.0;
@@ -378,6 +380,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   pb.white_filter_s = o.white_filter_s;
   pb.osc_f0_hz = o.osc_f0_hz;
   pb.osc_beta_per_s = o.osc_beta_per_s;
+  pb.osc_ts_s = o.osc_ts_s > 0.0 && std::isfinite(o.osc_ts_s) ? o.osc_ts_s : 0.0;
   if (pb.used[kSlotOsc] && !(std::isfinite(o.osc_f0_hz) && o.osc_f0_hz >= 0.0 &&
                              std::isfinite(o.osc_beta_per_s) && o.osc_beta_per_s > 0.0)) {
     res.status = FitStatus::kBadOptions;
@@ -418,7 +421,8 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
                            ? avar_flicker_bank(1.0, pb.flicker_lo_s, pb.flicker_hi_s, p.tau_s)
                            : 0.0;
     pb.osc[pb.n] = pb.used[kSlotOsc]
-                       ? avar_oscillation(1.0, pb.osc_f0_hz, pb.osc_beta_per_s, p.tau_s)
+                       ? avar_oscillation_sampled(1.0, pb.osc_f0_hz, pb.osc_beta_per_s,
+                                                  pb.osc_ts_s, p.tau_s)
                        : 0.0;
     ++pb.n;
   }

@@ -151,7 +151,8 @@ double term_avar(const ModelParams& p, TermKind k, std::size_t i, double tau_s) 
                  : 0.0;
     case TermKind::kOscillation:
       return i == 0 && p.osc_sigma > 0.0 && p.osc_beta_per_s > 0.0
-                 ? avar_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s, tau_s)
+                 ? avar_oscillation_sampled(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s,
+                                            p.osc_ts_s, tau_s)
                  : 0.0;
   }
   return 0.0;

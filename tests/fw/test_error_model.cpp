@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <utility>
 
 #include "imu/linalg.hpp"
 
@@ -314,6 +315,54 @@ TEST(ErrorModel, OscillationAvarMatchesNumericAndItsLimits) {
   p.osc_f0_hz = 19.6;
   p.osc_beta_per_s = 3.3;
   EXPECT_DOUBLE_EQ(imu::model_avar(p, 0.02), imu::avar_oscillation(2e-3, 19.6, 3.3, 0.02));
+}
+
+// AVAR of means of m samples of a process with autocovariance r(d), d in samples, written from
+// the definition: E (S2 - S1)^2 / (2 m^2) with S1, S2 the sums of samples 0..m-1 and m..2m-1.
+template <typename R>
+double sampled_avar_direct(R r, int m) {
+  double e = 0.0;
+  for (int i = 0; i < 2 * m; ++i) {
+    for (int j = 0; j < 2 * m; ++j) {
+      const double si = i < m ? -1.0 : 1.0;
+      const double sj = j < m ? -1.0 : 1.0;
+      e += si * sj * r(std::abs(i - j));
+    }
+  }
+  return e / (2.0 * m * m);
+}
+
+TEST(ErrorModel, SampledOscillationAvarIsTheAvarOfSampleMeans) {
+  // f0 = fs / 5 and a wide band: the case where sample means and continuous averages differ.
+  constexpr double kTs = 0.01;
+  constexpr double kSigma = 2e-3;
+  for (const auto& shape : {std::pair{20.0, 12.0}, std::pair{3.1, 0.4}}) {
+    const double f0 = shape.first;
+    const double beta = shape.second;
+    const auto r = [&](int d) {
+      return kSigma * kSigma * std::exp(-beta * d * kTs) * std::cos(2.0 * kPi * f0 * d * kTs);
+    };
+    for (const int m : {1, 2, 3, 7, 40, 251}) {
+      const double direct = sampled_avar_direct(r, m);
+      const double formula = imu::avar_oscillation_sampled(kSigma, f0, beta, kTs, m * kTs);
+      EXPECT_NEAR(formula, direct, 1e-9 * direct) << "f0 " << f0 << " m " << m;
+    }
+  }
+  // A sinusoid (beta -> 0): sample means scale the continuous average's AVAR by
+  // ((pi f0 Ts) / sin(pi f0 Ts))^2 at every m, 1.068^2 at f0 = fs / 5.
+  const double x = kPi * 20.0 * kTs;
+  const double factor = (x / std::sin(x)) * (x / std::sin(x));
+  for (const int m : {3, 7, 12}) {
+    const double cont = imu::avar_sinusoid(std::sqrt(2.0) * kSigma, 20.0, m * kTs);
+    EXPECT_NEAR(imu::avar_oscillation_sampled(kSigma, 20.0, 1e-9, kTs, m * kTs), factor * cont,
+                1e-5 * factor * cont)
+        << "m " << m;
+  }
+  // Many samples per period: the continuous average's AVAR; off the sample grid, or Ts = 0: it.
+  const double cont = imu::avar_oscillation(kSigma, 0.5, 0.3, 1.3);
+  EXPECT_NEAR(imu::avar_oscillation_sampled(kSigma, 0.5, 0.3, 1e-4, 1.3), cont, 1e-6 * cont);
+  EXPECT_DOUBLE_EQ(imu::avar_oscillation_sampled(kSigma, 0.5, 0.3, 0.0, 1.3), cont);
+  EXPECT_DOUBLE_EQ(imu::avar_oscillation_sampled(kSigma, 0.5, 0.3, 0.3, 1.3), cont);
 }
 
 TEST(ErrorModel, OscillationIsTwoStatesAndDiscretisesToADampedRotation) {

@@ -132,6 +132,9 @@ struct ModelParams {
   double osc_sigma = 0.0;       ///< narrowband oscillation: std of the process [unit]
   double osc_f0_hz = 0.0;       ///< its centre frequency [Hz]
   double osc_beta_per_s = 0.0;  ///< its damping rate [1/s] (PSD half-power width beta/pi Hz)
+  /// The sampling period of the record the oscillation was fitted on [s]: its AVAR is that of
+  /// sample means (avar_oscillation_sampled). 0: continuous averages. Not a filter parameter.
+  double osc_ts_s = 0.0;
 };
 
 /// The flicker bank for B over [tau_lo_s, tau_hi_s] (see kMaxFlickerGm). Returns the number of
@@ -156,6 +159,12 @@ struct ModelParams {
 /// a power series for |x| < 0.5, where the closed form cancels.
 [[nodiscard]] double avar_oscillation(double sigma, double f0_hz, double beta_per_s,
                                       double tau_s);
+/// The same process sampled every ts_s: the AVAR of means of m = tau_s / ts_s samples, which is
+/// what the ADEV of a record measures (exact; R(d) = sigma^2 e^(-beta d Ts) cos(2 pi f0 d Ts)).
+/// It exceeds the continuous average's by about ((pi f0 Ts) / sin(pi f0 Ts))^2: 7 % at
+/// f0 = fs / 5. A tau_s that is not a whole number of samples, or ts_s = 0: avar_oscillation.
+[[nodiscard]] double avar_oscillation_sampled(double sigma, double f0_hz, double beta_per_s,
+                                              double ts_s, double tau_s);
 /// Ideal flicker floor (2 ln 2 / pi) B^2 (for reference; the model uses the bank's own AVAR).
 [[nodiscard]] double avar_flicker_ideal(double b);
 /// AVAR of flicker_bank(b, tau_lo_s, tau_hi_s) at tau_s (0 for a bad range).

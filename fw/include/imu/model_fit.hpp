@@ -67,6 +67,9 @@ struct FitOptions {
   /// frequency [Hz] and damping rate [1/s], from the record's spectrum.
   double osc_f0_hz = 0.0;
   double osc_beta_per_s = 0.0;
+  /// The record's sampling period: the oscillation's AVAR is of sample means
+  /// (avar_oscillation_sampled; ModelParams::osc_ts_s). 0: continuous averages.
+  double osc_ts_s = 0.0;
   /// The sensor's output filter the white noise is seen through (ModelParams::n_filter_s; the
   /// white basis is avar_white_filtered): fixed here, the caller searches it. 0: plain white.
   double white_filter_s = 0.0;

@@ -108,13 +108,14 @@ Join join_models(const ModelParams& rec, const ModelParams& hm, const Split& sp,
 
   if (c.osc_sigma > 0.0 && is_alias(c.osc_f0_hz, j.fast, sp.fs_b_hz)) {
     j.dropped.push_back("oscillation at " + g4(c.osc_f0_hz) + " Hz");
-    c.osc_sigma = c.osc_f0_hz = c.osc_beta_per_s = 0.0;
+    c.osc_sigma = c.osc_f0_hz = c.osc_beta_per_s = c.osc_ts_s = 0.0;
   }
   if (hm.osc_sigma > 0.0 && hm.osc_f0_hz > sp.nyquist_hz) {
     j.fits = j.fits && !(c.osc_sigma > 0.0);  // one oscillation slot
     c.osc_sigma = hm.osc_sigma;
     c.osc_f0_hz = hm.osc_f0_hz;
     c.osc_beta_per_s = hm.osc_beta_per_s;
+    c.osc_ts_s = hm.osc_ts_s;
   }
 
   std::vector<GmParam> gms;

@@ -50,7 +50,7 @@ std::string model_json(const ModelParams& p) {
     << num(p.bi_tau_hi_s) << ", \"gm_bank\": " << gm_list(bank, nb)
     << "}, \"oscillation\": {\"sigma\": " << num(p.osc_sigma) << ", \"f0_hz\": "
     << num(p.osc_f0_hz) << ", \"beta_per_s\": " << num(p.osc_beta_per_s)
-    << "}, \"n_states\": " << (built ? std::to_string(c.n_states) : std::string("null")) << "}";
+    << ", \"point_sampled_ts_s\": " << num(p.osc_ts_s) << "}, \"n_states\": " << (built ? std::to_string(c.n_states) : std::string("null")) << "}";
   return s.str();
 }
 
@@ -347,8 +347,10 @@ std::string to_text(const Report& r) {
       s << buf;
     }
     if (p.osc_sigma > 0.0) {
-      std::snprintf(buf, sizeof buf, ", oscillation sigma = %.4e f0 = %.5g Hz beta = %.3g /s",
-                    p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s);
+      std::snprintf(buf, sizeof buf,
+                    ", oscillation sigma = %.4e f0 = %.5g Hz beta = %.3g /s (ADEV of %s)",
+                    p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s,
+                    p.osc_ts_s > 0.0 ? "point samples" : "averages over each sample period");
       s << buf;
     }
     if (p.bi > 0.0) {
