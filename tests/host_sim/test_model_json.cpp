@@ -100,22 +100,25 @@ TEST(ModelJson, MalformedFilterOrOscillationIsRefused) {
 }
 
 // A model the node would refuse only for its version 2 terms: 2 GM + RRW + a flicker bank
-// over 1..1e3 s (5 members) = 8 states leave no room, so the filter goes and then the
-// oscillation's variance goes to the white noise (N'^2 = N^2 + sigma^2 / fs at the recording's
-// rate); each said. With room for the oscillation but not the filter, only the filter goes.
+// over 1..1e3 s (5 members) + the oscillation (2) + the output filter (1) = 11 states against
+// 8. First the bank's short end moves up (10..1e3 s, 4 members: 10), then the filter would go
+// (9), so it stays and the oscillation's variance goes to the white noise (N'^2 = N^2 +
+// sigma^2 / fs at the recording's rate): 8, with the filter and the narrowed bank; each said.
 TEST(ModelJson, TermsTheNodeCannotHoldAreLeftOutAndSaid) {
   const std::string gm2 = "[{\"sb\": 2.68e-8, \"tb_s\": 158.7}, {\"sb\": 1e-6, \"tb_s\": 0.2}]";
   const std::string bank = "{\"b\": 1e-3, \"tau_lo_s\": 1, \"tau_hi_s\": 1000}";
   Read r = read(analysis(", \"n_filter_s\": 2e-3" + kOsc, gm2, "1.4e-4", bank));
   ASSERT_TRUE(r.ok) << r.err;
   EXPECT_TRUE(node_runs(r.rec));
-  EXPECT_EQ(bits(r.rec.n_filter_s), 0U);
+  EXPECT_EQ(bits(r.rec.n_filter_s), bits(2e-3F));
   EXPECT_EQ(bits(r.rec.osc_sigma), 0U);
+  EXPECT_EQ(bits(r.rec.bi_tau_lo_s), bits(10.0F));
   EXPECT_NEAR(static_cast<double>(r.rec.n), std::sqrt(3.3e-3 * 3.3e-3 + 0.02 * 0.02 / 100.0),
               1e-9);  // float rounding of 7e-3: 4e-10
-  EXPECT_NE(r.dropped.find("output filter of model_after (0.002 s) not sent"), std::string::npos)
+  EXPECT_NE(r.dropped.find("realised by the node from 10 s, not 1 s"), std::string::npos)
       << r.dropped;
   EXPECT_NE(r.dropped.find("its variance is added to the white noise"), std::string::npos);
+  EXPECT_EQ(r.dropped.find("output filter"), std::string::npos) << r.dropped;
   // The same in a long record's report (its fs_hz is the block means'; the node samples at the
   // full-rate head's 100 Hz).
   std::string long_json = analysis(kOsc, gm2, "1.4e-4", bank);
@@ -127,14 +130,17 @@ TEST(ModelJson, TermsTheNodeCannotHoldAreLeftOutAndSaid) {
   EXPECT_NEAR(static_cast<double>(r.rec.n), std::sqrt(3.3e-3 * 3.3e-3 + 0.02 * 0.02 / 100.0),
               1e-9);
   EXPECT_EQ(r.dropped.find("output filter"), std::string::npos) << r.dropped;
-  // 1 GM + RRW + bank (5) = 7: the oscillation (2) does not fit with or without the filter, the
-  // filter (1) does once the oscillation is folded: the filter stays.
+  // 1 GM + RRW + bank (5) + oscillation + filter = 10: with the bank narrowed (9) the filter
+  // goes (8): the oscillation stays as states.
   r = read(analysis(", \"n_filter_s\": 2e-3" + kOsc, "[{\"sb\": 2.68e-8, \"tb_s\": 158.7}]",
                     "1.4e-4", bank));
   ASSERT_TRUE(r.ok) << r.err;
   EXPECT_TRUE(node_runs(r.rec));
-  EXPECT_EQ(bits(r.rec.n_filter_s), bits(2e-3F));
-  EXPECT_EQ(bits(r.rec.osc_sigma), 0U);
+  EXPECT_EQ(bits(r.rec.n_filter_s), 0U);
+  EXPECT_EQ(bits(r.rec.osc_sigma), bits(0.02F));
+  EXPECT_EQ(bits(r.rec.bi_tau_lo_s), bits(10.0F));
+  EXPECT_NE(r.dropped.find("output filter of model_after (0.002 s) not sent"), std::string::npos)
+      << r.dropped;
   // 1 GM + RRW + a bank over 1..30 s (4 members) + oscillation = 8, + filter = 9: only the
   // filter goes.
   const std::string small_bank = "{\"b\": 1e-3, \"tau_lo_s\": 1, \"tau_hi_s\": 30}";

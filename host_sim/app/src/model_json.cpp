@@ -135,12 +135,16 @@ bool string_member_is(const std::string& s, std::size_t obj, const std::string& 
 
 // A record the node would refuse only for its version 2 terms (more states than its filter
 // holds, or a term out of its ranges) loses what the node can do without, and the rest is sent
-// as the node runs it: first the output filter (the white noise unfiltered changes a sample's
-// variance by about 1.5 n_filter_s / Ts), then the oscillation, whose variance goes to the
-// white noise per sample (N'^2 = N^2 + sigma^2 / fs: innovations of the right variance, NIS ~ 1,
-// though not of its colour, which the whiteness monitor still sees). A record refused for
-// another reason is sent as it is: the node refuses and counts it. n: model_after's N; root:
-// the channel's object (its fs_hz, or its full-rate head's). Notes go to `dropped`.
+// as the node runs it. At each stage the bias-instability bank's short end may first move up a
+// decade (one state) at a time while the bank spans two decades: the node then realises B from
+// there up; below it the bank's ADEV falls off where the white noise dominates the data's
+// (flicker_tau_lo's rule). The stages: the record as it is; the output filter left out (the
+// white noise unfiltered changes a sample's variance by about 1.5 n_filter_s / Ts); the
+// oscillation's variance moved to the white noise per sample (N'^2 = N^2 + sigma^2 / fs:
+// innovations of the right variance, NIS ~ 1, though not of its colour, which the whiteness
+// monitor still sees). A record refused for another reason is sent as it is: the node refuses
+// and counts it. n: model_after's N; root: the channel's object (its fs_hz, or its full-rate
+// head's). Notes go to `dropped`.
 bool fit_to_node(const std::string& json, std::size_t root, double n, hal::ModelRecord& rec,
                  std::string& dropped, std::string& err) {
   const auto runs = [](const hal::ModelRecord& m) {
@@ -150,6 +154,29 @@ bool fit_to_node(const std::string& json, std::size_t root, double n, hal::Model
   const auto note = [&dropped](const std::string& t) {
     dropped += (dropped.empty() ? "" : "; ") + t;
   };
+  const auto narrowed = [&runs](hal::ModelRecord m) {
+    while (!runs(m) && m.bi > 0.0F && m.bi_tau_lo_s * 1000.0F <= m.bi_tau_hi_s) {
+      m.bi_tau_lo_s *= 10.0F;
+    }
+    return m;
+  };
+  const auto runs_narrowed = [&](const hal::ModelRecord& m) { return runs(narrowed(m)); };
+  // m as it is or with its bank narrowed (said); false if neither runs.
+  const auto fits = [&](hal::ModelRecord& m) {
+    if (runs(m)) {
+      return true;
+    }
+    const hal::ModelRecord nm = narrowed(m);
+    if (!runs(nm)) {
+      return false;
+    }
+    note("bias instability of model_after realised by the node from " +
+         num_text(static_cast<double>(nm.bi_tau_lo_s)) + " s, not " +
+         num_text(static_cast<double>(m.bi_tau_lo_s)) + " s: its bank's members below would " +
+         "exceed the node's " + std::to_string(node::kNodeProcessStates) + " states");
+    m = nm;
+    return true;
+  };
   hal::ModelRecord unfiltered = rec;
   unfiltered.n_filter_s = 0.0F;
   hal::ModelRecord no_osc = rec;
@@ -158,17 +185,17 @@ bool fit_to_node(const std::string& json, std::size_t root, double n, hal::Model
   no_osc.osc_beta_per_s = 0.0F;
   hal::ModelRecord base = no_osc;
   base.n_filter_s = 0.0F;
-  if (runs(rec) || !runs(base)) {
+  if (runs(rec) || !runs_narrowed(base) || fits(rec)) {
     return true;
   }
   const std::string why = " (the model with it is not one the node runs: more than " +
                           std::to_string(node::kNodeProcessStates) +
                           " states, or out of its ranges)";
-  if (rec.n_filter_s > 0.0F && (runs(unfiltered) || !runs(no_osc))) {
+  if (rec.n_filter_s > 0.0F && (runs_narrowed(unfiltered) || !runs_narrowed(no_osc))) {
     note("output filter of model_after (" + num_text(static_cast<double>(rec.n_filter_s)) +
          " s) not sent" + why + ": the white noise goes unfiltered");
     rec = unfiltered;
-    if (runs(rec)) {
+    if (fits(rec)) {
       return true;
     }
   }
@@ -191,6 +218,7 @@ bool fit_to_node(const std::string& json, std::size_t root, double n, hal::Model
   note("oscillation of model_after (sigma " + num_text(sigma) + ") not sent as states" + why +
        ": its variance is added to the white noise (N " + std::to_string(n) + " -> " +
        std::to_string(n_eff) + ")");
+  (void)fits(rec);  // runs: base does, with its bank narrowed
   return true;
 }
 
