@@ -495,14 +495,40 @@ std::size_t gm_index(const ModelParams& m, double tb_s) {
   return best;
 }
 
+// iv (the 95 % interval of a positive value, from log_interval) widened to no less than
+// value exp(+-1.96 sd_ln_floor).
+ParamInterval with_log_sd_floor(ParamInterval iv, double value, double sd_ln_floor) {
+  if (!(value > 0.0) || !(iv.lo > 0.0) || !std::isfinite(iv.hi) || !(sd_ln_floor > 0.0)) {
+    return iv;
+  }
+  iv.lo = std::min(iv.lo, value * std::exp(-1.96 * sd_ln_floor));
+  iv.hi = std::max(iv.hi, value * std::exp(1.96 * sd_ln_floor));
+  return iv;
+}
+
+// The standard deviation of ln sigma when sigma^2 is a stationary process's variance estimated
+// from a record of t_rec_s seconds: var(sigma^2 hat) = (2 / T) integral R(t)^2 dt (Bendat and
+// Piersol, "Random Data", 4th ed., sec. 8.2), so sd(ln sigma) = sqrt(integral R^2 / (2 T)) /
+// sigma^2. A GM, R = sigma^2 exp(-|t| / Tb): integral R^2 = sigma^4 Tb, sd = sqrt(Tb / (2 T)).
+// A narrowband oscillation, R = sigma^2 exp(-beta |t|) cos(2 pi f0 t), beta << 2 pi f0:
+// integral R^2 = sigma^4 / (2 beta), sd = 1 / (2 sqrt(beta T)). The ADEV fit's covariance
+// cannot see this limit: its points' EDF assume power-law noise, for which a record holds as
+// many independent samples of the process as it holds of the ADEV's averages.
+double process_sd_ln_sigma(double corr_integral_s, double t_rec_s) {
+  return t_rec_s > 0.0 && corr_integral_s > 0.0 ? std::sqrt(corr_integral_s / (2.0 * t_rec_s))
+                                                : 0.0;
+}
+
 // A GM's sigma = sqrt(Sb Tb / 2) and Tb intervals (GM `g` of the log covariance), named
-// `prefix` + "sigma" and `prefix` + "tb_s".
+// `prefix` + "sigma" and `prefix` + "tb_s"; sigma's no narrower than its record allows.
 void gm_intervals(const LogCov& lc, const ModelParams& m, std::size_t g, const std::string& prefix,
-                  std::vector<ParamInterval>& out) {
+                  double t_rec_s, std::vector<ParamInterval>& out) {
   const std::string sb = "gm" + std::to_string(g) + "_sb";
   const std::string tb = "gm" + std::to_string(g) + "_tb_s";
-  out.push_back(log_interval(lc, prefix + "sigma", std::sqrt(m.gm[g].sb * m.gm[g].tb_s / 2.0),
-                             {{sb, 0.5}, {tb, 0.5}}));
+  const double sigma = std::sqrt(m.gm[g].sb * m.gm[g].tb_s / 2.0);
+  out.push_back(with_log_sd_floor(
+      log_interval(lc, prefix + "sigma", sigma, {{sb, 0.5}, {tb, 0.5}}), sigma,
+      process_sd_ln_sigma(m.gm[g].tb_s, t_rec_s)));
   out.push_back(log_interval(lc, prefix + "tb_s", m.gm[g].tb_s, {{tb, 1.0}}));
 }
 
@@ -513,10 +539,11 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
                       Report& out) {
   const ModelParams& m = out.model_after;
   const LogCov lc = log_covariance(pts, m, o, ts, tau_max);
+  const double t_rec_s = static_cast<double>(out.samples) * ts;
   out.model_after_ci95.clear();
   out.model_after_ci95.push_back(log_interval(lc, "n", m.n, {{"n", 1.0}}));
   if (m.n_gm > 0) {
-    gm_intervals(lc, m, 0, "gm_", out.model_after_ci95);
+    gm_intervals(lc, m, 0, "gm_", t_rec_s, out.model_after_ci95);
   }
   for (Effect& e : out.effects) {
     std::vector<ParamInterval>& c = e.ci95;
@@ -535,11 +562,13 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
       c.push_back(log_interval(lc, "amplitude", e.amplitude, {{w + "_a", 1.0}}));
       c.push_back(log_interval(lc, "freq_hz", e.freq_hz, {{w + "_f0_hz", 1.0}}));
     } else if (e.type == "oscillation") {
-      c.push_back(log_interval(lc, "sigma", e.amplitude, {{"osc_sigma", 1.0}}));
+      c.push_back(with_log_sd_floor(
+          log_interval(lc, "sigma", e.amplitude, {{"osc_sigma", 1.0}}), e.amplitude,
+          process_sd_ln_sigma(m.osc_beta_per_s > 0.0 ? 0.5 / m.osc_beta_per_s : 0.0, t_rec_s)));
       c.push_back(log_interval(lc, "freq_hz", e.freq_hz, {{"osc_f0_hz", 1.0}}));
       c.push_back(log_interval(lc, "bandwidth_hz", e.bandwidth_hz, {{"osc_beta_per_s", 1.0}}));
     } else if (e.type == "gauss_markov" && m.n_gm > 0) {
-      gm_intervals(lc, m, gm_index(m, e.tb_s), "", c);
+      gm_intervals(lc, m, gm_index(m, e.tb_s), "", t_rec_s, c);
     } else if (e.type == "bias_step" && e.statistic > 0.0) {
       // statistic: the size's |z| (its standard error is |size| / |z|)
       const double half = 1.96 * std::fabs(e.size) / e.statistic;
