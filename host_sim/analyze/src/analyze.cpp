@@ -3604,8 +3604,11 @@ class Analysis {
     }
   }
 
-  // A term beside larger ones at every tau is still named when the model is worse than the
-  // first-order one without it (the refit cannot do without it): put back into trial, said.
+  // A term beside larger ones at every tau is still named when the refit cannot do without it:
+  // without it the model is worse than the first-order one, or its ADEV cost rises by more than
+  // the search's threshold (the test a second GM passes backwards) and its RMS and max errors
+  // both rise (the cost alone can be a fraction of a per cent at the shortest taus, where the
+  // EDF is ~1e6, bought with a worse fit elsewhere): put back into trial, said.
   bool needed_beside_larger_terms(const AfterContext& ac, const AfterChoice& choice,
                                   const Effect& e,
                                   const std::vector<std::string>& dominates_nowhere,
@@ -3618,14 +3621,22 @@ class Analysis {
     Report r1;
     r1.effects = without_type(out.effects, e.type);
     remove_unnamed_terms(ac, ch, r1);
-    if (!(not_worse(choice.e, out.error_before) && !not_worse(ch.e, out.error_before))) {
+    const bool worse_than_before =
+        not_worse(choice.e, out.error_before) && !not_worse(ch.e, out.error_before);
+    const double cost_rise = ch.e.cost - choice.e.cost;
+    const bool needed = cost_rise > ac.cost_thr && ch.e.adev_rms_rel > choice.e.adev_rms_rel &&
+                        ch.e.adev_max_rel > choice.e.adev_max_rel;
+    if (!worse_than_before && !needed) {
       return false;
     }
     trial.effects.push_back(e);
-    trial.notes.push_back("named: " + e.type + " (it dominates the model ADEV at no tau, "
-                          "but without it the model after is worse than before: RMS " +
-                          fmt("%.3f", ch.e.adev_rms_rel) + " / max " +
-                          fmt("%.3f", ch.e.adev_max_rel) + ")");
+    trial.notes.push_back(
+        "named: " + e.type + " (it dominates the model ADEV at no tau, but without it " +
+        (worse_than_before ? std::string("the model after is worse than before")
+                           : "the ADEV cost rises by " + fmt("%.1f", cost_rise) + " > " +
+                                 fmt("%.1f", ac.cost_thr)) +
+        ": RMS " + fmt("%.3f", ch.e.adev_rms_rel) + " / max " + fmt("%.3f", ch.e.adev_max_rel) +
+        ")");
     return true;
   }
 
