@@ -10,6 +10,7 @@
 #include <cstring>
 #include <string>
 
+#include "imu/error_model.hpp"
 #include "imu/node/node.hpp"
 
 namespace {
@@ -97,6 +98,34 @@ TEST(ModelJson, MalformedFilterOrOscillationIsRefused) {
     EXPECT_FALSE(r.err.empty());
     EXPECT_EQ(r.err.find('\n'), std::string::npos);
   }
+}
+
+// An oscillation fitted as point samples (the ADEV of m-sample means) is sent with the sigma
+// the node's averaging sampler needs for the same ADEV: sigma x / sin(x), x = pi f0 Ts (said).
+// Checked against the AVAR formulas themselves: the node's continuous-average AVAR with the sent
+// sigma against the analysis's sample-mean AVAR, a narrow band at fs / 5.
+TEST(ModelJson, APointSampledOscillationIsSentAsTheAveragingSamplerSeesIt) {
+  const Read r = read(analysis(", \"oscillation\": {\"sigma\": 0.005, \"f0_hz\": 20, "
+                               "\"beta_per_s\": 0.5, \"point_sampled_ts_s\": 0.01}"));
+  ASSERT_TRUE(r.ok) << r.err;
+  EXPECT_TRUE(node_runs(r.rec));
+  const auto sent = static_cast<double>(r.rec.osc_sigma);
+  for (const int m : {1, 2, 3, 7, 12}) {
+    const double node = imu::avar_oscillation(sent, 20.0, 0.5, m * 0.01);
+    const double data = imu::avar_oscillation_sampled(0.005, 20.0, 0.5, 0.01, m * 0.01);
+    EXPECT_NEAR(node, data, 0.02 * data) << "m " << m;
+  }
+  EXPECT_NE(r.dropped.find("in point samples) sent as"), std::string::npos) << r.dropped;
+  // Averages over each sample period (0) or no key: sent as it is.
+  const Read a = read(analysis(", \"oscillation\": {\"sigma\": 0.005, \"f0_hz\": 20, "
+                               "\"beta_per_s\": 0.5, \"point_sampled_ts_s\": 0}"));
+  ASSERT_TRUE(a.ok) << a.err;
+  EXPECT_EQ(bits(a.rec.osc_sigma), bits(0.005F));
+  EXPECT_EQ(a.dropped, "");
+  const Read bad = read(analysis(", \"oscillation\": {\"sigma\": 0.005, \"f0_hz\": 20, "
+                                 "\"beta_per_s\": 0.5, \"point_sampled_ts_s\": \"x\"}"));
+  EXPECT_FALSE(bad.ok);
+  EXPECT_NE(bad.err.find("point_sampled_ts_s"), std::string::npos) << bad.err;
 }
 
 // A model the node would refuse only for its version 2 terms: 2 GM + RRW + a flicker bank

@@ -12,6 +12,8 @@
 namespace imu::sim {
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 // A number for a message: 6 significant digits.
 std::string num_text(double v) {
   char b[32];
@@ -336,6 +338,23 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
         !get_number(json, osc, "beta_per_s", beta, err)) {
       err = "model_after.oscillation {sigma, f0_hz, beta_per_s} malformed";
       return false;
+    }
+    // Fitted as point samples (the ADEV of m-sample means): the node sees the process through
+    // its averaging sampler, whose sample means' AVAR is the continuous average's; a band at f0
+    // seen so needs sigma x / sin(x), x = pi f0 Ts, to give the data's ADEV (exact for a line).
+    double point_ts_s = 0.0;
+    if (member(json, osc, "point_sampled_ts_s") != std::string::npos &&
+        !get_number(json, osc, "point_sampled_ts_s", point_ts_s, err)) {
+      err = "model_after.oscillation.point_sampled_ts_s malformed";
+      return false;
+    }
+    const double x = kPi * f0 * point_ts_s;
+    if (x > 0.0 && x < 0.5 * kPi) {
+      const double averaged = osc_sigma * x / std::sin(x);
+      dropped += std::string(dropped.empty() ? "" : "; ") + "oscillation of model_after (sigma " +
+                 num_text(osc_sigma) + " in point samples) sent as " + num_text(averaged) +
+                 ", the sigma the node's averaging sampler needs for the same ADEV";
+      osc_sigma = averaged;
     }
     rec.osc_sigma = static_cast<float>(osc_sigma);
     rec.osc_f0_hz = static_cast<float>(f0);
