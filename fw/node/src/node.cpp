@@ -283,7 +283,8 @@ void Node::on_config(const hal::ConfigRecord& c) {
         kf_[c_i].configure(gm, 0.0) != KfStatus::kOk) {
       ++stats_.model_rejected;  // cannot happen: model_in_range() checked both rate limits
     }
-    if (pushed_[c_i] && !build_pushed(c_i)) {
+    ModelParams p{};
+    if (pushed_[c_i] && !(model_record_valid(model_rec_[c_i], p) && build_pushed(c_i, p))) {
       pushed_[c_i] = false;  // valid at the old rate, not at this one: back to the example's
       ++stats_.model_rejected;
     }
@@ -291,9 +292,9 @@ void Node::on_config(const hal::ConfigRecord& c) {
   restart_estimators();
 }
 
-bool Node::build_pushed(std::size_t c) {
+bool Node::build_pushed(std::size_t c, const ModelParams& p) {
   std::size_t n = 0;
-  if (!discretize_pushed(model_par_[c], cfg_.rate_hz, scratch_dm_, n) || !install_filter(c)) {
+  if (!discretize_pushed(p, cfg_.rate_hz, scratch_dm_, n) || !install_filter(c)) {
     return false;
   }
   model_states_[c] = n;
@@ -331,10 +332,7 @@ void Node::on_model(const hal::ModelRecord& r) {
       ok = ok && discretize_pushed(p, rate_hz, scratch_dm_, n);
     }
   }
-  const ModelParams old_par = model_par_[c];
-  model_par_[c] = p;
-  if (!ok || (have_cfg_ && !build_pushed(c))) {
-    model_par_[c] = old_par;
+  if (!ok || (have_cfg_ && !build_pushed(c, p))) {
     ++stats_.model_rejected;
     send_models();
     return;

@@ -246,7 +246,7 @@ class Node {
   void on_model(const hal::ModelRecord& r);
   void send_models();
   void send_channel_monitors();
-  bool build_pushed(std::size_t c);
+  bool build_pushed(std::size_t c, const ModelParams& p);
   void apply_missing();
   void after_sample();
   void restart_estimators();
@@ -266,12 +266,11 @@ class Node {
   hal::Receiver<8> rx_;
   NodeAdev adev_;
   ScalarBiasKf<float> kf_[kChannels];
-  // Pushed models: per channel the record, its parameters, and its filter; pushed_
-  // selects kfn_ over kf_. RAM per channel: sizeof(KalmanFilter<float, 8>) (printed by the test)
-  // + the record and ModelParams.
+  // Pushed models: per channel the record and its filter; pushed_ selects kfn_ over kf_. RAM
+  // per channel: sizeof(KalmanFilter<float, 8>) (printed by the test) + the record. A new rate
+  // rebuilds the filter from the record (model_record_valid gives its parameters again).
   KalmanFilter<float, kNodeStates> kfn_[kChannels];
   hal::ModelRecord model_rec_[kChannels] = {};
-  ModelParams model_par_[kChannels] = {};
   std::size_t model_states_[kChannels] = {};
   bool pushed_[kChannels] = {};
   bool echo_v2_[kChannels] = {};  // the channel's last push was version 2: echo in version 2
