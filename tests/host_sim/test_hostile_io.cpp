@@ -467,14 +467,16 @@ TEST(HostileIo, ImpossibleTelemetryIsAnErrorExit) {
   st.samples = 2000;
   imu::hal::encode(st, imu::hal::Layout::kFd, 1, fr);
   send_all();
+  // The impossible point goes first: once the final set is complete run may end the session,
+  // and on a loaded machine it did so between two of these sends (the last one then failed).
+  imu::hal::AdevRecord bad{0, 0, 1, 0.01F, -1e-3F, 2e-3F, 1e-3F, 1999};
+  imu::hal::encode(bad, imu::hal::Layout::kFd, 2, fr);
+  send_all();
   for (std::uint8_t c = 0; c < 6; ++c) {
     imu::hal::AdevRecord a{c, 0, 1, 0.01F, 1e-3F, 9e-4F, 1.1e-3F, 1999};
-    imu::hal::encode(a, imu::hal::Layout::kFd, 2, fr);
+    imu::hal::encode(a, imu::hal::Layout::kFd, 3, fr);
     send_all();
   }
-  imu::hal::AdevRecord bad{0, 0, 1, 0.01F, -1e-3F, 2e-3F, 1e-3F, 1999};
-  imu::hal::encode(bad, imu::hal::Layout::kFd, 3, fr);
-  send_all();
   ASSERT_TRUE(p.wait(40.0)) << "run still waiting";
   EXPECT_EQ(p.status(), 1) << p.out() << p.err();
   EXPECT_NE(p.err().find("impossible ADEV records"), std::string::npos) << p.err();
