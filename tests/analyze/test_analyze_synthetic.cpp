@@ -153,6 +153,31 @@ TEST(AnalyzeSynthetic, NarrowbandOscillationIsNotASinusoid) {
   EXPECT_GE(t.rms_lower, 9);
 }
 
+// A record of white noise N = 3e-3 and a faint GM at 100 Hz (the terms under test are added).
+ia::SynthSpec faint_gm_record(std::size_t samples, std::uint64_t seed) {
+  ia::SynthSpec spec;
+  spec.fs_hz = 100.0;
+  spec.samples = samples;
+  spec.n = 3e-3;
+  spec.b = 1e-6;
+  spec.tp_s = 10.0;
+  spec.seed = seed;
+  return spec;
+}
+
+// 1 if r has an effect of `type` whose 95 % interval `name` holds `truth`, else 0.
+int interval_holds(const ia::Report& r, const std::string& type, const std::string& name,
+                   double truth) {
+  for (const auto& e : r.effects) {
+    for (const auto& iv : e.ci95) {
+      if (e.type == type && iv.name == name && iv.lo <= truth && truth <= iv.hi) {
+        return 1;
+      }
+    }
+  }
+  return 0;
+}
+
 // An oscillation at fs / 5 (as the ADIS16405 gyros' 20 Hz band at 100 Hz), point-sampled: the
 // ADEV of a record is that of sample means, which exceeds the continuous average's by
 // ((pi f0 Ts) / sin(pi f0 Ts))^2 = 14 % in AVAR here. Fitted with the continuous shape, sigma
@@ -161,28 +186,19 @@ TEST(AnalyzeSynthetic, OscillationAtAFifthOfTheRateKeepsItsSigma) {
   int inside = 0;
   int close = 0;
   for (std::uint64_t seed = 930001; seed <= 930004; ++seed) {
-    ia::SynthSpec spec;
-    spec.fs_hz = 100.0;
-    spec.samples = 1000000;
-    spec.n = 3e-3;
-    spec.b = 1e-6;
-    spec.tp_s = 10.0;
+    ia::SynthSpec spec = faint_gm_record(1000000, seed);
     spec.osc_sigma = 0.02;
     spec.osc_f0_hz = 20.0;
     spec.osc_beta_per_s = 3.14159265358979323846 * 1.0;  // 1 Hz half-power width
-    spec.seed = seed;
     ia::Report r;
     std::string err;
     ASSERT_TRUE(ia::analyze(ia::synthesize(spec), "osc", ia::Options{}, r, err)) << err;
     for (const auto& e : r.effects) {
-      if (e.type != "oscillation") {
-        continue;
-      }
-      close += std::fabs(e.amplitude / spec.osc_sigma - 1.0) <= 0.03 ? 1 : 0;
-      for (const auto& iv : e.ci95) {
-        inside += iv.name == "sigma" && iv.lo <= spec.osc_sigma && spec.osc_sigma <= iv.hi ? 1 : 0;
-      }
+      close += e.type == "oscillation" && std::fabs(e.amplitude / spec.osc_sigma - 1.0) <= 0.03
+                   ? 1
+                   : 0;
     }
+    inside += interval_holds(r, "oscillation", "sigma", spec.osc_sigma);
   }
   std::printf("oscillation at fs / 5: sigma within 3 %% on %d of 4, inside its interval on %d\n",
               close, inside);
@@ -381,14 +397,8 @@ TEST(AnalyzeSynthetic, ADominantFlickerTheRecordRequiresStaysNamed) {
   int named = 0;
   int inside = 0;
   for (std::uint64_t seed = 900001; seed <= 900006; ++seed) {
-    ia::SynthSpec spec;
-    spec.fs_hz = 100.0;
-    spec.samples = 2000000;
-    spec.n = 3e-3;
-    spec.b = 1e-6;
-    spec.tp_s = 10.0;
+    ia::SynthSpec spec = faint_gm_record(2000000, seed);
     spec.flicker_b = 1e-2;
-    spec.seed = seed;
     ia::Report r;
     std::string err;
     ASSERT_TRUE(ia::analyze(ia::synthesize(spec), "flicker", ia::Options{}, r, err)) << err;
@@ -396,14 +406,7 @@ TEST(AnalyzeSynthetic, ADominantFlickerTheRecordRequiresStaysNamed) {
     EXPECT_TRUE(ia::report_consistent(r, why)) << why;
     const bool ok = is_named(r, "bias_instability") && !is_named(r, "rate_random_walk");
     named += ok ? 1 : 0;
-    for (const auto& e : r.effects) {
-      for (const auto& iv : e.ci95) {
-        inside += e.type == "bias_instability" && iv.name == "b" && iv.lo <= spec.flicker_b &&
-                          spec.flicker_b <= iv.hi
-                      ? 1
-                      : 0;
-      }
-    }
+    inside += interval_holds(r, "bias_instability", "b", spec.flicker_b);
     EXPECT_LE(r.error_after.adev_max_rel, r.error_before.adev_max_rel) << describe(r);
     if (!ok) {
       std::printf("flicker seed %llu:\n%s", static_cast<unsigned long long>(seed),
