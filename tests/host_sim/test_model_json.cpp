@@ -198,3 +198,16 @@ TEST(ModelJson, AModelRefusedForAnotherReasonIsSentAsItIs) {
   EXPECT_EQ(bits(r.rec.osc_sigma), bits(0.02F));
   EXPECT_EQ(r.dropped, "");
 }
+
+// A bank the node refuses at every width (its short end 0, or its long end out of float range)
+// is sent as it is after a bounded search for a width it runs: the node refuses and counts it.
+TEST(ModelJson, ABankTheNodeRefusesAtEveryWidthIsSentAsItIs) {
+  for (const char* bi : {"{\"b\": 9e-4, \"tau_lo_s\": 0, \"tau_hi_s\": 1000}",
+                         "{\"b\": 9e-4, \"tau_lo_s\": 1e-30, \"tau_hi_s\": 3e38}"}) {
+    const Read r = read(analysis(", \"n_filter_s\": 2e-3" + kOsc, "[{\"sb\": 2e-6, \"tb_s\": 300}]",
+                                 "1.4e-4", bi));
+    ASSERT_TRUE(r.ok) << r.err;
+    EXPECT_FALSE(node_runs(r.rec)) << bi;
+    EXPECT_EQ(r.dropped, "") << bi;
+  }
+}

@@ -156,8 +156,11 @@ bool fit_to_node(const std::string& json, std::size_t root, double n, hal::Model
   const auto note = [&dropped](const std::string& t) {
     dropped += (dropped.empty() ? "" : "; ") + t;
   };
+  // A bank the node refuses at every width (a zero or non-finite end, a B out of range) ends
+  // the narrowing where the float's range does: at most 83 decades.
   const auto narrowed = [&runs](hal::ModelRecord m) {
-    while (!runs(m) && m.bi > 0.0F && m.bi_tau_lo_s * 1000.0F <= m.bi_tau_hi_s) {
+    while (!runs(m) && m.bi > 0.0F && m.bi_tau_lo_s > 0.0F && std::isfinite(m.bi_tau_hi_s) &&
+           m.bi_tau_lo_s * 1000.0F <= m.bi_tau_hi_s) {
       m.bi_tau_lo_s *= 10.0F;
     }
     return m;
