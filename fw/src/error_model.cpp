@@ -104,6 +104,18 @@ double avar_sinusoid(double a, double f0_hz, double tau_s) {
   return a * a * s * s * s * s / (x * x);
 }
 
+double avar_sinusoid_sampled(double a, double f0_hz, double ts_s, double tau_s) {
+  const double m_real = ts_s > 0.0 ? tau_s / ts_s : 0.0;
+  const double m_round = std::round(m_real);
+  const double x = kPi * f0_hz * ts_s;
+  const double s = std::sin(x);
+  if (!(m_round >= 1.0) || std::fabs(m_real - m_round) > 1e-6 * m_round || !(x > 1e-8) ||
+      !(s > 0.0)) {
+    return avar_sinusoid(a, f0_hz, tau_s);  // off the sample grid, or no sampling period
+  }
+  return avar_sinusoid(a, f0_hz, tau_s) * (x / s) * (x / s);
+}
+
 namespace {
 
 // Complex arithmetic on two doubles (<complex> would pull stream headers into fw).

@@ -143,7 +143,8 @@ double term_avar(const ModelParams& p, TermKind k, std::size_t i, double tau_s) 
     case TermKind::kSinusoid: {
       const double a = i == 0 ? p.sin_a : p.sin2_a;
       const double f0 = i == 0 ? p.sin_f0_hz : p.sin2_f0_hz;
-      return i < 2 && a > 0.0 && f0 > 0.0 ? avar_sinusoid(a, f0, tau_s) : 0.0;
+      const double ts = i == 0 ? p.sin_ts_s : p.sin2_ts_s;
+      return i < 2 && a > 0.0 && f0 > 0.0 ? avar_sinusoid_sampled(a, f0, ts, tau_s) : 0.0;
     }
     case TermKind::kBiasInstability:
       return i == 0 && p.bi > 0.0
@@ -175,9 +176,9 @@ void remove_term(ModelParams& p, TermKind k, std::size_t from) {
     case TermKind::kRamp: p.r = from == 0 ? 0.0 : p.r; break;
     case TermKind::kSinusoid:
       if (from == 0) {
-        p.sin_a = p.sin_f0_hz = 0.0;
+        p.sin_a = p.sin_f0_hz = p.sin_ts_s = 0.0;
       }
-      p.sin2_a = p.sin2_f0_hz = 0.0;
+      p.sin2_a = p.sin2_f0_hz = p.sin2_ts_s = 0.0;
       break;
     case TermKind::kBiasInstability: p.bi = from == 0 ? 0.0 : p.bi; break;
     case TermKind::kOscillation: p.osc_sigma = from == 0 ? 0.0 : p.osc_sigma; break;

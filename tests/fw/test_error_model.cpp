@@ -365,6 +365,30 @@ TEST(ErrorModel, SampledOscillationAvarIsTheAvarOfSampleMeans) {
   EXPECT_DOUBLE_EQ(imu::avar_oscillation_sampled(kSigma, 0.5, 0.3, 0.3, 1.3), cont);
 }
 
+// A sinusoid in a record's samples (random phase: R(d) = A^2 / 2 cos(2 pi f0 d Ts)): the AVAR of
+// its means of m samples from the definition, at f0 = fs / 5 (14 % above the continuous
+// average's) and near Nyquist; off the sample grid or without a period, the continuous one.
+TEST(ErrorModel, SampledSinusoidAvarIsTheAvarOfSampleMeans) {
+  constexpr double kTs = 0.004;
+  constexpr double kA = 3e-3;
+  for (const double f0 : {50.0, 111.3, 0.7}) {
+    const auto r = [&](int d) { return kA * kA / 2.0 * std::cos(2.0 * kPi * f0 * d * kTs); };
+    for (const int m : {1, 2, 5, 9, 64, 301}) {
+      const double direct = sampled_avar_direct(r, m);
+      const double formula = imu::avar_sinusoid_sampled(kA, f0, kTs, m * kTs);
+      EXPECT_NEAR(formula, direct, 1e-9 * kA * kA + 1e-9 * direct) << "f0 " << f0 << " m " << m;
+    }
+  }
+  const double x = kPi * 50.0 * kTs;
+  EXPECT_NEAR(imu::avar_sinusoid_sampled(kA, 50.0, kTs, 7 * kTs) /
+                  imu::avar_sinusoid(kA, 50.0, 7 * kTs),
+              (x / std::sin(x)) * (x / std::sin(x)), 1e-12);
+  EXPECT_GT((x / std::sin(x)) * (x / std::sin(x)), 1.13);
+  const double cont = imu::avar_sinusoid(kA, 50.0, 0.0301);
+  EXPECT_DOUBLE_EQ(imu::avar_sinusoid_sampled(kA, 50.0, kTs, 0.0301), cont);
+  EXPECT_DOUBLE_EQ(imu::avar_sinusoid_sampled(kA, 50.0, 0.0, 0.0301), cont);
+}
+
 TEST(ErrorModel, OscillationIsTwoStatesAndDiscretisesToADampedRotation) {
   imu::ModelParams p;
   p.n = 6.8e-4;

@@ -126,6 +126,11 @@ struct ModelParams {
   double sin_f0_hz = 0.0;  ///< sinusoid frequency f0 [Hz]
   double sin2_a = 0.0;      ///< a second sinusoid (e.g. a harmonic of the first) [unit]
   double sin2_f0_hz = 0.0;  ///< its frequency [Hz]
+  /// The sampling period of the record each sinusoid's amplitude was measured on [s]: a line
+  /// in a record's samples has the AVAR of sample means (avar_sinusoid_sampled). 0:
+  /// continuous averages. Not a filter parameter.
+  double sin_ts_s = 0.0;
+  double sin2_ts_s = 0.0;
   double bi = 0.0;          ///< bias instability B [unit] (flicker), AVAR ~ (0.664 B)^2
   double bi_tau_lo_s = 0.0;  ///< tau range over which the flicker bank realises B
   double bi_tau_hi_s = 0.0;
@@ -154,6 +159,12 @@ struct ModelParams {
 [[nodiscard]] double avar_rrw(double k, double tau_s);
 [[nodiscard]] double avar_ramp(double r, double tau_s);
 [[nodiscard]] double avar_sinusoid(double a, double f0_hz, double tau_s);
+/// A sinusoid of amplitude a in samples taken every ts_s, at tau_s = m ts_s: the mean of m
+/// samples has amplitude a sin(pi f0 tau) / (m sin(pi f0 ts)) (the continuous average's
+/// a sin(pi f0 tau) / (pi f0 tau) times x / sin x, x = pi f0 ts), so the AVAR is
+/// avar_sinusoid's times (x / sin x)^2 at every m. ts_s <= 0, or tau_s off the sample grid:
+/// avar_sinusoid.
+[[nodiscard]] double avar_sinusoid_sampled(double a, double f0_hz, double ts_s, double tau_s);
 /// Narrowband oscillation: sigma^2 Re{2 g(x) / x}, x = (beta - i 2 pi f0) tau, g(x) =
 /// 1 - (3 - 4 e^-x + e^-2x) / (2x) (the GM's bracket at a complex rate; beta > 0, f0 >= 0);
 /// a power series for |x| < 0.5, where the closed form cancels.

@@ -196,6 +196,8 @@ ModelParams with_sines(ModelParams p, const ModelParams& from) {
   p.sin_f0_hz = from.sin_f0_hz;
   p.sin2_a = from.sin2_a;
   p.sin2_f0_hz = from.sin2_f0_hz;
+  p.sin_ts_s = from.sin_ts_s;
+  p.sin2_ts_s = from.sin2_ts_s;
   return p;
 }
 
@@ -275,6 +277,8 @@ ModelParams stochastic_part(ModelParams p) {
   p.sin_f0_hz = 0.0;
   p.sin2_a = 0.0;
   p.sin2_f0_hz = 0.0;
+  p.sin_ts_s = 0.0;
+  p.sin2_ts_s = 0.0;
   return p;
 }
 
@@ -2989,6 +2993,7 @@ class Analysis {
         ModelParams sines{};
         sines.sin_a = sc.fit.amplitude;
         sines.sin_f0_hz = sc.fit.f_hz;
+        sines.sin_ts_s = ts;  // the amplitude of the record's samples
         add_sine_cand("sinusoid", sc, sines, cands);
       }
     } else if (!have_sine2) {
@@ -3018,6 +3023,8 @@ class Analysis {
         sines.sin_f0_hz = sine.f_hz;
         sines.sin2_a = sc.fit.amplitude;
         sines.sin2_f0_hz = sc.fit.f_hz;
+        sines.sin_ts_s = ts;
+        sines.sin2_ts_s = ts;
         add_sine_cand("sinusoid_harmonic", sc, sines, cands);
       }
     }
@@ -3625,8 +3632,9 @@ class Analysis {
         not_worse(choice.e, out.error_before) && !not_worse(ch.e, out.error_before);
     const double cost_rise = ch.e.cost - choice.e.cost;
     // Not quantization: its AVAR (3 Q^2 / tau^2) acts at the shortest taus only, where any
-    // shape the model lacks there (a point-sampled sinusoid near fs / 5, the sensor's filter)
-    // also lowers the cost; beside high-frequency sinusoids it was named on records without it.
+    // shape the model misses there (an oscillation's band near fs / 5 estimated from the
+    // spectrum, the sensor's filter) also lowers the cost; beside fast oscillations it was named
+    // on records without it.
     const bool needed = e.type != "quantization" && cost_rise > ac.cost_thr &&
                         ch.e.adev_rms_rel > choice.e.adev_rms_rel &&
                         ch.e.adev_max_rel > choice.e.adev_max_rel;

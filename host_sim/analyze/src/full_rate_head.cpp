@@ -64,7 +64,11 @@ struct Join {
   bool fits = true;
 };
 
-using Line = std::pair<double, double>;  // (amplitude, frequency)
+struct Line {
+  double a = 0.0;     // amplitude
+  double f_hz = 0.0;
+  double ts_s = 0.0;  // the sampling period it was measured at (ModelParams::sin_ts_s)
+};
 
 Join join_models(const ModelParams& rec, const ModelParams& hm, const Split& sp,
                  double head_tol_hz) {
@@ -74,37 +78,41 @@ Join join_models(const ModelParams& rec, const ModelParams& hm, const Split& sp,
   c.n = hm.n;
   c.n_filter_s = hm.n_filter_s;  // the sensor's filter is seen at full rate only
   c.q = hm.q;
-  const Line head_sines[] = {{hm.sin_a, hm.sin_f0_hz}, {hm.sin2_a, hm.sin2_f0_hz}};
-  const Line rec_sines[] = {{rec.sin_a, rec.sin_f0_hz}, {rec.sin2_a, rec.sin2_f0_hz}};
+  const Line head_sines[] = {{hm.sin_a, hm.sin_f0_hz, hm.sin_ts_s},
+                             {hm.sin2_a, hm.sin2_f0_hz, hm.sin2_ts_s}};
+  const Line rec_sines[] = {{rec.sin_a, rec.sin_f0_hz, rec.sin_ts_s},
+                            {rec.sin2_a, rec.sin2_f0_hz, rec.sin2_ts_s}};
   const auto add_fast = [&](double a, double f, double bw) {
     if (a > 0.0 && f > sp.nyquist_hz) {
       j.fast.push_back({f, std::max({0.02 * alias_of(f, sp.fs_b_hz), bw, head_tol_hz})});
     }
   };
   for (const Line& l : head_sines) {
-    add_fast(l.first, l.second, 0.0);
+    add_fast(l.a, l.f_hz, 0.0);
   }
   add_fast(hm.osc_sigma, hm.osc_f0_hz, hm.osc_beta_per_s / 3.14159265358979323846);
 
   std::vector<Line> sines;
   for (const Line& l : rec_sines) {
-    if (l.first > 0.0 && is_alias(l.second, j.fast, sp.fs_b_hz)) {
-      j.dropped.push_back("sinusoid at " + g4(l.second) + " Hz");
-    } else if (l.first > 0.0) {
+    if (l.a > 0.0 && is_alias(l.f_hz, j.fast, sp.fs_b_hz)) {
+      j.dropped.push_back("sinusoid at " + g4(l.f_hz) + " Hz");
+    } else if (l.a > 0.0) {
       sines.push_back(l);
     }
   }
   for (const Line& l : head_sines) {
-    if (l.first > 0.0 && l.second > sp.nyquist_hz) {
+    if (l.a > 0.0 && l.f_hz > sp.nyquist_hz) {
       sines.push_back(l);
     }
   }
   j.fits = sines.size() <= 2;
-  sines.resize(2, Line{0.0, 0.0});  // two slots (fits says whether more were asked for)
-  c.sin_a = sines[0].first;
-  c.sin_f0_hz = sines[0].second;
-  c.sin2_a = sines[1].first;
-  c.sin2_f0_hz = sines[1].second;
+  sines.resize(2, Line{});  // two slots (fits says whether more were asked for)
+  c.sin_a = sines[0].a;
+  c.sin_f0_hz = sines[0].f_hz;
+  c.sin_ts_s = sines[0].ts_s;
+  c.sin2_a = sines[1].a;
+  c.sin2_f0_hz = sines[1].f_hz;
+  c.sin2_ts_s = sines[1].ts_s;
 
   if (c.osc_sigma > 0.0 && is_alias(c.osc_f0_hz, j.fast, sp.fs_b_hz)) {
     j.dropped.push_back("oscillation at " + g4(c.osc_f0_hz) + " Hz");

@@ -45,7 +45,8 @@ std::string model_json(const ModelParams& p) {
   s << "{\"n\": " << num(p.n) << ", \"n_filter_s\": " << num(p.n_filter_s) << ", \"q\": " << num(p.q) << ", \"gm\": " << gm_list(p.gm, p.n_gm)
     << ", \"k\": " << num(p.k) << ", \"r\": " << num(p.r) << ", \"sin_a\": " << num(p.sin_a)
     << ", \"sin_f0_hz\": " << num(p.sin_f0_hz) << ", \"sin2_a\": " << num(p.sin2_a)
-    << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"bias_instability\": {\"b\": "
+    << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"sin_ts_s\": " << num(p.sin_ts_s)
+    << ", \"sin2_ts_s\": " << num(p.sin2_ts_s) << ", \"bias_instability\": {\"b\": "
     << num(p.bi) << ", \"tau_lo_s\": " << num(p.bi_tau_lo_s) << ", \"tau_hi_s\": "
     << num(p.bi_tau_hi_s) << ", \"gm_bank\": " << gm_list(bank, nb)
     << "}, \"oscillation\": {\"sigma\": " << num(p.osc_sigma) << ", \"f0_hz\": "
