@@ -1475,6 +1475,7 @@ struct AfterContext {
   std::uint32_t required = 0;
   double required_lr = 0.0;     // the walk's 2 ln LR
   double required_bi_lr = 0.0;  // bias instability's 2 ln LR beside the model's other terms
+  double gm_tb_fixed_s = 0.0;   // fit_after's one GM at this Tb (0: searched)
 };
 
 // The 2 ln LR by which the record requires the term of FitTerm bit `bit` (0: not tested).
@@ -1545,7 +1546,8 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
         fo.terms = terms;
         fo.tau_min_s = c.ts;
         fo.tau_max_s = c.tau_max;
-        fo.tb_max_s = tb_max;
+        fo.tb_max_s = c.gm_tb_fixed_s > 0.0 ? c.gm_tb_fixed_s * (1.0 + 1e-9) : tb_max;
+        fo.tb_min_s = c.gm_tb_fixed_s > 0.0 ? c.gm_tb_fixed_s * (1.0 - 1e-9) : 0.0;
         fo.white_filter_s = c.white_filter_s;
         fo.edf_cap = cap;
         fo.flicker_tau_hi_s = c.tau_max;
@@ -3653,10 +3655,11 @@ class Analysis {
   }
 
   // A second GM (no mechanism claimed, exempt from the run check) must pass the search's ADEV
-  // cost test backwards: the model refitted without it costs more than cost_thr more. Nor may
+  // cost test backwards: the model refitted with one GM costs more than cost_thr more. Nor may
   // it peak where the base GM may not (its ADEV peak and an octave after it inside
-  // [Ts, T/10]): beyond that it is the same curve as a walk or flicker over the range.
-  void check_second_gm(const AfterContext& ac, const AfterChoice& choice, Report& trial,
+  // [Ts, T/10]): beyond that it is the same curve as a walk or flicker over the range. Nor may
+  // either GM be immaterial (drop_immaterial_gm).
+  void check_second_gm(const AfterContext& ac, AfterChoice& choice, Report& trial,
                        std::vector<std::string>& gone) {
     if (choice.p.n_gm < 2 || std::find(gone.begin(), gone.end(), "gauss_markov") != gone.end()) {
       return;
@@ -3681,7 +3684,58 @@ class Analysis {
       trial.notes.push_back("not named: gauss_markov (the model refitted without it costs only " +
                             fmt("%.1f", rise) + " <= " + fmt("%.1f", cost_thr) +
                             " more in sum z^2)");
+      return;
     }
+    drop_immaterial_gm(ac, choice, trial);
+  }
+
+  // Of a model's two GMs, one whose removal changes the model's ADEV by less than
+  // unexplained_min_rel at every tau of [Ts, T/10] is not a term the record shows: the analysis
+  // would not report its absence as unexplained. The cost test can still pass it: a GM at a
+  // hundredth of the white noise's AVAR near a few tenths of a second buys its cost from the
+  // slow wander of the overlapping estimates at the shortest taus (EDF ~1e6, neighbouring taus
+  // correlated), and a one-GM refit by that cost then moves the record's own GM there too. It
+  // leaves the model; the other GM keeps its Tb and the rest is refitted (fit_after with
+  // gm_tb_fixed_s), unless that model is worse than before or its RMS or max error rises by
+  // more than unexplained_min_rel (then the other terms lean on it: a GM at the shortest taus
+  // can hold what a flicker bank starting at 10 Ts leaves out). Its effect leaves trial and
+  // out, said.
+  void drop_immaterial_gm(const AfterContext& ac, AfterChoice& choice, Report& trial) {
+    const ModelParams& p = choice.p;
+    const double keep = 1.0 - o.unexplained_min_rel;
+    double share[2] = {0.0, 0.0};  // each GM's largest share of the model's AVAR
+    for (const AdevPoint& pt : in_range(points_for_model(ac.clean, p), tau_max)) {
+      const double total = model_avar(p, pt.tau_s);
+      for (std::size_t g = 0; g < 2 && total > 0.0; ++g) {
+        share[g] = std::max(share[g],
+                            avar_gauss_markov(p.gm[g].sb, p.gm[g].tb_s, pt.tau_s) / total);
+      }
+    }
+    const std::size_t g = share[0] <= share[1] ? 0 : 1;
+    if (!(share[g] < 1.0 - keep * keep)) {
+      return;
+    }
+    AfterContext fixed = ac;
+    fixed.gm_tb_fixed_s = p.gm[1 - g].tb_s;
+    const AfterChoice ch = fit_after(fixed, choice.terms & ~kFitGm2, p, p.sin_a > 0.0);
+    const double rel = o.unexplained_min_rel;
+    if (!ch.ok || (not_worse(choice.e, out.error_before) && !not_worse(ch.e, out.error_before)) ||
+        ch.e.adev_rms_rel > choice.e.adev_rms_rel + rel ||
+        ch.e.adev_max_rel > choice.e.adev_max_rel + rel) {
+      return;  // the refit needs it: the others move (e.g. a flicker bank's lower end)
+    }
+    trial.effects = without_type(trial.effects, "gauss_markov");
+    out.effects = without_type(out.effects, "gauss_markov");
+    out.notes.push_back(
+        "not named: gauss_markov (the GM of Tb = " + fmt("%.4g", p.gm[g].tb_s) +
+        " s changes the model's ADEV by at most " +
+        fmt("%.2g", 100.0 * (1.0 - std::sqrt(1.0 - share[g]))) + " % at any tau, under the " +
+        fmt("%.0f", 100.0 * o.unexplained_min_rel) + " % the analysis reports as unexplained; " +
+        "removed, the other GM kept at Tb = " + fmt("%.4g", p.gm[1 - g].tb_s) +
+        " s: error over [Ts, T/10] RMS " + fmt("%.3f", ch.e.adev_rms_rel) + " / max " +
+        fmt("%.3f", ch.e.adev_max_rel) + ", with it " + fmt("%.3f", choice.e.adev_rms_rel) +
+        " / " + fmt("%.3f", choice.e.adev_max_rel) + ")");
+    choice = ch;
   }
 
   // The after-model (never worse), the names checked, the remainder said, the filters run.
