@@ -447,8 +447,14 @@ Outcome analyse(const Record& rec) {
   }
   out.ok = true;
   if (std::getenv("BENCH_SELECTION_TEXT") != nullptr) {
-    std::fprintf(stderr, "== seed %llu\n%s\n", static_cast<unsigned long long>(rec.spec.seed),
-                 ia::to_text(r).c_str());
+    const ia::SynthSpec& s = rec.spec;
+    std::fprintf(stderr,
+                 "== seed %llu\ntruth: N %.4g, GM peak ADEV %.4g at Tp %.4g s, Q %.4g, K %.4g, "
+                 "R %.4g, sinusoid %.4g at %.4g Hz, B %.4g, oscillation %.4g at %.4g Hz (beta "
+                 "%.4g /s), step %.4g at %.4g s\n%s\n",
+                 static_cast<unsigned long long>(s.seed), s.n, s.b, s.tp_s, s.q, s.k, s.ramp_r,
+                 s.sin_a, s.sin_f_hz, s.flicker_b, s.osc_sigma, s.osc_f0_hz, s.osc_beta_per_s,
+                 s.step_size, s.step_time_s, ia::to_text(r).c_str());
   }
   out.cpu_s = r.cpu_seconds;
   out.unexplained = !r.unexplained.empty();
