@@ -3699,7 +3699,7 @@ class Analysis {
   // gm_tb_fixed_s), unless that model is worse than before or its RMS or max error rises by
   // more than unexplained_min_rel (then the other terms lean on it: a GM at the shortest taus
   // can hold what a flicker bank starting at 10 Ts leaves out). Its effect leaves trial and
-  // out, said.
+  // out, said; the others take the refit's parameters.
   void drop_immaterial_gm(const AfterContext& ac, AfterChoice& choice, Report& trial) {
     const ModelParams& p = choice.p;
     const double keep = 1.0 - o.unexplained_min_rel;
@@ -3736,6 +3736,8 @@ class Analysis {
         fmt("%.3f", ch.e.adev_max_rel) + ", with it " + fmt("%.3f", choice.e.adev_rms_rel) +
         " / " + fmt("%.3f", choice.e.adev_max_rel) + ")");
     choice = ch;
+    drop_unmodelled_effects(choice.p, trial);  // the effects take the refit's parameters
+    drop_unmodelled_effects(choice.p, out);
   }
 
   // The after-model (never worse), the names checked, the remainder said, the filters run.
