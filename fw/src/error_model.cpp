@@ -104,13 +104,22 @@ double avar_sinusoid(double a, double f0_hz, double tau_s) {
   return a * a * s * s * s * s / (x * x);
 }
 
-double avar_sinusoid_sampled(double a, double f0_hz, double ts_s, double tau_s) {
+namespace {
+
+// The number of samples m with tau = m Ts when tau lies on the sample grid (to 1e-6 m), else
+// 0: the sampled AVAR forms hold only there.
+double samples_per_tau(double ts_s, double tau_s) {
   const double m_real = ts_s > 0.0 ? tau_s / ts_s : 0.0;
   const double m_round = std::round(m_real);
+  return m_round >= 1.0 && std::fabs(m_real - m_round) <= 1e-6 * m_round ? m_round : 0.0;
+}
+
+}  // namespace
+
+double avar_sinusoid_sampled(double a, double f0_hz, double ts_s, double tau_s) {
   const double x = kPi * f0_hz * ts_s;
   const double s = std::sin(x);
-  if (!(m_round >= 1.0) || std::fabs(m_real - m_round) > 1e-6 * m_round || !(x > 1e-8) ||
-      !(s > 0.0)) {
+  if (!(samples_per_tau(ts_s, tau_s) >= 1.0) || !(x > 1e-8) || !(s > 0.0)) {
     return avar_sinusoid(a, f0_hz, tau_s);  // off the sample grid, or no sampling period
   }
   return avar_sinusoid(a, f0_hz, tau_s) * (x / s) * (x / s);
@@ -170,9 +179,8 @@ double avar_oscillation(double sigma, double f0_hz, double beta_per_s, double ta
 
 double avar_oscillation_sampled(double sigma, double f0_hz, double beta_per_s, double ts_s,
                                 double tau_s) {
-  const double m_real = ts_s > 0.0 ? tau_s / ts_s : 0.0;
-  const double m_round = std::round(m_real);
-  if (!(m_round >= 1.0) || std::fabs(m_real - m_round) > 1e-6 * m_round || !(beta_per_s > 0.0)) {
+  const double m_round = samples_per_tau(ts_s, tau_s);
+  if (!(m_round >= 1.0) || !(beta_per_s > 0.0)) {
     return avar_oscillation(sigma, f0_hz, beta_per_s, tau_s);
   }
   // R(d) = sigma^2 Re z^d, z = e^(-beta Ts) e^(i 2 pi f0 Ts). V(n) = var(sum of n samples) =
