@@ -168,8 +168,9 @@ Residual residual(const Points& pts, const ModelParams& m, const Options& o, dou
 // a GM at the shortest taus held the flicker below the bank and the record's own GM was then
 // named as a second GM (the selection benchmark: 38 of 500 reports, 27 at 1e-4). A bank
 // reaching below where the floor begins competes with the GM of the sensor's own filter (the
-// ADIS16405's, ~0.1 s), which it then imitates: tau_floor, not the bound, keeps it above. A bank that
-// stops short of where the floor begins makes the fit raise B to fill the gap: on pure flicker
+// ADIS16405's, ~0.1 s), which it then imitates: tau_floor, not the bound, keeps it above. A
+// bank that stops short of where the floor begins makes the fit raise B to fill the gap: on
+// pure flicker
 // (B = 1e-2, N = 3e-3, 2e6 samples at 100 Hz) a lower end at tau_min_adev / 30 and 1e-2 tau_max
 // biased B by +2 % to +15 %, this one by -0.5 % to +1.2 %.
 double flicker_tau_lo(double tau_min, double tau_max, const Points& pts) {
