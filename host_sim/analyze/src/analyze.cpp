@@ -3781,14 +3781,7 @@ class Analysis {
     const bool worse_than_before =
         not_worse(choice.e, out.error_before) && !not_worse(ch.e, out.error_before);
     const double cost_rise = ch.e.cost - choice.e.cost;
-    // Not quantization beside a narrowband oscillation: Q's AVAR (3 Q^2 / tau^2) acts at the
-    // shortest taus only, where the oscillation's ADEV below 1 / f0 follows the band's shape
-    // estimated from the spectrum; what that shape misses there also lowers the cost, and Q was
-    // named on records without it. Elsewhere a Q dropped here leaves its AVAR to N (N 2-17 %
-    // high, outside its interval).
-    const bool beside_band = e.type == "quantization" && choice.p.osc_sigma > 0.0;
-    const bool needed = !beside_band && cost_rise > ac.cost_thr &&
-                        ch.e.adev_rms_rel > choice.e.adev_rms_rel &&
+    const bool needed = cost_rise > ac.cost_thr && ch.e.adev_rms_rel > choice.e.adev_rms_rel &&
                         ch.e.adev_max_rel > choice.e.adev_max_rel;
     if (!worse_than_before && !needed) {
       return false;
