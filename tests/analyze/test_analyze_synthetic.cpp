@@ -286,6 +286,17 @@ TEST(AnalyzeSynthetic, ASlowGmOnlyBeyondTheFirstOrderRangeIsNotASecondGm) {
   EXPECT_GE(near_tb, 20);
 }
 
+// White noise N = 3.3e-4 and a GM peaking at 60 s, 2^20 samples at 100 Hz; with_q: quantization
+// at 30 % of the white noise's AVAR at Ts (3 Q^2 / Ts^2 = 0.3 N^2 / Ts).
+ia::SynthSpec q_record(std::uint64_t seed, bool with_q) {
+  ia::SynthSpec spec = faint_gm_record(1048576, seed);
+  spec.n = 3.3e-4;
+  spec.b = 4e-5;
+  spec.tp_s = 60.0;
+  spec.q = with_q ? spec.n * std::sqrt(0.3 / spec.fs_hz / 3.0) : 0.0;
+  return spec;
+}
+
 // Quantization at 30 % of the white noise's AVAR at Ts (dominant nowhere: that takes 2x) beside
 // white noise and a GM: the model without Q misses the first taus, so Q is named, near its
 // truth, and N keeps its interval (a Q dropped here leaves its AVAR to N, which then runs
@@ -297,12 +308,7 @@ TEST(AnalyzeSynthetic, QuantizationBesideLargerWhiteNoiseIsKept) {
   int n_inside = 0;
   constexpr int kSeedsHere = 6;
   for (std::uint64_t seed = 950101; seed < 950101 + kSeedsHere; ++seed) {
-    ia::SynthSpec spec = faint_gm_record(1048576, seed);
-    spec.n = 3.3e-4;
-    spec.b = 4e-5;
-    spec.tp_s = 60.0;
-    const double ts_s = 1.0 / spec.fs_hz;
-    spec.q = spec.n * std::sqrt(0.3 * ts_s / 3.0);  // 3 Q^2 / Ts^2 = 0.3 N^2 / Ts
+    ia::SynthSpec spec = q_record(seed, true);
     ia::Report r;
     std::string err;
     ASSERT_TRUE(ia::analyze(ia::synthesize(spec), "q", ia::Options{}, r, err)) << err;
@@ -336,14 +342,10 @@ TEST(AnalyzeSynthetic, QuantizationBesideAnOscillation) {
   constexpr int kSeedsHere = 6;
   for (std::uint64_t seed = 970101; seed < 970101 + kSeedsHere; ++seed) {
     for (const bool with_q : {true, false}) {
-      ia::SynthSpec spec = faint_gm_record(1048576, seed);
-      spec.n = 3.3e-4;
-      spec.b = 4e-5;
-      spec.tp_s = 60.0;
+      ia::SynthSpec spec = q_record(seed, with_q);
       spec.osc_sigma = 0.002;  // 0.6 x the white std per sample
       spec.osc_f0_hz = 8.0;
       spec.osc_beta_per_s = 3.14159265358979323846 * 0.8;
-      spec.q = with_q ? spec.n * std::sqrt(0.3 / spec.fs_hz / 3.0) : 0.0;  // as above
       ia::Report r;
       std::string err;
       ASSERT_TRUE(ia::analyze(ia::synthesize(spec), "q", ia::Options{}, r, err)) << err;
