@@ -1084,7 +1084,7 @@ std::vector<double> minus_sine(const std::vector<double>& y, double ts, const Si
 // is ~1.5 bins wide, 3 after the 3-bin smoothing) and the peak at least twice the floor, with
 // both half-power points inside the window. Those give the start; centre and width are then
 // fitted (fit_lorentzian): read off the half-power points of the noisy PSD, the width comes out
-// 15-35 % narrow (the highest bin overstates the peak, the flanks hold the band's own tails),
+// 15-50 % narrow (the highest bin overstates the peak, the flanks hold the band's own tails),
 // and the ADEV fit's shape below 1 / f0 with it. The ADEV fit then sizes sigma^2.
 struct OscFit {
   bool ok = false;
@@ -1186,7 +1186,7 @@ struct BandShape {
 };
 
 // Least squares of the smoothed PSD over [k0, k1] against floor + slope + P x band, weighted by
-// the start's model squared (an averaged periodogram scatters in proportion to its level): a
+// 1 / (the start's model)^2 (an averaged periodogram scatters in proportion to its level): a
 // grid over the centre and the half-width (moved while the best lies on its edge, at most three
 // times), then narrowed three times around the best. Returns false (out unchanged) when the
 // best stays on the edge or P is not positive.
