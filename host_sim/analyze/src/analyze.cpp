@@ -171,9 +171,8 @@ Residual residual(const Points& pts, const ModelParams& m, const Options& o, dou
 // reaching below where the floor begins competes with the GM of the sensor's own filter (the
 // ADIS16405's, ~0.1 s), which it then imitates: tau_floor, not the bound, keeps it above. A
 // bank that stops short of where the floor begins makes the fit raise B to fill the gap: on
-// pure flicker
-// (B = 1e-2, N = 3e-3, 2e6 samples at 100 Hz) a lower end at tau_min_adev / 30 and 1e-2 tau_max
-// biased B by +2 % to +15 %, this one by -0.5 % to +1.2 %.
+// pure flicker (B = 1e-2, N = 3e-3, 2e6 samples at 100 Hz) a lower end at tau_min_adev / 30 and
+// 1e-2 tau_max biased B by +2 % to +15 %, this one by -0.5 % to +1.2 %.
 double flicker_tau_lo(double tau_min, double tau_max, const Points& pts) {
   double t_min_adev = 0.0;
   double a_min = 0.0;
@@ -1090,7 +1089,6 @@ struct OscFit {
   bool ok = false;
   double f0_hz = 0.0;
   double beta_per_s = 0.0;
-  double width_bins = 0.0;
 };
 
 // The Welch PSD of a record, 3-bin smoothed (computed once per record version: every bump's
@@ -1238,9 +1236,10 @@ bool fit_lorentzian(const WelchPsd& w_psd, std::size_t k0, std::size_t k1, doubl
   double ln_g = std::log(g_start);
   double f_span = g_start;        // the centre's grid: f0 +- f_span
   double g_span = std::log(2.0);  // the half-width's: ln g +- g_span
-  constexpr int kHalf = 6;        // 13 x 13 points per round
-  int moves = 0;                  // the coarse grid re-centred on an edge at most 3 times
-  for (int round = 0; round < 4; ++round) {
+  constexpr int kHalf = 6;        // 13 x 13 points per grid
+  // One grid around (f0, ln_g), moved to its best point; false if no point has P > 0, else
+  // on_edge tells whether the best lay on the grid's edge.
+  const auto step = [&](bool& on_edge) {
     double best = std::numeric_limits<double>::infinity();
     int bi = 0;
     int bj = 0;
@@ -1254,20 +1253,23 @@ bool fit_lorentzian(const WelchPsd& w_psd, std::size_t k0, std::size_t k1, doubl
         }
       }
     }
-    if (!std::isfinite(best)) {
-      return false;
-    }
     f0 += f_span * bi / kHalf;
     ln_g += g_span * bj / kHalf;
-    if (round == 0 && (std::abs(bi) == kHalf || std::abs(bj) == kHalf)) {
-      if (++moves > 3) {
-        return false;
-      }
-      round = -1;  // the same span around the edge point
-      continue;
+    on_edge = std::abs(bi) == kHalf || std::abs(bj) == kHalf;
+    return std::isfinite(best);
+  };
+  bool on_edge = true;
+  for (int moves = 0; on_edge; ++moves) {  // the coarse grid, moved at most 3 times
+    if (moves > 3 || !step(on_edge)) {
+      return false;
     }
+  }
+  for (int round = 0; round < 3; ++round) {
     f_span *= 2.0 / kHalf;
     g_span *= 2.0 / kHalf;
+    if (!step(on_edge)) {
+      return false;
+    }
   }
   fit.f0_hz = f0;
   fit.beta_per_s = 2.0 * kPi * std::exp(ln_g);
@@ -1347,17 +1349,17 @@ OscFit estimate_oscillation(const WelchPsd& w_psd, double f_c) {
   OscFit out;
   out.f0_hz = swf / sw * df;
   out.beta_per_s = kPi * width * df;
-  out.width_bins = width;
-  // Underdamped only (a peak away from 0 Hz): otherwise it is a GM's business.
-  out.ok = sw > 0.0 && out.f0_hz > width * df;
+  // Underdamped only (a peak further from 0 Hz than its half-power width, beta / pi):
+  // otherwise it is a GM's business.
+  const auto underdamped = [](const OscFit& f) { return f.f0_hz > f.beta_per_s / kPi; };
+  out.ok = sw > 0.0 && underdamped(out);
   if (out.ok) {
     const double reach = 8.0 * std::max(3.0, 0.5 * width);  // the flanks' outer edge
     const double lo = std::max(static_cast<double>(k_lo), static_cast<double>(kp) - reach);
     const double hi = std::min(static_cast<double>(k_hi), static_cast<double>(kp) + reach);
     fit_lorentzian(w_psd, static_cast<std::size_t>(lo), static_cast<std::size_t>(hi),
                    floor_level, sm[kp] - floor_level, out);
-    out.width_bins = out.beta_per_s / (kPi * df);
-    out.ok = out.f0_hz > out.width_bins * df;
+    out.ok = underdamped(out);
   }
   return out;
 }
