@@ -584,6 +584,38 @@ TEST(AnalyzeSynthetic, ADominantFlickerTheRecordRequiresStaysNamed) {
   EXPECT_GE(inside, 4);
 }
 
+// A ramp under flicker: over [Ts, T/10] a line plus flicker's long excursions is a walk's
+// curve too, and the walk's likelihood beside a GM alone rises with both. White noise, a GM
+// peaking at 8 s, B = 1.4e-3 and R = sqrt(2) x 2e-4 per T/300 (the ramp dominates from about
+// T/100), 2^20 samples at 100 Hz: the walk must not be named, the ramp and B should be.
+TEST(AnalyzeSynthetic, ARampUnderFlickerIsNotAWalk) {
+  int walk = 0;
+  int ramp = 0;
+  int flicker = 0;
+  for (std::uint64_t seed = 980101; seed <= 980106; ++seed) {
+    ia::SynthSpec spec = faint_gm_record(1048576, seed);
+    spec.n = 2.6e-3;
+    spec.b = 2e-4;
+    spec.tp_s = 8.0;
+    spec.flicker_b = 1.4e-3;
+    const double t_rec_s = static_cast<double>(spec.samples) / spec.fs_hz;
+    spec.ramp_r = std::sqrt(2.0) * spec.b / (t_rec_s / 300.0);
+    const ia::Report r = analyze_spec(spec, "ramp_flicker");
+    walk += is_named(r, "rate_random_walk") ? 1 : 0;
+    ramp += is_named(r, "ramp") ? 1 : 0;
+    flicker += is_named(r, "bias_instability") ? 1 : 0;
+    if (is_named(r, "rate_random_walk") || !is_named(r, "ramp")) {
+      std::printf("ramp under flicker seed %llu:\n%s", static_cast<unsigned long long>(seed),
+                  describe(r).c_str());
+    }
+  }
+  std::printf("ramp under flicker: walk named on %d of 6, ramp on %d, bias instability on %d\n",
+              walk, ramp, flicker);
+  EXPECT_EQ(walk, 0);
+  EXPECT_GE(ramp, 5);
+  EXPECT_GE(flicker, 4);
+}
+
 TEST(AnalyzeSynthetic, TwentyControlsGiveNoEffect) {
   int clean = 0;
   for (std::uint64_t seed = 201; seed <= 220; ++seed) {

@@ -1386,13 +1386,15 @@ struct LongTauInput {
   const ModelParams& cur;
   double cur_cost;
   double cost_thr;
+  double lr_thr;  // the record likelihood's level: a line the model lacks must pass it
 };
 
 // See the call: among the long-tau candidates that pass the ADEV test, the one the record's
 // likelihood prefers (AIC); `best` unchanged when fewer than two of them pass or it is another
 // kind of term.
 const Cand* long_tau_choice(const LongTauInput& in, const std::vector<Cand>& cands,
-                            const Cand* best, std::vector<std::string>& notes) {
+                            const Cand* best, std::vector<std::string>& notes, bool& line) {
+  line = false;
   const auto passes = [&](const Cand& c) { return in.cur_cost - c.cost > in.cost_thr; };
   const Cand* bi = nullptr;
   const Cand* rw = nullptr;
@@ -1417,31 +1419,39 @@ const Cand* long_tau_choice(const LongTauInput& in, const std::vector<Cand>& can
   struct Scored {
     const Cand* c;
     double score;
+    bool line;  // its score is the one beside a line the model does not hold yet
   };
   std::vector<Scored> scored;
   std::string what;
+  // Each member scored as it is and, where the model has no ramp yet, beside a line when the
+  // line passes the record likelihood's test beside it (then one parameter more): a ramp under
+  // flicker is a walk's curve over the range as well, and flicker's long excursions beside an
+  // unmodelled line would otherwise raise only the walk's likelihood. The line itself is left
+  // to the search's next step.
+  const auto score = [&](const Cand* c, const ModelParams& p, bool walk, double extra) {
+    const auto loglik = [&](bool with_line) {
+      const RrwLikelihoodTest t =
+          test_rrw(in.y, in.ts, p, in.tb_max, with_line, in.step_at, kAuxBlocks, walk);
+      return t.ok ? (walk ? t.h1.loglik : t.h0.loglik) : -std::numeric_limits<double>::infinity();
+    };
+    const double plain = loglik(in.ramp);
+    const double lined = in.ramp ? plain : loglik(true);
+    const bool needs_line = !in.ramp && 2.0 * (lined - plain) > in.lr_thr;
+    const double ll = needs_line ? lined - 1.0 : plain;
+    if (std::isfinite(ll)) {
+      scored.push_back({c, ll - extra, needs_line});
+    }
+  };
   if (bi != nullptr) {
     ModelParams p = bi->p;
     p.k = 0.0;
-    const RrwLikelihoodTest t =
-        test_rrw(in.y, in.ts, p, in.tb_max, in.ramp, in.step_at, kAuxBlocks, false);
-    if (t.ok) {
-      scored.push_back({bi, t.h0.loglik - 1.0});
-    }
+    score(bi, p, false, 1.0);
   }
-  if (rw != nullptr || gm != nullptr) {
-    const RrwLikelihoodTest t =
-        test_rrw(in.y, in.ts, in.cur, in.tb_max, in.ramp, in.step_at, kAuxBlocks);
-    if (t.ok && rw != nullptr) {
-      scored.push_back({rw, t.h1.loglik - 1.0});
-    }
+  if (rw != nullptr) {
+    score(rw, in.cur, true, 1.0);
   }
   if (gm != nullptr) {
-    const RrwLikelihoodTest t =
-        test_rrw(in.y, in.ts, gm->p, in.tb_max, in.ramp, in.step_at, kAuxBlocks, false);
-    if (t.ok) {
-      scored.push_back({gm, t.h0.loglik - 2.0});
-    }
+    score(gm, gm->p, false, 2.0);
   }
   bool best_scored = false;
   for (const auto& sc : scored) {
@@ -1452,11 +1462,13 @@ const Cand* long_tau_choice(const LongTauInput& in, const std::vector<Cand>& can
   }
   const Scored* win = &scored[0];
   for (const auto& sc : scored) {
-    what += (what.empty() ? "" : ", ") + sc.c->type + " " + fmt("%.1f", sc.score);
+    what += (what.empty() ? "" : ", ") + sc.c->type + (sc.line ? " beside a line " : " ") +
+            fmt("%.1f", sc.score);
     win = sc.score > win->score ? &sc : win;
   }
   notes.push_back("long-tau family by the record's likelihood (ln L less extra parameters): " +
                   what + ": " + win->c->type);
+  line = win->line;
   return win->c;
 }
 
@@ -3255,13 +3267,15 @@ class Analysis {
     // end fits any of them (two GMs and a walk imitate flicker over a decade or two); the
     // record decides. The candidates that pass the ADEV test are compared by their maximised
     // block-mean likelihoods (long_memory.hpp) less their extra parameters (AIC: 1 for B or K,
-    // 2 for a GM).
+    // 2 for a GM; 1 more beside a line the model does not hold, and then the walk and flicker
+    // are told apart on the record less its line as well).
+    bool beside_line = false;
     if (best != nullptr) {
       best = long_tau_choice(LongTauInput{fit_record(), ts, tb_max, (terms & kFitRamp) != 0U,
-                                          step_at, cur_p, cur_cost, cost_thr},
-                             cands, best, out.notes);
+                                          step_at, cur_p, cur_cost, cost_thr, lr_thr},
+                             cands, best, out.notes, beside_line);
     }
-    if (best != nullptr && !walk_or_flicker(cands, best)) {
+    if (best != nullptr && !walk_or_flicker(cands, best, beside_line)) {
       return take_best(cands);
     }
     if (best == nullptr || cur_cost - best->cost <= cost_thr) {
@@ -3372,12 +3386,13 @@ class Analysis {
   // holds only a few of their time scales either fits the other (a flicker floor whose last
   // estimates scatter upwards, a walk seen over a decade). Each is taken only if the record's
   // likelihood needs it beside the other (long_tau_pair; on the detrended record when a ramp
-  // is in the model; ramp_or_walk weighs a trend against the walk). One needed: it
+  // is in the model or the family's choice scored best beside a line: beside_line;
+  // ramp_or_walk weighs a trend against the walk). One needed: it
   // is taken, the other ruled out; neither: the record cannot tell them apart. Then the walk
   // is ruled out; bias instability, stationary and the lesser claim, is kept where the ADEV
   // and the family's likelihood put it first, and ruled out with the walk where they put the
   // walk first (the rise stays unexplained). False when `best` was ruled out.
-  bool walk_or_flicker(const std::vector<Cand>& cands, const Cand* best) {
+  bool walk_or_flicker(const std::vector<Cand>& cands, const Cand* best, bool beside_line) {
     const bool walk = best->type == "rate_random_walk";
     if ((!walk && best->type != "bias_instability") || !(cur_cost - best->cost > cost_thr)) {
       return true;
@@ -3386,7 +3401,7 @@ class Analysis {
     if (other == nullptr) {
       return true;  // no rival on the ADEV: its test is the ADEV's (and the walk's likelihood)
     }
-    const bool detrend = (terms & kFitRamp) != 0U;
+    const bool detrend = (terms & kFitRamp) != 0U || beside_line;
     const LongTauPair lp = long_tau_pair(walk ? &other->p : &best->p, detrend);
     const double need_best = walk ? lp.k_beside_b : lp.b_beside_k;
     const double need_other = walk ? lp.b_beside_k : lp.k_beside_b;
