@@ -34,7 +34,8 @@
 //   noise-level change (from t_c, uniform in [0.2 T, 0.8 T], independent white noise that
 //     multiplies the white std per sample by g, 1.5 to 4: added std white_sd sqrt(g^2 - 1)).
 // A term "dominates" when its ADEV is at least 2 x that of all the other true terms together over
-// an octave of taus inside [Ts, T/10] (steps: at least 5 GM sigmas; outliers: always); those
+// an octave of taus inside [Ts, T/10] (a step's AVAR: d^2 tau / (3 (T - 2 tau)); outliers:
+// always); those
 // are the records where it should be named. The targets (see the README): named in at least
 // 90 % of the records where it dominates, in at most 1 % of the records without it. The records
 // with a transient or a noise change are left out of the "without it" columns (a name there may
@@ -260,11 +261,24 @@ void draw_terms(std::mt19937_64& rng, Record& r, double gm_sigma, double white_s
   }
 }
 
-// Dominance over an octave inside [Ts, T/10] (taus at 8 per octave).
-void mark_dominant(Record& r, double gm_sigma) {
+// AVAR of a bias step of size d inside a record of length T, at tau no longer than the step's
+// distance to either end: d^2 tau / (3 (T - 2 tau)) (of the T - 2 tau overlapping pairs of
+// windows, those within tau of the step differ by d (1 - |offset| / tau)).
+double step_avar(const Record& r, double tau) {
+  const double d = r.spec.step_size;
+  return r.has[kStep] ? d * d * tau / (3.0 * (r.t_rec - 2.0 * tau)) : 0.0;
+}
+
+// Dominance over an octave inside [Ts, T/10] (taus at 8 per octave): the term's AVAR at least
+// 4x that of all the others (the base included) at every tau of the octave. The step's AVAR
+// is step_avar (its time is in [0.1 T, 0.9 T], so every tau up to T/10 qualifies).
+void mark_dominant(Record& r) {
   const ia::SynthSpec& s = r.spec;
   const double ts = 1.0 / s.fs_hz;
-  for (std::size_t t = 0; t < kStep; ++t) {
+  const auto avar_of = [&r](std::size_t t, double tau) {
+    return t == kStep ? step_avar(r, tau) : term_avar(r, static_cast<Term>(t), tau);
+  };
+  for (std::size_t t = 0; t <= kStep; ++t) {
     if (!r.has[t]) {
       continue;
     }
@@ -273,17 +287,16 @@ void mark_dominant(Record& r, double gm_sigma) {
     for (int i = 0; i <= n_tau; ++i) {
       const double tau = ts * std::pow(2.0, 0.125 * i);
       double rest = base_avar(s, tau);
-      for (std::size_t o = 0; o < kStep; ++o) {
-        rest += o == t ? 0.0 : term_avar(r, static_cast<Term>(o), tau);
+      for (std::size_t o = 0; o <= kStep; ++o) {
+        rest += o == t ? 0.0 : avar_of(o, tau);
       }
-      const bool dom = term_avar(r, static_cast<Term>(t), tau) >= 4.0 * rest;
+      const bool dom = avar_of(t, tau) >= 4.0 * rest;
       run_from = dom ? (run_from > 0.0 ? run_from : tau) : 0.0;
       if (run_from > 0.0 && tau >= 2.0 * run_from * 0.999) {
         r.dominant[t] = true;
       }
     }
   }
-  r.dominant[kStep] = r.has[kStep] && std::fabs(s.step_size) >= 5.0 * gm_sigma;
   r.dominant[kOutliers] = r.has[kOutliers];
 }
 
@@ -308,7 +321,7 @@ Record draw(std::uint64_t seed, std::size_t max_samples) {
   const double white_sd = s.n * std::sqrt(s.fs_hz);
   draw_terms(rng, r, gm_sigma, white_sd);
   draw_nonstationary(rng, r, gm_sigma, white_sd);
-  mark_dominant(r, gm_sigma);
+  mark_dominant(r);
   return r;
 }
 
