@@ -977,6 +977,65 @@ SineFit sine_ls(const std::vector<double>& y, double ts, double f_hz) {
   return out;
 }
 
+// Is a line at f one sinusoid over the whole record? A narrowband random process whose band is
+// narrower than the spectrum's resolution shows a line too, but its amplitude and phase wander
+// with its correlation time. The record is cut into kSegments; in each, the least-squares
+// complex amplitude at f (sine_ls, referred to the record's time origin) and, for the noise
+// beside the line, at f +- 8.5 and +- 16.5 bins of a segment (1 / T_seg: beyond a band a few
+// bins wide, within a few per cent of f where f T_seg >= 24). Under one sinusoid in
+// locally flat noise, X = sum_k |c_k - mean c|^2 / s2 (s2 the off-line coefficients' variance
+// per component) is chi2 with 2 (kSegments - 1) degrees of freedom. Leakage of the line into
+// the off-line bins and band power there raise s2 (the test errs towards the sinusoid).
+// Untested (tested = false) when a segment holds under 24 periods. Cost: 5 passes over y.
+struct SineCoherence {
+  bool tested = false;
+  double stat = 0.0;
+  double thr = 0.0;
+};
+SineCoherence sine_coherence(const std::vector<double>& y, double ts, double f_hz, double alpha) {
+  constexpr std::size_t kSegments = 16;
+  SineCoherence out;
+  const std::size_t len = y.size() / kSegments;
+  const double t_seg = static_cast<double>(len) * ts;
+  if (len < 64 || f_hz * t_seg < 24.0) {
+    return out;
+  }
+  constexpr double kOff[4] = {-16.5, -8.5, 8.5, 16.5};
+  std::vector<double> seg(len);
+  std::complex<double> c[kSegments];
+  std::complex<double> mean(0.0, 0.0);
+  double s2 = 0.0;
+  std::size_t n_off = 0;
+  for (std::size_t k = 0; k < kSegments; ++k) {
+    std::copy(y.begin() + static_cast<std::ptrdiff_t>(k * len),
+              y.begin() + static_cast<std::ptrdiff_t>((k + 1) * len), seg.begin());
+    const SineFit at = sine_ls(seg, ts, f_hz);
+    if (!at.ok) {
+      return out;
+    }
+    const double t0 = static_cast<double>(k * len) * ts;
+    c[k] = std::complex<double>(at.a, -at.b) * std::polar(1.0, -2.0 * kPi * f_hz * t0);
+    mean += c[k] / static_cast<double>(kSegments);
+    for (const double off : kOff) {
+      const SineFit beside = sine_ls(seg, ts, f_hz + off / t_seg);
+      if (beside.ok) {
+        s2 += 0.5 * (beside.a * beside.a + beside.b * beside.b);
+        ++n_off;
+      }
+    }
+  }
+  if (n_off == 0 || !(s2 > 0.0)) {
+    return out;
+  }
+  s2 /= static_cast<double>(n_off);
+  for (const auto& ck : c) {
+    out.stat += std::norm(ck - mean) / s2;
+  }
+  out.thr = chi2_quantile(1.0 - alpha, 2.0 * static_cast<double>(kSegments - 1));
+  out.tested = true;
+  return out;
+}
+
 // The Hann-windowed record and its spectrum, computed once per channel: the record the
 // sinusoid search reads does not change in the greedy loop, and every bump's search window is
 // a slice of the one full-rate spectrum.
@@ -3145,6 +3204,19 @@ class Analysis {
         if (it == sine_cache.end()) {
           SineCand sc;
           sc.fit = estimate_sinusoid(y, ts, f_c, spectrum_of_y);
+          const SineCoherence coh =
+              sc.fit.ok ? sine_coherence(y, ts, sc.fit.f_hz, o.alpha) : SineCoherence{};
+          if (coh.tested && coh.stat > coh.thr) {
+            sc.fit.ok = false;
+            const std::string note =
+                "not a sinusoid: the line at " + fmt("%.5g", sc.fit.f_hz) +
+                " Hz changes its amplitude or phase over the record (X = " +
+                fmt("%.1f", coh.stat) + " > " + fmt("%.1f", coh.thr) +
+                " over 16 parts): a band narrower than the spectrum resolves";
+            if (std::find(out.notes.begin(), out.notes.end(), note) == out.notes.end()) {
+              out.notes.push_back(note);
+            }
+          }
           if (sc.fit.ok) {
             sc.adev = adev_of(to_counts(minus_sine(y, ts, sc.fit), offset, lsb, sat), gap, ts, lsb);
           }
