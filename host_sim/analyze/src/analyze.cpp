@@ -3175,6 +3175,25 @@ class Analysis {
     cands.push_back(Cand{type, terms, p, residual(eval, p, o, ts, tau_max).cost, &sc});
   }
 
+  // sine_coherence of the line at f_hz, run once per line (two bumps can lead to the same
+  // one); a line that fails it is said in a note, once.
+  bool coherent_line(double f_hz) {
+    const auto seen = line_coherent.find(f_hz);
+    if (seen != line_coherent.end()) {
+      return seen->second;
+    }
+    const SineCoherence coh = sine_coherence(y, ts, f_hz, o.alpha);
+    const bool coherent = !coh.tested || coh.stat <= coh.thr;
+    if (!coherent) {
+      out.notes.push_back("not a sinusoid: the line at " + fmt("%.5g", f_hz) +
+                          " Hz changes its amplitude or phase over the record (X = " +
+                          fmt("%.1f", coh.stat) + " > " + fmt("%.1f", coh.thr) +
+                          " over 16 parts): a band narrower than the spectrum resolves");
+    }
+    line_coherent.emplace(f_hz, coherent);
+    return coherent;
+  }
+
   // Sinusoids at the three strongest bumps where the data sit above the model (negative z); once
   // one is in the model, its harmonics 2 and 3.
   void sine_candidates(const Residual& res, std::vector<Cand>& cands) {
@@ -3204,19 +3223,7 @@ class Analysis {
         if (it == sine_cache.end()) {
           SineCand sc;
           sc.fit = estimate_sinusoid(y, ts, f_c, spectrum_of_y);
-          const SineCoherence coh =
-              sc.fit.ok ? sine_coherence(y, ts, sc.fit.f_hz, o.alpha) : SineCoherence{};
-          if (coh.tested && coh.stat > coh.thr) {
-            sc.fit.ok = false;
-            const std::string note =
-                "not a sinusoid: the line at " + fmt("%.5g", sc.fit.f_hz) +
-                " Hz changes its amplitude or phase over the record (X = " +
-                fmt("%.1f", coh.stat) + " > " + fmt("%.1f", coh.thr) +
-                " over 16 parts): a band narrower than the spectrum resolves";
-            if (std::find(out.notes.begin(), out.notes.end(), note) == out.notes.end()) {
-              out.notes.push_back(note);
-            }
-          }
+          sc.fit.ok = sc.fit.ok && coherent_line(sc.fit.f_hz);
           if (sc.fit.ok) {
             sc.adev = adev_of(to_counts(minus_sine(y, ts, sc.fit), offset, lsb, sat), gap, ts, lsb);
           }
@@ -4405,6 +4412,7 @@ class Analysis {
   // Per bump (by its tau index): the sinusoid estimate and the ADEV of y without it. The same
   // bump comes back round after round; each entry costs passes over the record.
   std::map<std::size_t, SineCand> sine_cache;
+  std::map<double, bool> line_coherent;  // coherent_line's verdict by the line's frequency
   std::map<int, SineCand> harmonic_cache;   // by harmonic number, of y minus the sinusoid
   std::map<std::size_t, OscFit> osc_cache;  // by bump (tau index), of fit_record()'s PSD
   WelchPsd psd_of_y_fit;                    // empty until needed; reset when fit_record() changes
