@@ -46,6 +46,12 @@ ia::Report run(const std::string& name, std::uint64_t seed) {
 
 std::string describe(const ia::Report& r) { return ia::to_text(r); }
 
+// Prints r's text under "<what> seed <seed>:" (a record a test's count missed).
+void print_report(const std::string& what, std::uint64_t seed, const ia::Report& r) {
+  std::printf("%s seed %llu:\n%s", what.c_str(), static_cast<unsigned long long>(seed),
+              describe(r).c_str());
+}
+
 // Exactly one effect of the expected type (a false extra effect is as bad as a missed one).
 const ia::Effect* single_effect(const ia::Report& r, const std::string& type) {
   EXPECT_EQ(r.effects.size(), 1U) << describe(r);
@@ -96,8 +102,7 @@ Tally tally(const std::string& name, const std::string& type, Pred in_tolerance)
     t.second_gm += gm2 ? 1 : 0;
     t.rms_lower += r.error_after.adev_rms_rel < r.error_before.adev_rms_rel ? 1 : 0;
     if (!ok || r.effects.size() > 1) {
-      std::printf("%s seed %llu:\n%s", name.c_str(), static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report(name, seed, r);
     }
   }
   std::printf("%s: found in tolerance on %d of %d seeds, other effects beside it on %d, a second "
@@ -166,6 +171,16 @@ ia::SynthSpec faint_gm_record(std::size_t samples, std::uint64_t seed) {
   spec.b = 1e-6;
   spec.tp_s = 10.0;
   spec.seed = seed;
+  return spec;
+}
+
+// White noise N and a GM of peak ADEV b at tp_s, `samples` at 100 Hz.
+ia::SynthSpec gm_record(std::size_t samples, std::uint64_t seed, double n, double b,
+                        double tp_s) {
+  ia::SynthSpec spec = faint_gm_record(samples, seed);
+  spec.n = n;
+  spec.b = b;
+  spec.tp_s = tp_s;
   return spec;
 }
 
@@ -278,8 +293,7 @@ TEST(AnalyzeSynthetic, ASlowGmOnlyBeyondTheFirstOrderRangeIsNotASecondGm) {
                    ? 1
                    : 0;
     if (!r.effects.empty()) {
-      std::printf("slow GM seed %llu:\n%s", static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report("slow GM", seed, r);
     }
   }
   std::printf("slow GM only: no effect on %d of %d, one GM within 3x of Tb on %d\n", clean,
@@ -291,10 +305,7 @@ TEST(AnalyzeSynthetic, ASlowGmOnlyBeyondTheFirstOrderRangeIsNotASecondGm) {
 // White noise N = 3.3e-4 and a GM peaking at 60 s, 2^20 samples at 100 Hz; with_q: quantization
 // at 30 % of the white noise's AVAR at Ts (3 Q^2 / Ts^2 = 0.3 N^2 / Ts).
 ia::SynthSpec q_record(std::uint64_t seed, bool with_q) {
-  ia::SynthSpec spec = faint_gm_record(1048576, seed);
-  spec.n = 3.3e-4;
-  spec.b = 4e-5;
-  spec.tp_s = 60.0;
+  ia::SynthSpec spec = gm_record(1048576, seed, 3.3e-4, 4e-5, 60.0);
   spec.q = with_q ? spec.n * std::sqrt(0.3 / spec.fs_hz / 3.0) : 0.0;
   return spec;
 }
@@ -493,8 +504,7 @@ TEST(AnalyzeSynthetic, BiasInstabilityIsFoundWithBWithin30Percent) {
                       : 0;
     if (!ok || r.effects.size() > 1) {
       const std::uint64_t seed = kFirst11 + static_cast<std::uint64_t>(i);
-      std::printf("bias instability seed %llu:\n%s", static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report("bias instability", seed, r);
     }
   }
   std::printf("bias instability: B within 30 %% on %d of %d seeds; a walk, ramp or step named "
@@ -574,8 +584,7 @@ TEST(AnalyzeSynthetic, ADominantFlickerTheRecordRequiresStaysNamed) {
     inside += interval_holds(r, "bias_instability", "b", spec.flicker_b);
     EXPECT_LE(r.error_after.adev_max_rel, r.error_before.adev_max_rel) << describe(r);
     if (!ok) {
-      std::printf("flicker seed %llu:\n%s", static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report("flicker", seed, r);
     }
   }
   std::printf("dominant flicker: bias_instability named (no walk) on %d of 6, B inside its "
@@ -593,10 +602,7 @@ TEST(AnalyzeSynthetic, ARampUnderFlickerIsNotAWalk) {
   int ramp = 0;
   int flicker = 0;
   for (std::uint64_t seed = 980101; seed <= 980106; ++seed) {
-    ia::SynthSpec spec = faint_gm_record(1048576, seed);
-    spec.n = 2.6e-3;
-    spec.b = 2e-4;
-    spec.tp_s = 8.0;
+    ia::SynthSpec spec = gm_record(1048576, seed, 2.6e-3, 2e-4, 8.0);
     spec.flicker_b = 1.4e-3;
     const double t_rec_s = static_cast<double>(spec.samples) / spec.fs_hz;
     spec.ramp_r = std::sqrt(2.0) * spec.b / (t_rec_s / 300.0);
@@ -605,8 +611,7 @@ TEST(AnalyzeSynthetic, ARampUnderFlickerIsNotAWalk) {
     ramp += is_named(r, "ramp") ? 1 : 0;
     flicker += is_named(r, "bias_instability") ? 1 : 0;
     if (is_named(r, "rate_random_walk") || !is_named(r, "ramp")) {
-      std::printf("ramp under flicker seed %llu:\n%s", static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report("ramp under flicker", seed, r);
     }
   }
   std::printf("ramp under flicker: walk named on %d of 6, ramp on %d, bias instability on %d\n",
@@ -624,18 +629,14 @@ TEST(AnalyzeSynthetic, ARampUnderFlickerIsNotAWalk) {
 TEST(AnalyzeSynthetic, ABandNarrowerThanTheSpectrumIsNotASinusoid) {
   int sine = 0;
   for (std::uint64_t seed = 990101; seed <= 990106; ++seed) {
-    ia::SynthSpec spec = faint_gm_record(4194304, seed);
-    spec.n = 5e-3;
-    spec.b = 1e-4;
-    spec.tp_s = 36.0;
+    ia::SynthSpec spec = gm_record(4194304, seed, 5e-3, 1e-4, 36.0);
     spec.osc_sigma = 3e-3;
     spec.osc_f0_hz = 0.2;
     spec.osc_beta_per_s = 3.14159265358979323846 * 0.015 * spec.osc_f0_hz;
     const ia::Report r = analyze_spec(spec, "narrow_band");
     if (is_named(r, "sinusoid")) {
       ++sine;
-      std::printf("narrow band seed %llu:\n%s", static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report("narrow band", seed, r);
     }
   }
   std::printf("band 1.5 %% of f0 wide: named a sinusoid on %d of 6\n", sine);
@@ -648,8 +649,7 @@ TEST(AnalyzeSynthetic, TwentyControlsGiveNoEffect) {
     const ia::Report r = run("control", seed);
     clean += r.effects.empty() ? 1 : 0;
     if (!r.effects.empty()) {
-      std::printf("control seed %llu:\n%s", static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report("control", seed, r);
     }
   }
   std::printf("controls without an effect: %d of 20\n", clean);
@@ -695,8 +695,7 @@ TEST(AnalyzeSynthetic, AnEffectWithoutATermIsUnexplainedNotAWrongName) {
     honest += ok ? 1 : 0;
     if (!ok) {
       const std::uint64_t seed = kFirst11 + static_cast<std::uint64_t>(i);
-      std::printf("drift walk seed %llu:\n%s", static_cast<unsigned long long>(seed),
-                  describe(r).c_str());
+      print_report("drift walk", seed, r);
     }
   }
   std::printf("drift walk: unexplained and no wrong name on %d of %d\n", honest, kSeeds11);
