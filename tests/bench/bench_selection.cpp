@@ -5,8 +5,9 @@
 //
 //   bench_selection [RECORDS [THREADS [FIRST_SEED [MAX_SAMPLES [RECORDS_CSV]]]]]
 //   (500 2 7100001 4194304; RECORDS_CSV: one line per record, its truth and what was named: the
-//   transient's A and tau_w, the noise change's t_c and g, the step's time and size, and per
-//   non-stationary kind its outcome, "+note" when a note gives a time in it)
+//   transient's A, tau_w and event_z, the noise change's t_c and g, the step's time, size and
+//   event_z, and per non-stationary kind its outcome, "+note" when a note gives a time in it;
+//   last, the white noise N: truth, model_after's and its 95 % interval)
 //   With BENCH_SELECTION_TEXT set in the environment each report's text goes to stderr: one
 //   record's diagnosis is `BENCH_SELECTION_TEXT=1 bench_selection 1 1 SEED`. With
 //   BENCH_SELECTION_NONSTATIONARY=1 every record is non-stationary: one that drew none of the
@@ -110,6 +111,7 @@ struct Record {
   double transient_tau_s = 0.0;  // tau_w
   double noise_time_s = 0.0;     // t_c: the added white noise starts at the first sample after it
   double noise_gain = 1.0;       // g: the white std per sample after t_c over that before
+  double oracle_z[kKinds] = {};  // the transient's and the step's event_z (0: none)
   double noise_add_sd = 0.0;     // the added noise's std per sample
   std::uint64_t noise_seed = 0;  // the added noise's stream
 };
@@ -121,7 +123,8 @@ struct Outcome {
   double lo95[kTerms] = {};  // the main parameter's reported 95 % interval (|.|, sorted)
   double hi95[kTerms] = {};
   bool has95[kTerms] = {};
-  double n_lo95 = 0.0;       // the white noise N's
+  double n_est = 0.0;        // the white noise N: model_after's, and its interval
+  double n_lo95 = 0.0;
   double n_hi95 = 0.0;
   bool second_gm = false;
   bool output_filter = false;  // the generator's white noise is never filtered: always false
@@ -300,6 +303,37 @@ void mark_dominant(Record& r) {
   r.dominant[kOutliers] = r.has[kOutliers];
 }
 
+// How far an event stands out of the record's stationary noise, at its known time: the
+// difference of the means of two adjacent windows of tau has variance 2 AVAR(tau) under the
+// stationary terms (the AVAR's definition), so an event that moves it by s(tau) has
+// z(tau) = s / sqrt(2 AVAR(tau)); the largest over tau = Ts 2^(j/2). A step d at t0: s = d,
+// tau up to min(t0, T - t0); a warm-up transient A e^(-t / tau_w) over [0, tau] against
+// [tau, 2 tau]: s = A (tau_w / tau) (1 - e^(-tau / tau_w))^2, tau up to T / 2. A search that
+// does not know the time needs more than a test at it (the step's profile likelihood asks
+// about 4 sd of it), so below some 4-5 the event is no failure of the analysis to name.
+double event_z(const Record& r, std::size_t kind) {
+  const ia::SynthSpec& s = r.spec;
+  const double ts = 1.0 / s.fs_hz;
+  double tau_max = r.t_rec / 2.0;
+  if (kind == kStepKind) {
+    tau_max = std::min(s.step_time_s, r.t_rec - s.step_time_s);
+  }
+  double best = 0.0;
+  for (double tau = ts; tau <= tau_max; tau *= std::sqrt(2.0)) {
+    double avar = base_avar(s, tau);
+    for (std::size_t t = 0; t < kStep; ++t) {
+      avar += term_avar(r, static_cast<Term>(t), tau);
+    }
+    const double w = r.transient_tau_s;
+    const double sig = kind == kStepKind
+                           ? std::fabs(s.step_size)
+                           : std::fabs(r.transient_amp) * (w / tau) *
+                                 std::pow(1.0 - std::exp(-tau / w), 2.0);
+    best = std::max(best, sig / std::sqrt(2.0 * avar));
+  }
+  return best;
+}
+
 Record draw(std::uint64_t seed, std::size_t max_samples) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
@@ -322,6 +356,9 @@ Record draw(std::uint64_t seed, std::size_t max_samples) {
   draw_terms(rng, r, gm_sigma, white_sd);
   draw_nonstationary(rng, r, gm_sigma, white_sd);
   mark_dominant(r);
+  for (const std::size_t k : {kTransient, kStepKind}) {
+    r.oracle_z[k] = r.has_kind[k] ? event_z(r, k) : 0.0;
+  }
   return r;
 }
 
@@ -475,6 +512,7 @@ Outcome analyse(const Record& rec) {
   out.consistent = ia::report_consistent(r, why);
   out.output_filter = r.model_after.n_filter_s > 0.0;
   read_effects(r, out);
+  out.n_est = r.model_after.n;
   for (const auto& iv : r.model_after_ci95) {
     if (iv.name == "n") {
       out.n_lo95 = iv.lo;
@@ -549,6 +587,14 @@ void print_confusion(const std::vector<Record>& recs, const std::vector<Outcome>
 
 // Per non-stationary kind: what the report said about it; then the terms named that the record
 // does not hold (the non-stationarity read as a walk, a ramp, ...), against the stationary records.
+constexpr double kClearZ = 5.0;  // an event this far out at its known time should not go unseen
+
+std::string fmt_z(double z) {
+  char b[32];
+  std::snprintf(b, sizeof b, " (z %.1f)", z);
+  return b;
+}
+
 void print_nonstationary(const std::vector<Record>& recs, const std::vector<Outcome>& outs) {
   std::printf("\n| kind | records | named | unexplained with a time range over it | unexplained, "
               "tau only | nothing | a note gives a time in it |\n|---|---|---|---|---|---|---|\n");
@@ -567,6 +613,20 @@ void print_nonstationary(const std::vector<Record>& recs, const std::vector<Outc
                 pct(by_fate[kNamed], n).c_str(), pct(by_fate[kUnexplainedTimed], n).c_str(),
                 pct(by_fate[kUnexplainedTau], n).c_str(), pct(by_fate[kNothing], n).c_str(),
                 pct(note, n).c_str());
+  }
+  // "nothing" against how far the event stands out at its known time (event_z)
+  for (const std::size_t k : {kTransient, kStepKind}) {
+    std::size_t faint = 0;
+    std::string clear;
+    for (std::size_t i = 0; i < recs.size(); ++i) {
+      if (outs[i].ok && recs[i].has_kind[k] && outs[i].fate[k] == kNothing) {
+        const double z = recs[i].oracle_z[k];
+        faint += z < kClearZ ? 1U : 0U;
+        clear += z < kClearZ ? "" : " " + std::to_string(recs[i].spec.seed) + fmt_z(z);
+      }
+    }
+    std::printf("%s with nothing: %zu below z = %.0f at its known time, the others:%s\n",
+                kKindName[k], faint, kClearZ, clear.empty() ? " none" : clear.c_str());
   }
   std::printf("\nterms named that the record does not hold:\n\n| records with | records |");
   for (const char* name : kName) {
@@ -621,7 +681,7 @@ bool write_csv(const char* path, const std::vector<Record>& recs,
     return false;
   }
   std::fprintf(f, "seed,fs_hz,samples,gyro,true,dominant,named,second_gm,output_filter,"
-                  "unexplained,transient,noise_change,step,outcome,estimates\n");
+                  "unexplained,transient,noise_change,step,outcome,estimates,n\n");
   for (std::size_t i = 0; i < recs.size(); ++i) {
     const Record& r = recs[i];
     std::string has;
@@ -643,13 +703,15 @@ bool write_csv(const char* path, const std::vector<Record>& recs,
     char change[64] = "";
     char step[64] = "";
     if (r.has_kind[kTransient]) {  // A [unit] and tau_w [s]
-      std::snprintf(transient, sizeof transient, "%.4g %.4g", r.transient_amp, r.transient_tau_s);
+      std::snprintf(transient, sizeof transient, "%.4g %.4g z %.3g", r.transient_amp,
+                    r.transient_tau_s, r.oracle_z[kTransient]);
     }
     if (r.has_kind[kNoiseChange]) {  // t_c [s] and g
       std::snprintf(change, sizeof change, "%.6g %.3g", r.noise_time_s, r.noise_gain);
     }
     if (r.has[kStep]) {  // its time [s] and size [unit]
-      std::snprintf(step, sizeof step, "%.6g %.4g", r.spec.step_time_s, r.spec.step_size);
+      std::snprintf(step, sizeof step, "%.6g %.4g z %.3g", r.spec.step_time_s, r.spec.step_size,
+                    r.oracle_z[kStepKind]);
     }
     std::string estimates;  // per named, present term: truth estimate [lo95 hi95]
     for (std::size_t t = 0; t < kTerms; ++t) {
@@ -660,12 +722,12 @@ bool write_csv(const char* path, const std::vector<Record>& recs,
         estimates += one;
       }
     }
-    std::fprintf(f, "%llu,%g,%zu,%d,%s,%s,%s,%d,%d,%d,%s,%s,%s,%s,%s\n",
+    std::fprintf(f, "%llu,%g,%zu,%d,%s,%s,%s,%d,%d,%d,%s,%s,%s,%s,%s,%.5g %.5g [%.5g %.5g]\n",
                  static_cast<unsigned long long>(r.spec.seed), r.spec.fs_hz, r.spec.samples,
                  r.gyro ? 1 : 0, has.c_str(), dom.c_str(), named.c_str(),
                  outs[i].second_gm ? 1 : 0, outs[i].output_filter ? 1 : 0,
                  outs[i].unexplained ? 1 : 0, transient, change, step, outcome.c_str(),
-                 estimates.c_str());
+                 estimates.c_str(), r.spec.n, outs[i].n_est, outs[i].n_lo95, outs[i].n_hi95);
   }
   return std::fclose(f) == 0;
 }
