@@ -319,7 +319,9 @@ double event_z(const Record& r, std::size_t kind) {
     tau_max = std::min(s.step_time_s, r.t_rec - s.step_time_s);
   }
   double best = 0.0;
-  for (double tau = ts; tau <= tau_max; tau *= std::sqrt(2.0)) {
+  const int n_tau = tau_max > ts ? static_cast<int>(2.0 * std::log2(tau_max / ts)) : -1;
+  for (int j = 0; j <= n_tau; ++j) {
+    const double tau = ts * std::pow(2.0, 0.5 * j);
     double avar = base_avar(s, tau);
     for (std::size_t t = 0; t < kStep; ++t) {
       avar += term_avar(r, static_cast<Term>(t), tau);
