@@ -1807,6 +1807,117 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
   return best;
 }
 
+// The white noise N and bias instability B of model_after are read off the shortest taus, where
+// the record may hold more than the model says: quantization the search did not keep (its AVAR
+// 3 Q^2 / tau^2 and N's trade there), flicker below the bank's lower end (flicker_tau_lo: the
+// bank stops short of Ts, and the white noise takes the floor's AVAR there) and a white level
+// that changes part way (the model's N is the record's average). An interval that knows only
+// the chosen model's scatter misses the truth wherever that model is one of several the data
+// allow. Each such reading that the ADEV does not rule out (its fit's cost at most cost_thr
+// above the model's own refit, same points and options) moves N and B by the ratio of its fit to
+// that refit (a noise change: by each part's level, from the change's time and std ratio).
+struct ShortTauReading {
+  std::string what;
+  double n_ratio = 1.0;
+  double b_ratio = 1.0;
+};
+
+std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint32_t terms,
+                                                const ModelParams& m, const NoiseLevelChange& nc,
+                                                std::size_t samples) {
+  std::vector<ShortTauReading> out;
+  const Points pts =
+      in_range(points_for_model(m.sin_a > 0.0 ? c.fit_set : c.clean, m), c.tau_max);
+  // The GMs' correlation times held near the model's (the readings differ at the shortest taus)
+  double tb_lo = 0.0;
+  double tb_hi = c.tb_max;
+  for (std::size_t i = 0; i < m.n_gm; ++i) {
+    tb_lo = i == 0 ? 0.99 * m.gm[i].tb_s : std::min(tb_lo, 0.99 * m.gm[i].tb_s);
+    tb_hi = i == 0 ? 1.01 * m.gm[i].tb_s : std::max(tb_hi, 1.01 * m.gm[i].tb_s);
+  }
+  const auto refit = [&](std::uint32_t t, double flicker_lo_s) {
+    FitOptions fo;
+    fo.terms = t;
+    fo.tau_min_s = c.ts;
+    fo.tau_max_s = c.tau_max;
+    fo.tb_min_s = tb_lo;
+    fo.tb_max_s = tb_hi;
+    fo.white_filter_s = m.n_filter_s;
+    fo.flicker_tau_hi_s = c.tau_max;
+    fo.flicker_tau_lo_s = flicker_lo_s;
+    fo.osc_f0_hz = m.osc_f0_hz;
+    fo.osc_beta_per_s = m.osc_beta_per_s;
+    fo.osc_ts_s = m.osc_ts_s;
+    return fit(pts.data(), pts.size(), fo);
+  };
+  const double lo_rule = flicker_tau_lo(c.ts, c.tau_max, pts);
+  const FitResult base = refit(terms, lo_rule);
+  if (base.status != FitStatus::kOk || !(base.params.n > 0.0)) {
+    return out;
+  }
+  const auto add = [&](const char* what, const FitResult& f) {
+    if (f.status == FitStatus::kOk && f.params.n > 0.0 && f.cost <= base.cost + c.cost_thr) {
+      const bool b = base.params.bi > 0.0 && f.params.bi > 0.0;
+      out.push_back({what, f.params.n / base.params.n, b ? f.params.bi / base.params.bi : 1.0});
+    }
+  };
+  if ((terms & kFitQuantization) == 0U) {
+    add("with quantization", refit(terms | kFitQuantization, lo_rule));
+  }
+  if ((terms & kFitFlicker) != 0U && lo_rule > 1.5 * c.ts) {
+    // below Ts too, as far as the bank's decades reach (kMaxFlickerGm)
+    add("with the flicker bank down to Ts / 10", refit(terms, std::max(0.1 * c.ts, 1e-6 * c.tau_max)));
+  }
+  if (nc.found && nc.at > 0 && nc.at < samples) {
+    const double f = static_cast<double>(nc.at) / static_cast<double>(samples);
+    const double r = nc.std_ratio;
+    const double before = 1.0 / std::sqrt(f + (1.0 - f) * r * r);
+    out.push_back({"before the white level changes", before, 1.0});
+    out.push_back({"after it", r * before, 1.0});
+  }
+  return out;
+}
+
+// iv (a positive parameter's 95 % interval) widened to hold the same interval moved by `ratio`;
+// true if it grew.
+bool widen_by_ratio(ParamInterval& iv, double ratio) {
+  if (!(iv.lo > 0.0) || !std::isfinite(iv.hi) || !(ratio > 0.0)) {
+    return false;
+  }
+  const double lo = std::min(iv.lo, iv.lo * ratio);
+  const double hi = std::max(iv.hi, iv.hi * ratio);
+  const bool grew = lo < iv.lo || hi > iv.hi;
+  iv.lo = lo;
+  iv.hi = hi;
+  return grew;
+}
+
+// N's and B's 95 % intervals widened to hold every reading of short_tau_readings; a note names
+// the readings that widened them.
+void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, Report& out) {
+  std::string said;
+  for (const ShortTauReading& rd : readings) {
+    bool grew = false;
+    for (ParamInterval& iv : out.model_after_ci95) {
+      grew = (iv.name == "n" && widen_by_ratio(iv, rd.n_ratio)) || grew;
+    }
+    for (Effect& e : out.effects) {
+      for (ParamInterval& iv : e.ci95) {
+        const bool b = e.type == "bias_instability" && iv.name == "b";
+        grew = (b && widen_by_ratio(iv, rd.b_ratio)) || grew;
+      }
+    }
+    if (grew) {
+      said += (said.empty() ? "" : ", ") + rd.what + " (N x" + fmt("%.4f", rd.n_ratio) +
+              (std::fabs(rd.b_ratio - 1.0) > 0.0 ? ", B x" + fmt("%.4f", rd.b_ratio) : std::string()) + ")";
+    }
+  }
+  if (!said.empty()) {
+    out.notes.push_back("the 95 % intervals of N and B hold the readings of the shortest taus "
+                        "the ADEV does not rule out: " + said);
+  }
+}
+
 // The name of one term bit (a FitTerm bit or kSineBit).
 const char* term_name(std::uint32_t t) {
   if (t == kSineBit) {
@@ -4296,6 +4407,8 @@ class Analysis {
     add_time_ranges();
     std::vector<TermPart> parts = check_terms_on_halves();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
+    widen_for_short_tau_readings(
+        short_tau_readings(ac, choice.terms, cur_p, noise_change, out.samples), out);
     for (const auto& w : withdrawn) {
       bool covered = false;
       for (const auto& u : out.unexplained) {
