@@ -1815,16 +1815,60 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
 // the chosen model's scatter misses the truth wherever that model is one of several the data
 // allow. Each such reading that the ADEV does not rule out (its fit's cost at most cost_thr
 // above the model's own refit, same points and options) moves N and B by the ratio of its fit to
-// that refit (a noise change: by each part's level, from the change's time and std ratio).
+// that refit (a noise change: N by each part's white level, NoiseParts).
 struct ShortTauReading {
   std::string what;
   double n_ratio = 1.0;
   double b_ratio = 1.0;
+  double n_sd_ln = 0.0;  // the reading's own scatter (sd of ln N), added to the interval's ends
 };
 
+// The AVAR at tau = Ts of the record before and after a change of the white noise's level, and
+// of the whole (half the mean squared first difference; pairs with a gap left out, and those
+// within one of the change's blocks of its place, which the block grid only locates), with the
+// pairs each part holds. found: the record has such a change.
+struct NoiseParts {
+  bool found = false;
+  double avar_before = 0.0;
+  double avar_after = 0.0;
+  double avar_all = 0.0;
+  double pairs_before = 0.0;
+  double pairs_after = 0.0;
+};
+
+NoiseParts noise_parts(const std::vector<double>& y, const std::vector<std::uint8_t>& gap,
+                       const NoiseLevelChange& nc) {
+  NoiseParts p;
+  if (!nc.found || nc.at < 2 || nc.at + 2 > y.size()) {
+    return p;
+  }
+  double sum[2] = {0.0, 0.0};
+  double pairs[2] = {0.0, 0.0};
+  const std::size_t guard = nc.block_len;
+  for (std::size_t i = 1; i < y.size(); ++i) {
+    const bool near_change = i + guard >= nc.at && i < nc.at + guard;
+    if (near_change || (!gap.empty() && (gap[i] != 0U || gap[i - 1] != 0U))) {
+      continue;
+    }
+    const double d = y[i] - y[i - 1];
+    const std::size_t part = i < nc.at ? 0 : 1;
+    sum[part] += d * d;
+    pairs[part] += 1.0;
+  }
+  if (!(pairs[0] > 0.0) || !(pairs[1] > 0.0)) {
+    return p;
+  }
+  p.found = true;
+  p.avar_before = 0.5 * sum[0] / pairs[0];
+  p.avar_after = 0.5 * sum[1] / pairs[1];
+  p.avar_all = 0.5 * (sum[0] + sum[1]) / (pairs[0] + pairs[1]);
+  p.pairs_before = pairs[0];
+  p.pairs_after = pairs[1];
+  return p;
+}
+
 std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint32_t terms,
-                                                const ModelParams& m, const NoiseLevelChange& nc,
-                                                std::size_t samples) {
+                                                const ModelParams& m, const NoiseParts& np) {
   std::vector<ShortTauReading> out;
   const Points pts =
       in_range(points_for_model(m.sin_a > 0.0 ? c.fit_set : c.clean, m), c.tau_max);
@@ -1868,24 +1912,36 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
     // below Ts too, as far as the bank's decades reach (kMaxFlickerGm)
     add("with the flicker bank down to Ts / 10", refit(terms, std::max(0.1 * c.ts, 1e-6 * c.tau_max)));
   }
-  if (nc.found && nc.at > 0 && nc.at < samples) {
-    const double f = static_cast<double>(nc.at) / static_cast<double>(samples);
-    const double r = nc.std_ratio;
-    const double before = 1.0 / std::sqrt(f + (1.0 - f) * r * r);
-    out.push_back({"before the white level changes", before, 1.0});
-    out.push_back({"after it", r * before, 1.0});
+  // Each part's white AVAR at Ts: its AVAR less the model's other terms' there, against the
+  // whole record's (the other terms dilute the change's std ratio on the first differences).
+  ModelParams others = m;
+  others.n = 0.0;
+  const double white_all = np.avar_all - model_avar(others, c.ts);
+  // A part's mean of squared first differences of white noise (an MA(1) of lag-1 correlation
+  // -1/2) has var 3 AVAR^2 / pairs: sd(ln N) = sqrt(3 / pairs) / 2, in the ratio of the part's
+  // AVAR to its white AVAR.
+  const auto part = [&](const char* what, double avar, double pairs) {
+    const double white = avar - model_avar(others, c.ts);
+    if (white > 0.0 && pairs > 0.0) {
+      out.push_back({what, std::sqrt(white / white_all), 1.0,
+                     0.5 * std::sqrt(3.0 / pairs) * avar / white});
+    }
+  };
+  if (np.found && white_all > 0.0) {
+    part("before the white level changes", np.avar_before, np.pairs_before);
+    part("after it", np.avar_after, np.pairs_after);
   }
   return out;
 }
 
-// iv (a positive parameter's 95 % interval) widened to hold the same interval moved by `ratio`;
-// true if it grew.
-bool widen_by_ratio(ParamInterval& iv, double ratio) {
+// iv (a positive parameter's 95 % interval) widened to hold the same interval moved by `ratio`
+// and widened by the reading's own scatter sd_ln; true if it grew.
+bool widen_by_ratio(ParamInterval& iv, double ratio, double sd_ln = 0.0) {
   if (!(iv.lo > 0.0) || !std::isfinite(iv.hi) || !(ratio > 0.0)) {
     return false;
   }
-  const double lo = std::min(iv.lo, iv.lo * ratio);
-  const double hi = std::max(iv.hi, iv.hi * ratio);
+  const double lo = std::min(iv.lo, iv.lo * ratio * std::exp(-1.96 * sd_ln));
+  const double hi = std::max(iv.hi, iv.hi * ratio * std::exp(1.96 * sd_ln));
   const bool grew = lo < iv.lo || hi > iv.hi;
   iv.lo = lo;
   iv.hi = hi;
@@ -1899,7 +1955,7 @@ void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, 
   for (const ShortTauReading& rd : readings) {
     bool grew = false;
     for (ParamInterval& iv : out.model_after_ci95) {
-      grew = (iv.name == "n" && widen_by_ratio(iv, rd.n_ratio)) || grew;
+      grew = (iv.name == "n" && widen_by_ratio(iv, rd.n_ratio, rd.n_sd_ln)) || grew;
     }
     for (Effect& e : out.effects) {
       for (ParamInterval& iv : e.ci95) {
@@ -4408,7 +4464,7 @@ class Analysis {
     std::vector<TermPart> parts = check_terms_on_halves();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
     widen_for_short_tau_readings(
-        short_tau_readings(ac, choice.terms, cur_p, noise_change, out.samples), out);
+        short_tau_readings(ac, choice.terms, cur_p, noise_parts(y, gap, noise_change)), out);
     for (const auto& w : withdrawn) {
       bool covered = false;
       for (const auto& u : out.unexplained) {
