@@ -1910,7 +1910,8 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
   }
   if ((terms & kFitFlicker) != 0U && lo_rule > 1.5 * c.ts) {
     // below Ts too, as far as the bank's decades reach (kMaxFlickerGm)
-    add("with the flicker bank down to Ts / 10", refit(terms, std::max(0.1 * c.ts, 1e-6 * c.tau_max)));
+    add("with the flicker bank down to Ts / 10",
+        refit(terms, std::max(0.1 * c.ts, 1e-6 * c.tau_max)));
   }
   // Each part's white AVAR at Ts: its AVAR less the model's other terms' there, against the
   // whole record's (the other terms dilute the change's std ratio on the first differences).
@@ -1964,8 +1965,9 @@ void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, 
       }
     }
     if (grew) {
+      const bool b = std::fabs(rd.b_ratio - 1.0) > 0.0;
       said += (said.empty() ? "" : ", ") + rd.what + " (N x" + fmt("%.4f", rd.n_ratio) +
-              (std::fabs(rd.b_ratio - 1.0) > 0.0 ? ", B x" + fmt("%.4f", rd.b_ratio) : std::string()) + ")";
+              (b ? ", B x" + fmt("%.4f", rd.b_ratio) : std::string()) + ")";
     }
   }
   if (!said.empty()) {
