@@ -217,11 +217,13 @@ const char* fit_status_text(FitStatus s) {
   return "unknown";
 }
 
-// tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max).
-// shape: the oscillation's f0 and beta when terms hold kFitOscillation.
+// tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max), tb_min_s
+// from below. shape: the oscillation's f0 and beta when terms hold kFitOscillation.
+// flicker_lo_s: the bias-instability bank's lower end (0: flicker_tau_lo's rule).
 FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
                     double tb_max_s = 0.0, const ModelParams* shape = nullptr,
-                    double white_filter_s = 0.0) {
+                    double white_filter_s = 0.0, double tb_min_s = 0.0,
+                    double flicker_lo_s = 0.0) {
   FitOptions fo;
   fo.white_filter_s = white_filter_s;
   if (shape != nullptr) {
@@ -232,9 +234,10 @@ FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, doub
   fo.terms = terms;
   fo.tau_min_s = tau_min;
   fo.tau_max_s = tau_max;
+  fo.tb_min_s = tb_min_s;
   fo.tb_max_s = tb_max_s;
   fo.flicker_tau_hi_s = tau_max;
-  fo.flicker_tau_lo_s = flicker_tau_lo(tau_min, tau_max, pts);
+  fo.flicker_tau_lo_s = flicker_lo_s > 0.0 ? flicker_lo_s : flicker_tau_lo(tau_min, tau_max, pts);
   return fit(pts.data(), pts.size(), fo);
 }
 
@@ -1880,19 +1883,7 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
     tb_hi = i == 0 ? 1.01 * m.gm[i].tb_s : std::max(tb_hi, 1.01 * m.gm[i].tb_s);
   }
   const auto refit = [&](std::uint32_t t, double flicker_lo_s) {
-    FitOptions fo;
-    fo.terms = t;
-    fo.tau_min_s = c.ts;
-    fo.tau_max_s = c.tau_max;
-    fo.tb_min_s = tb_lo;
-    fo.tb_max_s = tb_hi;
-    fo.white_filter_s = m.n_filter_s;
-    fo.flicker_tau_hi_s = c.tau_max;
-    fo.flicker_tau_lo_s = flicker_lo_s;
-    fo.osc_f0_hz = m.osc_f0_hz;
-    fo.osc_beta_per_s = m.osc_beta_per_s;
-    fo.osc_ts_s = m.osc_ts_s;
-    return fit(pts.data(), pts.size(), fo);
+    return fit_terms(pts, t, c.ts, c.tau_max, tb_hi, &m, m.n_filter_s, tb_lo, flicker_lo_s);
   };
   const double lo_rule = flicker_tau_lo(c.ts, c.tau_max, pts);
   const FitResult base = refit(terms, lo_rule);
