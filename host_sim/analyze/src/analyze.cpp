@@ -2826,31 +2826,11 @@ class Analysis {
       const double scale_b = std::sqrt(mad_b * mad_b + rounding);
       const double scale = std::min(scale_a, scale_b);
       const double thr = two_sided_normal_threshold(o.alpha / n_d);
-      OutlierGate gate;
-      std::vector<double> times;
-      if (scale > 0.0 && gate.configure(thr) == EffectStatus::kOk) {
-        for (std::size_t i = 0; i < y.size(); ++i) {
-          const double sc = i < split ? scale_a : scale_b;
-          if ((gap.empty() || gap[i] == 0) && gate.push(static_cast<double>(fb.nu[i]) / sc)) {
-            outlier[i] = 1;
-            const double pred = known_raw + static_cast<double>(fb.pred_rel[i]);
-            outlier_delta.emplace_back(i, y[i] - pred);
-            y[i] = pred;
-            outliers_replaced = true;
-            if (times.size() < 100) {
-              times.push_back(static_cast<double>(i) * ts);
-            }
-          }
-        }
-        if (gate.stats().outliers > 0) {
-          Effect e;
-          e.times_s = times;
-          e.type = "outliers";
-          e.count = gate.stats().outliers;
-          e.statistic = gate.stats().max_abs;
-          e.threshold = thr;
-          out.effects.push_back(e);
-        }
+      outlier_split = split;
+      outlier_limit_a = thr * scale_a;
+      outlier_limit_b = thr * scale_b;
+      if (scale > 0.0) {
+        outliers_replaced = gate_outliers(scale_a, scale_b, thr, known_raw);
       }
     }
 
@@ -2864,6 +2844,72 @@ class Analysis {
     // The before filter's per-sample innovations and predictions served the outlier search only.
     fb.nu = std::vector<float>{};
     fb.pred_rel = std::vector<float>{};
+  }
+
+  // The before filter's innovations through the outlier gate (|nu| / scale > thr). A flagged
+  // sample is an outlier when it stands alone: kShiftRun or more flagged within kShiftGap
+  // samples of each other with one sign are a change of the level the filter had not
+  // followed yet (a step's first samples), left in the record for the step search. Each
+  // outlier is replaced by the filter's prediction; true when any was.
+  static constexpr std::size_t kShiftRun = 3;
+  static constexpr std::size_t kShiftGap = 2;
+  bool gate_outliers(double scale_a, double scale_b, double thr, double known_raw) {
+    OutlierGate gate;
+    if (gate.configure(thr) != EffectStatus::kOk) {
+      return false;
+    }
+    std::vector<std::pair<std::size_t, double>> flagged;  // index, nu / scale
+    for (std::size_t i = 0; i < y.size(); ++i) {
+      const double z = static_cast<double>(fb.nu[i]) / (i < outlier_split ? scale_a : scale_b);
+      if ((gap.empty() || gap[i] == 0) && gate.push(z)) {
+        flagged.emplace_back(i, z);
+      }
+    }
+    std::vector<double> times;
+    std::uint64_t count = 0;
+    std::uint64_t shifted = 0;
+    double max_abs = 0.0;
+    for (std::size_t a = 0; a < flagged.size();) {
+      std::size_t b = a + 1;
+      while (b < flagged.size() && flagged[b].first - flagged[b - 1].first <= kShiftGap &&
+             (flagged[b].second > 0.0) == (flagged[a].second > 0.0)) {
+        ++b;
+      }
+      if (b - a >= kShiftRun) {
+        shifted += b - a;
+        a = b;
+        continue;
+      }
+      for (; a < b; ++a) {
+        const std::size_t i = flagged[a].first;
+        outlier[i] = 1;
+        const double pred = known_raw + static_cast<double>(fb.pred_rel[i]);
+        outlier_delta.emplace_back(i, y[i] - pred);
+        y[i] = pred;
+        ++count;
+        max_abs = std::max(max_abs, std::fabs(flagged[a].second));
+        if (times.size() < 100) {
+          times.push_back(static_cast<double>(i) * ts);
+        }
+      }
+    }
+    if (shifted > 0) {
+      out.notes.push_back(std::to_string(shifted) + " samples above the outlier gate (" +
+                          fmt("%.2f", thr) + " robust sigma) come in runs of " +
+                          std::to_string(kShiftRun) + " or more of one sign: a change of the "
+                          "level, not outliers (left to the step search)");
+    }
+    if (count == 0) {
+      return false;
+    }
+    Effect e;
+    e.times_s = times;
+    e.type = "outliers";
+    e.count = count;
+    e.statistic = max_abs;
+    e.threshold = thr;
+    out.effects.push_back(e);
+    return true;
   }
 
   // The strongest excursion of the two-window step detectors over the scales the ADEV gives
@@ -3019,21 +3065,130 @@ class Analysis {
       if (!window_step_beats_decay(best.sample_index)) {
         break;
       }
-      const double size = best.size_counts * lsb;  // the difference of its two window means
-      step_at.push_back(best.sample_index);
+      const std::size_t k = refine_step(best.sample_index, best_window);
+      const double size = window_step_size(k, best_window);
+      step_at.push_back(k);
       Effect e;
       e.type = "bias_step";
-      e.time_s = static_cast<double>(best.sample_index) * ts;
+      e.time_s = static_cast<double>(k) * ts;
       e.size = size;
       e.statistic = std::fabs(best.z);
       e.threshold = thr;
       out.effects.push_back(e);
-      for (std::size_t i = best.sample_index; i < y.size(); ++i) {
+      for (std::size_t i = k; i < y.size(); ++i) {
         y[i] -= e.size;
       }
+      restore_step_outliers(k, best_window / 8.0, size);
       counts = to_counts(y, offset, lsb, sat);
       adev_y = adev_of(counts, gap, ts, lsb);
     }
+  }
+
+  // The record's value at i as measured: an outlier's replacement undone.
+  [[nodiscard]] double measured(std::size_t i) const {
+    const auto it = std::lower_bound(
+        outlier_delta.begin(), outlier_delta.end(), i,
+        [](const std::pair<std::size_t, double>& a, std::size_t b) { return a.first < b; });
+    return it != outlier_delta.end() && it->first == i ? y[i] + it->second : y[i];
+  }
+
+  // The window detector places a step at a block boundary of its scale. The step's sample is
+  // the maximum-likelihood change point within one block either side, the levels on each side
+  // taken from the detector's windows outside that zone (white noise within the zone; a
+  // Gauss-Markov drift is a level over one block): argmax over k of sum_{i<k} (mL - mR)
+  // (2 y_i - mL - mR). The zone is read as measured: the before filter's "outliers" right
+  // after a large step are the step's first samples.
+  [[nodiscard]] std::size_t refine_step(std::uint64_t at_u, double window) const {
+    const auto at = static_cast<std::size_t>(at_u);
+    const auto w = static_cast<std::size_t>(window);
+    const std::size_t blk = std::max<std::size_t>(1, w / 8);
+    if (at < w || at + w > y.size() || w <= 2 * blk) {
+      return at;
+    }
+    double m_l = 0.0;
+    double m_r = 0.0;
+    for (std::size_t i = at - w; i < at - blk; ++i) {
+      m_l += y[i];
+    }
+    for (std::size_t i = at + blk; i < at + w; ++i) {
+      m_r += y[i];
+    }
+    m_l /= static_cast<double>(w - blk);
+    m_r /= static_cast<double>(w - blk);
+    std::size_t best = at - blk;
+    double sum = 0.0;
+    double best_sum = 0.0;
+    for (std::size_t i = at - blk; i < at + blk; ++i) {
+      sum += (m_l - m_r) * (2.0 * measured(i) - m_l - m_r);
+      if (sum > best_sum) {
+        best_sum = sum;
+        best = i + 1;
+      }
+    }
+    return best;
+  }
+
+  // The step's size at sample k: the difference of the means of the two windows either side,
+  // read as measured within one block of k (as refine_step reads them).
+  [[nodiscard]] double window_step_size(std::size_t k, double window) const {
+    const auto w = std::min({static_cast<std::size_t>(window), k, y.size() - k});
+    const std::size_t blk = std::max<std::size_t>(1, static_cast<std::size_t>(window) / 8);
+    if (w == 0) {
+      return 0.0;
+    }
+    double before = 0.0;
+    double after = 0.0;
+    for (std::size_t j = 0; j < w; ++j) {
+      before += j < blk ? measured(k - 1 - j) : y[k - 1 - j];
+      after += j < blk ? measured(k + j) : y[k + j];
+    }
+    return (after - before) / static_cast<double>(w);
+  }
+
+  // The before filter's outliers within one block after a step it had not seen: at each the
+  // filter predicted the old level. With the step removed, the sample as measured is kept where
+  // it no longer passes the outlier gate (its innovation less the step); the outliers effect
+  // loses it.
+  void restore_step_outliers(std::size_t k, double block, double size) {
+    const auto end = std::min(y.size(), k + static_cast<std::size_t>(std::max(1.0, block)));
+    std::size_t restored = 0;
+    for (auto it = outlier_delta.begin(); it != outlier_delta.end();) {
+      const std::size_t i = it->first;
+      const double limit = i < outlier_split ? outlier_limit_a : outlier_limit_b;
+      if (i >= k && i < end && std::fabs(it->second - size) <= limit) {
+        y[i] += it->second;
+        outlier[i] = gap.empty() ? 0 : gap[i];
+        it = outlier_delta.erase(it);
+        ++restored;
+      } else {
+        ++it;
+      }
+    }
+    if (restored == 0) {
+      return;
+    }
+    for (auto e = out.effects.begin(); e != out.effects.end(); ++e) {
+      if (e->type != "outliers") {
+        continue;
+      }
+      e->count = e->count > restored ? e->count - restored : 0;
+      std::vector<double> times;
+      for (const auto& [i, d] : outlier_delta) {
+        if (times.size() < 100) {
+          times.push_back(static_cast<double>(i) * ts);
+        }
+      }
+      e->times_s = times;
+      if (e->count == 0) {
+        out.effects.erase(e);
+      }
+      break;
+    }
+    out.notes.push_back(std::to_string(restored) +
+                        (restored == 1 ? " outlier" : " outliers") +
+                        " of the before-model's innovations within one block after the step at "
+                        "t = " + fmt("%.1f", static_cast<double>(k) * ts) + " s " +
+                        (restored == 1 ? "is the step's sample" : "are the step's samples"));
   }
 
   // The alternatives to a significant level shift with one parameter each: a walk (K) and bias
@@ -4543,6 +4698,9 @@ class Analysis {
   std::vector<double> y;
   std::vector<std::uint8_t> outlier;
   std::vector<std::pair<std::size_t, double>> outlier_delta;  // index, value - replacement
+  std::size_t outlier_split = 0;   // the outlier gate's limits on |innovation| before and
+  double outlier_limit_a = 0.0;    // after the noise level's change (the same without one)
+  double outlier_limit_b = 0.0;
   AdevSet adev_y;
   std::vector<std::uint64_t> step_at;
   double tb_max = 0.0;
