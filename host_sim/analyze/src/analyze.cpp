@@ -1558,34 +1558,6 @@ double bias_instability_lr(const std::vector<double>& y, double ts, const ModelP
   return t.ok ? std::max(0.0, 2.0 * (t.h0.loglik - test.h0.loglik)) : 0.0;
 }
 
-// 2 ln LR of a quadratic trend in the record after its least-squares line is removed, against
-// the model's stationary terms (GMs, bias instability; no walk, no ramp): 0 without a ramp.
-double ramp_bend_lr(const std::vector<double>& y, double ts, const ModelParams& p, double tb_max,
-                    const std::vector<std::uint64_t>& step_at) {
-  if (!(p.r > 0.0)) {
-    return 0.0;
-  }
-  ModelParams h0 = p;
-  h0.r = 0.0;
-  h0.k = 0.0;
-  const RrwLikelihoodTest t = test_rrw(y, ts, h0, tb_max, true, step_at, kAuxBlocks, false);
-  if (!t.ok) {
-    return 0.0;
-  }
-  const double nb = static_cast<double>(t.means.size());
-  std::vector<double> u(t.means.size());
-  double mean = 0.0;
-  for (std::size_t k = 0; k < u.size(); ++k) {
-    const double x = static_cast<double>(k) - 0.5 * (nb - 1.0);
-    u[k] = x * x;
-    mean += u[k] / nb;
-  }
-  for (auto& v : u) {
-    v -= mean;
-  }
-  return regressor_lr(t, u);
-}
-
 // Keeps the outliers whose after-model innovation also passes the gate (same threshold, the
 // after innovations' robust spread); the rest are dropped with a note.
 void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip,
@@ -2092,6 +2064,73 @@ TransientLr warmup_transient_lr(const RrwLikelihoodTest& lt, bool detrend) {
   return best;
 }
 
+// The ramp's two checks on the record's likelihood (both 0 without a ramp in p). The null is
+// the composite one of a drift that is not a straight line: the model's stationary terms (GMs,
+// bias instability) with a rate random walk of any K >= 0 (the walk's likelihood maximum), and,
+// when the record's start holds a significant decay (transient_thr, warmup_transient_lr's
+// level), that decay fitted beside the regressor (a warm-up transient bends the start).
+//   line_lr: 2 ln LR of the line beside that null: a ramp is a trend the record needs beside a
+//     walk and a decay (a walk's increments have no mean; the long-tau rise of flicker, a walk
+//     or a slow GM can pass the ADEV's test as a ramp).
+//   bend_lr: 2 ln LR of a quadratic trend after the least-squares line is removed: a ramp is a
+//     straight line, no curvature may remain beyond what the null makes (a drift that bends,
+//     e.g. a walk of the drift rate, has the ramp's ADEV slope without being one).
+struct RampChecks {
+  double line_lr = 0.0;  // < 0: not computed (no check)
+  double bend_lr = 0.0;
+};
+
+// regressor (k - (nb - 1) / 2)^power over the test's blocks, its mean removed.
+std::vector<double> trend_regressor(std::size_t nb, int power) {
+  std::vector<double> u(nb);
+  double mean = 0.0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    const double x = static_cast<double>(k) - 0.5 * (static_cast<double>(nb) - 1.0);
+    u[k] = power == 1 ? x : x * x;
+    mean += u[k] / static_cast<double>(nb);
+  }
+  for (auto& v : u) {
+    v -= mean;
+  }
+  return u;
+}
+
+// 2 ln LR of the trend regressor of `power` on y's block means (their line removed when
+// detrend) against the ramp checks' null; -1 when the null could not be fitted.
+double trend_beside_walk_lr(const std::vector<double>& y, double ts, const ModelParams& p,
+                            double tb_max, const std::vector<std::uint64_t>& step_at,
+                            double transient_thr, bool detrend, int power) {
+  ModelParams h0 = p;
+  h0.r = 0.0;
+  h0.k = 0.0;
+  RrwLikelihoodTest t = test_rrw(y, ts, h0, tb_max, detrend, step_at, kAuxBlocks, true);
+  if (!t.ok) {
+    return -1.0;
+  }
+  if (t.h1.ok && t.h1.loglik > t.h0.loglik) {
+    t.h0 = t.h1;
+  }
+  const std::vector<double> u = trend_regressor(t.means.size(), power);
+  const TransientLr tr = warmup_transient_lr(t, detrend);
+  if (!(tr.lr > transient_thr)) {
+    return regressor_lr(t, u);
+  }
+  const std::vector<double> decay =
+      decay_regressor(t.means.size(), t.block_s, tr.tau_s, detrend);
+  return regressor_lr(t, u, nullptr, &decay);
+}
+
+RampChecks ramp_checks(const std::vector<double>& y, double ts, const ModelParams& p,
+                       double tb_max, const std::vector<std::uint64_t>& step_at,
+                       double transient_thr) {
+  RampChecks c;
+  if (p.r > 0.0) {
+    c.line_lr = trend_beside_walk_lr(y, ts, p, tb_max, step_at, transient_thr, false, 1);
+    c.bend_lr = trend_beside_walk_lr(y, ts, p, tb_max, step_at, transient_thr, true, 2);
+  }
+  return c;
+}
+
 // p with the walk k in place of its GMs of tb >= slow_tb.
 ModelParams walk_alone(const ModelParams& p, double k, double slow_tb) {
   ModelParams q = p;
@@ -2245,7 +2284,7 @@ bool term_dominates(const std::string& type, const ModelParams& p, double tau) {
 // Before naming an ADEV term: it must dominate the model (>= half its AVAR) somewhere in
 // [Ts, T/10], and the residual must hold no significant run where it dominates; else the term
 // stays in the model (it lowers the error) but is not named: the range goes to `unexplained`.
-// ramp_bend_lr: evidence of curvature left after removing the line (the ramp's own check).
+// ramp: the ramp's own checks on the record's likelihood (ramp_checks).
 // The model without the term of effect type `type`.
 ModelParams without(const ModelParams& p, const std::string& type) {
   ModelParams q = p;
@@ -2294,7 +2333,7 @@ void keep_required(const AfterContext& c, const Points& pts, const std::vector<d
       UnexplainedRun{run.lo_s, run.hi_s, std::fabs(zrun), zrun > 0.0 ? 1 : -1, 0.0, 0.0, {}});
 }
 
-void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr,
+void name_check(const AfterContext& c, const ModelParams& p, const RampChecks& ramp,
                 Report& out, std::vector<std::string>& dominates_nowhere) {
   Points pts;
   const std::vector<double> z = final_z(c, p, pts);
@@ -2346,12 +2385,12 @@ void name_check(const AfterContext& c, const ModelParams& p, double ramp_bend_lr
                           " (in the model, but it dominates the model ADEV at no tau)");
       continue;
     }
-    if (e.type == "ramp" && ramp_bend_lr > bend_thr) {
-      // A ramp is a straight line in the record: once the line is removed, no curvature may
-      // remain beyond what the model's stationary terms make (a drift that bends, e.g. a walk
-      // of the drift rate, has the ramp's ADEV slope without being one).
+    if (e.type == "ramp" && ramp.line_lr >= 0.0 && !(ramp.line_lr > bend_thr)) {
+      why = "the record does not need the line beside a walk and a decay from the start: "
+            "2 ln LR = " + fmt("%.1f", ramp.line_lr) + " <= " + fmt("%.2f", bend_thr);
+    } else if (e.type == "ramp" && ramp.bend_lr > bend_thr) {
       why = "after removing the line the record still bends: quadratic 2 ln LR = " +
-            fmt("%.1f", ramp_bend_lr) + " > " + fmt("%.2f", bend_thr) +
+            fmt("%.1f", ramp.bend_lr) + " > " + fmt("%.2f", bend_thr) +
             "; the drift is not a straight line";
     } else if (worst_run >= c.o.min_run && required_by_record(c, e.type)) {
       // The record's likelihood decided this term (one criterion): it stays named.
@@ -3783,9 +3822,10 @@ class Analysis {
   // is in the model or the family's choice scored best beside a line: beside_line;
   // ramp_or_walk weighs a trend against the walk). One needed: it
   // is taken, the other ruled out; neither: the record cannot tell them apart. Then the walk
-  // is ruled out; bias instability, stationary and the lesser claim, is kept where the ADEV
-  // and the family's likelihood put it first, and ruled out with the walk where they put the
-  // walk first (the rise stays unexplained). False when `best` was ruled out.
+  // is ruled out and bias instability, stationary and the lesser claim, is kept whichever of
+  // the two the ADEV and the family's likelihood put first (it is named only where it then
+  // dominates the model; ruling both out left the rise to any term that passes the ADEV's
+  // test, e.g. a ramp the record does not need). False when `best` was ruled out.
   bool walk_or_flicker(const std::vector<Cand>& cands, const Cand* best, bool beside_line) {
     const bool walk = best->type == "rate_random_walk";
     if ((!walk && best->type != "bias_instability") || !(cur_cost - best->cost > cost_thr)) {
@@ -3803,27 +3843,21 @@ class Analysis {
       return true;
     }
     const bool other_needed = need_other > lr_thr;
-    if (!walk && !other_needed) {
+    if (!other_needed) {
       out.notes.push_back("bias_instability kept, rate_random_walk ruled out: the" +
                           std::string(detrend ? " detrended" : "") +
                           " record cannot tell them apart (2 ln LR of each beside the other " +
                           fmt("%.1f", need_best) + ", " + fmt("%.1f", need_other) + " <= " +
                           fmt("%.2f", lr_thr) + ")");
       ruled_out.emplace_back("rate_random_walk");
-      return true;
+      return !walk;
     }
-    out.notes.push_back(
-        "not added: " + best->type + " (the" + (detrend ? " detrended" : "") +
-        " record's likelihood needs it beside " + (walk ? "bias instability" : "a walk") +
-        " by 2 ln LR = " + fmt("%.1f", need_best) + " <= " + fmt("%.2f", lr_thr) + ")" +
-        (other_needed ? "; " + other->type + " is needed beside it (" + fmt("%.1f", need_other) +
-                            ")"
-                      : "; nor the other beside it (" + fmt("%.1f", need_other) +
-                            "): the record cannot tell them apart, both are ruled out"));
+    out.notes.push_back("not added: " + best->type + " (the" + (detrend ? " detrended" : "") +
+                        " record's likelihood needs it beside " +
+                        (walk ? "bias instability" : "a walk") + " by 2 ln LR = " +
+                        fmt("%.1f", need_best) + " <= " + fmt("%.2f", lr_thr) + "); " +
+                        other->type + " is needed beside it (" + fmt("%.1f", need_other) + ")");
     ruled_out.push_back(best->type);  // the walk, or bias instability where the walk is needed
-    if (!other_needed) {
-      ruled_out.push_back(other->type);  // the walk led and neither is needed: nothing is named
-    }
     return false;
   }
 
@@ -4126,8 +4160,9 @@ class Analysis {
       Report trial;
       trial.effects = out.effects;
       std::vector<std::string> dominates_nowhere;
-      name_check(ac, choice.p, ramp_bend_lr(fit_record(), ts, choice.p, tb_max, step_at), trial,
-                 dominates_nowhere);
+      const RampChecks ramp =
+          ramp_checks(fit_record(), ts, choice.p, tb_max, step_at, transient_threshold());
+      name_check(ac, choice.p, ramp, trial, dominates_nowhere);
       std::vector<std::string> gone;
       for (const auto& e : out.effects) {
         bool kept = false;

@@ -611,11 +611,13 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
   return out;
 }
 
-double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u, double* size) {
+double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u, double* size,
+                    const std::vector<double>* nuisance) {
   if (size != nullptr) {
     *size = 0.0;
   }
-  if (!test.ok || !test.h0.ok || u.size() != test.means.size()) {
+  if (!test.ok || !test.h0.ok || u.size() != test.means.size() ||
+      (nuisance != nullptr && nuisance->size() != u.size())) {
     return 0.0;
   }
   const double var = sample_variance(test.means);
@@ -625,6 +627,29 @@ double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u,
           loglik_impl(test.means, var, test.block_s, test.h0.model, -1.0, test.resets, &a)) ||
       !std::isfinite(loglik_impl(u, var, test.block_s, test.h0.model, -1.0, test.resets, &e))) {
     return 0.0;
+  }
+  if (nuisance != nullptr) {
+    // Both the whitened data and the whitened regressor less their projection on the whitened
+    // nuisance (Frisch-Waugh-Lovell: u's coefficient and its statistic with the nuisance fitted).
+    std::vector<double> f;
+    if (!std::isfinite(
+            loglik_impl(*nuisance, var, test.block_s, test.h0.model, -1.0, test.resets, &f))) {
+      return 0.0;
+    }
+    double ff = 0.0;
+    double af = 0.0;
+    double ef = 0.0;
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      ff += f[k] * f[k];
+      af += a[k] * f[k];
+      ef += e[k] * f[k];
+    }
+    if (ff > 0.0) {
+      for (std::size_t k = 0; k < f.size(); ++k) {
+        a[k] -= af / ff * f[k];
+        e[k] -= ef / ff * f[k];
+      }
+    }
   }
   double ae = 0.0;
   double ee = 0.0;

@@ -103,9 +103,11 @@ struct StepLikelihood {
 };
 /// 2 ln LR of a deterministic regressor u (one value per block of the test) against the test's
 /// H0, by GLS as for a step: e.g. a quadratic trend left after a line was removed. 0 if n/a.
-/// size (if given): the regressor's GLS coefficient (0 if n/a).
+/// size (if given): the regressor's GLS coefficient (0 if n/a). nuisance (if given, one value
+/// per block): a second regressor fitted beside u in both hypotheses (the partial 2 ln LR of u).
 [[nodiscard]] double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u,
-                                  double* size = nullptr);
+                                  double* size = nullptr,
+                                  const std::vector<double>* nuisance = nullptr);
 
 /// only_block != kEveryBlock: that boundary alone (the GLS size of a step found elsewhere).
 inline constexpr std::size_t kEveryBlock = static_cast<std::size_t>(-1);
