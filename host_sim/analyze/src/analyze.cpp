@@ -530,6 +530,31 @@ double process_sd_ln_sigma(double corr_integral_s, double t_rec_s) {
                                                 : 0.0;
 }
 
+// The standard deviation of ln K that a walk's record allows. The walk shows in the record's
+// increments over the taus where it dominates the model's other terms, from tau_d on; a record
+// of T seconds holds T / tau_d independent ones, each a chi-square(1) reading of K^2 tau_d / 3:
+// var(ln K^2) >= 2 tau_d / T, sd(ln K) >= sqrt(tau_d / (2 T)). tau_d: the shortest tau of a
+// 10 % grid from Ts where K^2 tau / 3 reaches the rest of the model's AVAR; T / 2 if none below.
+// The ADEV fit's covariance treats its long-tau points as independent readings; they share
+// the same few increments.
+double walk_sd_ln_k(const ModelParams& m, double ts, double t_rec_s) {
+  if (!(m.k > 0.0) || !(ts > 0.0) || !(t_rec_s > 2.0 * ts)) {
+    return 0.0;
+  }
+  ModelParams rest = m;
+  rest.k = 0.0;
+  double tau_d = 0.5 * t_rec_s;
+  const int steps = static_cast<int>(std::ceil(std::log(0.5 * t_rec_s / ts) / std::log(1.1)));
+  for (int i = 0; i < steps; ++i) {
+    const double tau = ts * std::pow(1.1, i);
+    if (m.k * m.k * tau / 3.0 >= model_avar(rest, tau)) {
+      tau_d = tau;
+      break;
+    }
+  }
+  return std::sqrt(tau_d / (2.0 * t_rec_s));
+}
+
 // A GM's sigma = sqrt(Sb Tb / 2) and Tb intervals (GM `g` of the log covariance), named
 // `prefix` + "sigma" and `prefix` + "tb_s"; sigma's no narrower than its record allows.
 void gm_intervals(const LogCov& lc, const ModelParams& m, std::size_t g, const std::string& prefix,
@@ -562,7 +587,8 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
     if (e.type == "quantization") {
       c.push_back(log_interval(lc, "q", e.q, {{"q", 1.0}}));
     } else if (e.type == "rate_random_walk") {
-      c.push_back(log_interval(lc, "k", e.k, {{"k", 1.0}}));
+      c.push_back(with_log_sd_floor(log_interval(lc, "k", e.k, {{"k", 1.0}}), e.k,
+                                    walk_sd_ln_k(m, ts, t_rec_s)));
     } else if (e.type == "ramp") {
       c.push_back(log_interval(lc, "r", e.r, {{"r", 1.0}}));
     } else if (e.type == "bias_instability") {
