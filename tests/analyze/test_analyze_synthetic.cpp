@@ -27,10 +27,10 @@ constexpr std::uint64_t kSeeds[] = {1, 2, 3, 4, 5};  // the "_alt" model's gener
 constexpr std::uint64_t kFirst11 = 101;
 constexpr int kSeeds11 = 10;
 
-// The report on spec's record under the default options at its rate, its consistency checked.
-ia::Report analyze_spec(const ia::SynthSpec& spec, const std::string& name) {
-  const std::vector<double> y = ia::synthesize(spec);
-  EXPECT_EQ(y.size(), spec.samples);
+// The report on the record y of spec under the default options at its rate, its consistency
+// checked.
+ia::Report analyze_record(const std::vector<double>& y, const ia::SynthSpec& spec,
+                          const std::string& name) {
   ia::Report r;
   std::string err;
   ia::Options o;
@@ -40,6 +40,13 @@ ia::Report analyze_spec(const ia::SynthSpec& spec, const std::string& name) {
   EXPECT_TRUE(ia::report_consistent(r, why)) << name << " seed " << spec.seed << ": " << why
                                              << "\n" << ia::to_text(r);
   return r;
+}
+
+// The same on spec's own record.
+ia::Report analyze_spec(const ia::SynthSpec& spec, const std::string& name) {
+  const std::vector<double> y = ia::synthesize(spec);
+  EXPECT_EQ(y.size(), spec.samples);
+  return analyze_record(y, spec, name);
 }
 
 ia::Report run(const std::string& name, std::uint64_t seed) {
@@ -675,13 +682,7 @@ TEST(AnalyzeSynthetic, ARampBesideAWalkOrAWarmUpTransientIsNamed) {
           y[i] += kWarmUpA * std::exp(-static_cast<double>(i) / spec.fs_hz / 300.0);
         }
       }
-      ia::Report r;
-      std::string err;
-      ia::Options o;
-      o.fs_hz = spec.fs_hz;
-      ASSERT_TRUE(ia::analyze(y, "ramp_bent", o, r, err)) << err;
-      std::string why;
-      EXPECT_TRUE(ia::report_consistent(r, why)) << why;
+      const ia::Report r = analyze_record(y, spec, "ramp_bent");
       named += is_named(r, "ramp") ? 1 : 0;
       inside += interval_holds(r, "ramp", "r", spec.ramp_r);
       if (!is_named(r, "ramp")) {

@@ -3794,12 +3794,7 @@ class Analysis {
     if (against_walk) {
       t.h0 = t.h1;
     }
-    const double nb = static_cast<double>(t.means.size());
-    std::vector<double> u(t.means.size());
-    for (std::size_t k = 0; k < u.size(); ++k) {
-      u[k] = static_cast<double>(k) - 0.5 * (nb - 1.0);
-    }
-    return regressor_lr(t, u);
+    return regressor_lr(t, trend_regressor(t.means.size(), 1));
   }
 
   // Ramp or rate random walk: over a record that holds few of its time scales a walk looks like
