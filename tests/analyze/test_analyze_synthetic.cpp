@@ -859,50 +859,55 @@ TEST(ReportConsistency, EveryDisagreementIsCaught) {
   EXPECT_TRUE(ia::report_consistent(r, why)) << why;
 }
 
-}  // namespace
-
-// ---- 95 % intervals (ParamInterval): the true parameter inside the reported interval on at
-// least 9 of 10 records per case (seeds 401..410, which no other test uses) for the model's
-// white noise N and for Q; each interval narrower than a decade on these 2.8-hour records,
-// where every parameter is determined. K's coverage is printed, not required: it was 4 of 9
-// when this test was written (the interval is the ADEV fit's, K often the block-mean
-// likelihood's estimate, whose scatter is about twice as wide); the README says so.
-TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
-  for (const char* name : {"quantization", "rate_random_walk"}) {
-    SCOPED_TRACE(name);
-    int named = 0;
-    int effect_in = 0;
-    int n_in = 0;
-    for (std::uint64_t seed = 401; seed <= 410; ++seed) {
-      const ia::SynthSpec spec = tc::make_case(name, seed);
-      const ia::Report r = run(name, seed);
-      const double truth = std::string(name) == "quantization" ? spec.q : spec.k;
-      for (const auto& e : r.effects) {
-        if (e.type != name) {
-          continue;
-        }
-        ++named;
-        ASSERT_FALSE(e.ci95.empty());
-        const ia::ParamInterval& iv = e.ci95.front();
-        EXPECT_LT(iv.hi, 10.0 * iv.lo) << describe(r);
-        effect_in += truth >= iv.lo && truth <= iv.hi ? 1 : 0;
-        std::printf("%s seed %llu: %s %.4g in [%.4g, %.4g]\n", name,
-                    static_cast<unsigned long long>(seed), iv.name.c_str(), truth, iv.lo, iv.hi);
-      }
-      ASSERT_FALSE(r.model_after_ci95.empty());
-      const ia::ParamInterval& n = r.model_after_ci95.front();
-      EXPECT_EQ(n.name, "n");
-      EXPECT_LT(n.hi, 10.0 * n.lo);
-      n_in += spec.n >= n.lo && spec.n <= n.hi ? 1 : 0;
-      std::printf("%s seed %llu: N %.5g in [%.5g, %.5g]\n", name,
-                  static_cast<unsigned long long>(seed), spec.n, n.lo, n.hi);
+// White noise of density n_density through a first-order low-pass of time constant tf_s, seen
+// by an averaging sampler (each sample the mean over its period, 16 sub-steps per period): the
+// shape the analysis's output filter describes, generated here without its formulas.
+void add_filtered_white(std::vector<double>& y, double fs_hz, double n_density, double tf_s,
+                        std::uint64_t seed) {
+  constexpr int kSub = 16;
+  const double dt = 1.0 / fs_hz / kSub;
+  const double a = std::exp(-dt / tf_s);
+  std::mt19937_64 g(seed);
+  std::normal_distribution<double> w(0.0, n_density / std::sqrt(dt));
+  double x = 0.0;
+  for (double& v : y) {
+    double sum = 0.0;
+    for (int k = 0; k < kSub; ++k) {
+      x = a * x + (1.0 - a) * w(g);
+      sum += x;
     }
-    std::printf("%s: the true parameter inside the effect's 95 %% interval on %d of %d named, N "
-                "inside its interval on %d of 10\n", name, effect_in, named, n_in);
-    if (std::string(name) == "quantization") {
-      EXPECT_GE(named, 9);
-      EXPECT_GE(effect_in, 9) << effect_in << " of " << named;
-    }
-    EXPECT_GE(n_in, 9);
+    v += sum / kSub;
   }
 }
+
+// White noise (N = 5e-3) through an output filter of Tf = 3 ms (a third of the sample period)
+// beside a GM peaking at 0.4 s and a narrowband oscillation at 0.7 Hz (sigma 5e-3, beta 0.4 /s),
+// 2^20 samples at 100 Hz, seeds 990501..990506: the model after has the filter with Tf within
+// x1.5 of the truth on at least 5 of 6 (the oscillation and the GM bend the same first ADEV
+// points; a filter lost with them leaves the node's innovations correlated at lag 1).
+TEST(AnalyzeSynthetic, TheSensorsOutputFilterIsKeptBesideItsOtherTerms) {
+  constexpr double kN = 5e-3;
+  constexpr double kTf = 3e-3;
+  int kept = 0;
+  int near = 0;
+  for (std::uint64_t seed = 990501; seed <= 990506; ++seed) {
+    ia::SynthSpec spec = gm_record(1048576, seed, 1e-7, 4e-3, 0.4);
+    spec.osc_sigma = 5e-3;
+    spec.osc_f0_hz = 0.7;
+    spec.osc_beta_per_s = 0.4;
+    std::vector<double> y = ia::synthesize(spec);
+    add_filtered_white(y, spec.fs_hz, kN, kTf, seed + 17);
+    const ia::Report r = analyze_record(y, spec, "filtered_white");
+    const double tf = r.model_after.n_filter_s;
+    kept += tf > 0.0 ? 1 : 0;
+    near += tf > kTf / 1.5 && tf < kTf * 1.5 ? 1 : 0;
+    if (!(tf > kTf / 1.5 && tf < kTf * 1.5)) {
+      print_report("output filter", seed, r);
+    }
+  }
+  std::printf("output filter kept on %d of 6, within x1.5 of its Tf on %d\n", kept, near);
+  EXPECT_GE(kept, 5);
+  EXPECT_GE(near, 5);
+}
+
+}  // namespace

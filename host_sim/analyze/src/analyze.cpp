@@ -4456,17 +4456,42 @@ class Analysis {
             "low-pass of Tf = " + fmt("%.3g", 1e3 * tf) +
             " ms (the first ADEV points lie below the white line; cost drop " +
             fmt("%.1f", settled_drop) + " > " + fmt("%.1f", cost_thr) + ")");
-      } else {
+      } else if (!filter_on_settled(ac0, choice)) {
         out.notes.push_back("not added: an output filter on the white noise of Tf = " +
                             fmt("%.3g", 1e3 * tf) + " ms (cost drop " + fmt("%.1f", drop) +
                             " alone, " + fmt("%.1f", settled_drop) +
                             " once the terms are named, <= " + fmt("%.1f", cost_thr) + ")");
       }
     } else {
-      out.notes.push_back("not added: an output filter on the white noise (cost drop " +
-                          fmt("%.1f", drop) + " <= " + fmt("%.1f", cost_thr) + ")");
       settle_terms(ac0, choice, withdrawn);
+      if (!filter_on_settled(ac0, choice)) {
+        out.notes.push_back("not added: an output filter on the white noise (cost drop " +
+                            fmt("%.1f", drop) + " <= " + fmt("%.1f", cost_thr) + ")");
+      }
     }
+  }
+
+  // The output filter on the settled model, its named terms kept as they are: naming with the
+  // filter can go another way (a term whose ADEV the filter shares at the first points is then
+  // unnamed, and what it carried elsewhere is lost with it), which says nothing about the
+  // filter. Kept when the fit of the settled terms with it lowers the ADEV cost by more than
+  // cost_thr (output_filter_fit, the same test); the effects take the refit's parameters.
+  bool filter_on_settled(const AfterContext& ac0, AfterChoice& choice) {
+    AfterChoice filtered = choice;
+    double drop = 0.0;
+    const double tf = output_filter_fit(ac0, filtered, drop);
+    if (!(tf > 0.0) || filtered.terms != choice.terms) {
+      return false;
+    }
+    choice = filtered;
+    white_filter_s = tf;
+    drop_unmodelled_effects(choice.p, out);
+    out.notes.push_back("the white noise is seen through the sensor's output filter, a first-order "
+                        "low-pass of Tf = " + fmt("%.3g", 1e3 * tf) +
+                        " ms, fitted with the named terms (the first ADEV points lie below the "
+                        "white line; cost drop " + fmt("%.1f", drop) + " > " +
+                        fmt("%.1f", cost_thr) + ")");
+    return true;
   }
 
   // The parts of the record that are not stationary (noise level, transients), as unexplained
