@@ -911,3 +911,49 @@ TEST(AnalyzeSynthetic, TheSensorsOutputFilterIsKeptBesideItsOtherTerms) {
 }
 
 }  // namespace
+
+// ---- 95 % intervals (ParamInterval): the true parameter inside the reported interval on at
+// least 9 of 10 records per case (seeds 401..410, which no other test uses) for the model's
+// white noise N and for Q; each interval narrower than a decade on these 2.8-hour records,
+// where every parameter is determined. K's coverage is printed, not required: it was 4 of 9
+// when this test was written (the interval is the ADEV fit's, K often the block-mean
+// likelihood's estimate, whose scatter is about twice as wide); the README says so.
+TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
+  for (const char* name : {"quantization", "rate_random_walk"}) {
+    SCOPED_TRACE(name);
+    int named = 0;
+    int effect_in = 0;
+    int n_in = 0;
+    for (std::uint64_t seed = 401; seed <= 410; ++seed) {
+      const ia::SynthSpec spec = tc::make_case(name, seed);
+      const ia::Report r = run(name, seed);
+      const double truth = std::string(name) == "quantization" ? spec.q : spec.k;
+      for (const auto& e : r.effects) {
+        if (e.type != name) {
+          continue;
+        }
+        ++named;
+        ASSERT_FALSE(e.ci95.empty());
+        const ia::ParamInterval& iv = e.ci95.front();
+        EXPECT_LT(iv.hi, 10.0 * iv.lo) << describe(r);
+        effect_in += truth >= iv.lo && truth <= iv.hi ? 1 : 0;
+        std::printf("%s seed %llu: %s %.4g in [%.4g, %.4g]\n", name,
+                    static_cast<unsigned long long>(seed), iv.name.c_str(), truth, iv.lo, iv.hi);
+      }
+      ASSERT_FALSE(r.model_after_ci95.empty());
+      const ia::ParamInterval& n = r.model_after_ci95.front();
+      EXPECT_EQ(n.name, "n");
+      EXPECT_LT(n.hi, 10.0 * n.lo);
+      n_in += spec.n >= n.lo && spec.n <= n.hi ? 1 : 0;
+      std::printf("%s seed %llu: N %.5g in [%.5g, %.5g]\n", name,
+                  static_cast<unsigned long long>(seed), spec.n, n.lo, n.hi);
+    }
+    std::printf("%s: the true parameter inside the effect's 95 %% interval on %d of %d named, N "
+                "inside its interval on %d of 10\n", name, effect_in, named, n_in);
+    if (std::string(name) == "quantization") {
+      EXPECT_GE(named, 9);
+      EXPECT_GE(effect_in, 9) << effect_in << " of " << named;
+    }
+    EXPECT_GE(n_in, 9);
+  }
+}
