@@ -4451,11 +4451,7 @@ class Analysis {
         choice = filtered;
         withdrawn = std::move(withdrawn_f);
         white_filter_s = tf;
-        out.notes.push_back(
-            "the white noise is seen through the sensor's output filter, a first-order "
-            "low-pass of Tf = " + fmt("%.3g", 1e3 * tf) +
-            " ms (the first ADEV points lie below the white line; cost drop " +
-            fmt("%.1f", settled_drop) + " > " + fmt("%.1f", cost_thr) + ")");
+        out.notes.push_back(filter_kept_note(tf, "", settled_drop));
       } else if (!filter_on_settled(ac0, choice)) {
         out.notes.push_back("not added: an output filter on the white noise of Tf = " +
                             fmt("%.3g", 1e3 * tf) + " ms (cost drop " + fmt("%.1f", drop) +
@@ -4486,12 +4482,16 @@ class Analysis {
     choice = filtered;
     white_filter_s = tf;
     drop_unmodelled_effects(choice.p, out);
-    out.notes.push_back("the white noise is seen through the sensor's output filter, a first-order "
-                        "low-pass of Tf = " + fmt("%.3g", 1e3 * tf) +
-                        " ms, fitted with the named terms (the first ADEV points lie below the "
-                        "white line; cost drop " + fmt("%.1f", drop) + " > " +
-                        fmt("%.1f", cost_thr) + ")");
+    out.notes.push_back(filter_kept_note(tf, ", fitted with the named terms", drop));
     return true;
+  }
+
+  // The note of a kept output filter: Tf, how it was fitted, its cost drop against cost_thr.
+  [[nodiscard]] std::string filter_kept_note(double tf, const char* how, double drop) const {
+    return "the white noise is seen through the sensor's output filter, a first-order low-pass "
+           "of Tf = " + fmt("%.3g", 1e3 * tf) + " ms" + how +
+           " (the first ADEV points lie below the white line; cost drop " + fmt("%.1f", drop) +
+           " > " + fmt("%.1f", cost_thr) + ")";
   }
 
   // The parts of the record that are not stationary (noise level, transients), as unexplained
