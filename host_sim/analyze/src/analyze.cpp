@@ -205,6 +205,29 @@ ModelParams with_sines(ModelParams p, const ModelParams& from) {
   return p;
 }
 
+// The AVAR of a sampled 1/f sequence (Kasdin's, of white variance b^2, no anti-alias filter
+// ahead of the sampler) at tau = m Ts, less the continuous floor avar_flicker_ideal, per b^2:
+// 2 int_0^1/2 sin^4(pi f m) / (m^2 sin^3(pi f)) df - 2 ln 2 / pi (its spectrum b^2 / (2 sin pi f)
+// in cycles per sample), by Simpson's rule. 0.195 at m = 1, 0.0068 at 8, 1.7e-4 at 64: the
+// excess is read as white noise unless the model knows it. 0 beyond m = 64.
+double flicker_sampled_excess(std::uint32_t m) {
+  if (m == 0 || m > 64) {
+    return 0.0;
+  }
+  const double md = static_cast<double>(m);
+  const std::uint32_t steps = 64 * m + 256;  // even: 64 per period of sin^4(pi f m)
+  const double h = 0.5 / static_cast<double>(steps);
+  double sum = 0.0;
+  for (std::uint32_t i = 1; i <= steps; ++i) {  // the integrand is 0 at f = 0
+    const double f = h * static_cast<double>(i);
+    const double s = std::sin(kPi * f);
+    const double a = std::sin(kPi * f * md);
+    const double w = i == steps ? 1.0 : (i % 2 == 1 ? 4.0 : 2.0);
+    sum += w * a * a * a * a / (md * md * s * s * s);
+  }
+  return 2.0 * sum * h / 3.0 - avar_flicker_ideal(1.0);
+}
+
 // What a fit's status means, for a note.
 const char* fit_status_text(FitStatus s) {
   switch (s) {
@@ -1811,12 +1834,13 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
 // The white noise N and bias instability B of model_after are read off the shortest taus, where
 // the record may hold more than the model says: quantization the search did not keep (its AVAR
 // 3 Q^2 / tau^2 and N's trade there), flicker below the bank's lower end (flicker_tau_lo: the
-// bank stops short of Ts, and the white noise takes the floor's AVAR there) and a white level
-// that changes part way (the model's N is the record's average). An interval that knows only
-// the chosen model's scatter misses the truth wherever that model is one of several the data
-// allow. Each such reading that the ADEV does not rule out (its fit's cost at most cost_thr
-// above the model's own refit, same points and options) moves N and B by the ratio of its fit to
-// that refit (a noise change: N by each part's white level, NoiseParts).
+// bank stops short of Ts, and the white noise takes the floor's AVAR there), flicker made as a
+// sampled 1/f sequence (its first taus hold more than the floor: without_sampled_flicker_excess)
+// and a white level that changes part way (the model's N is the record's average). An interval
+// that knows only the chosen model's scatter misses the truth wherever that model is one of
+// several the data allow. Each such reading that the ADEV does not rule out (its fit's cost at
+// most cost_thr above the model's own refit, same points and options) moves N and B by the ratio
+// of its fit to that refit (a noise change: N by each part's white level, NoiseParts).
 struct ShortTauReading {
   std::string what;
   double n_ratio = 1.0;
@@ -1868,6 +1892,30 @@ NoiseParts noise_parts(const std::vector<double>& y, const std::vector<std::uint
   return p;
 }
 
+// pts with the excess of a sampled 1/f sequence of bias instability b over its floor
+// (flicker_sampled_excess) taken off each point: the data as the model's bank would see them if
+// the record's flicker were such a sequence. False (out untouched) for b = 0 or where the excess
+// would take a point's whole AVAR.
+bool without_sampled_flicker_excess(const Points& pts, double b, Points& out) {
+  if (!(b > 0.0)) {
+    return false;
+  }
+  Points p = pts;
+  for (AdevPoint& pt : p) {
+    const double avar = pt.avar - b * b * flicker_sampled_excess(pt.af);
+    if (!(avar > 0.0)) {
+      return false;
+    }
+    const double ratio = std::sqrt(avar / pt.avar);
+    pt.avar = avar;
+    pt.adev *= ratio;
+    pt.ci_lo *= ratio;
+    pt.ci_hi *= ratio;
+  }
+  out = std::move(p);
+  return true;
+}
+
 std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint32_t terms,
                                                 const ModelParams& m, const NoiseParts& np) {
   std::vector<ShortTauReading> out;
@@ -1880,11 +1928,12 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
     tb_lo = i == 0 ? 0.99 * m.gm[i].tb_s : std::min(tb_lo, 0.99 * m.gm[i].tb_s);
     tb_hi = i == 0 ? 1.01 * m.gm[i].tb_s : std::max(tb_hi, 1.01 * m.gm[i].tb_s);
   }
-  const auto refit = [&](std::uint32_t t, double flicker_lo_s) {
-    return fit_terms(pts, t, c.ts, c.tau_max, tb_hi, &m, m.n_filter_s, tb_lo, flicker_lo_s);
+  const auto refit = [&](std::uint32_t t, double flicker_lo_s, const Points& on,
+                          double filter_s) {
+    return fit_terms(on, t, c.ts, c.tau_max, tb_hi, &m, filter_s, tb_lo, flicker_lo_s);
   };
   const double lo_rule = flicker_tau_lo(c.ts, c.tau_max, pts);
-  const FitResult base = refit(terms, lo_rule);
+  const FitResult base = refit(terms, lo_rule, pts, m.n_filter_s);
   if (base.status != FitStatus::kOk || !(base.params.n > 0.0)) {
     return out;
   }
@@ -1895,12 +1944,21 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
     }
   };
   if ((terms & kFitQuantization) == 0U) {
-    add("with quantization", refit(terms | kFitQuantization, lo_rule));
+    add("with quantization", refit(terms | kFitQuantization, lo_rule, pts, m.n_filter_s));
   }
+  const double lo_ts = std::max(0.1 * c.ts, 1e-6 * c.tau_max);
   if ((terms & kFitFlicker) != 0U && lo_rule > 1.5 * c.ts) {
     // below Ts too, as far as the bank's decades reach (kMaxFlickerGm)
-    add("with the flicker bank down to Ts / 10",
-        refit(terms, std::max(0.1 * c.ts, 1e-6 * c.tau_max)));
+    add("with the flicker bank down to Ts / 10", refit(terms, lo_ts, pts, m.n_filter_s));
+  }
+  Points sampled;
+  if ((terms & kFitFlicker) != 0U && without_sampled_flicker_excess(pts, m.bi, sampled)) {
+    add("with the bias instability a sampled 1/f sequence",
+        refit(terms, lo_ts, sampled, m.n_filter_s));
+    if (m.n_filter_s > 0.0) {  // the excess falls off faster than white, as a filter's dip does
+      add("with the bias instability a sampled 1/f sequence and no output filter",
+          refit(terms, lo_ts, sampled, 0.0));
+    }
   }
   // Each part's white AVAR at Ts: its AVAR less the model's other terms' there, against the
   // whole record's (the other terms dilute the change's std ratio on the first differences).
