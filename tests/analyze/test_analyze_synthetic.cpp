@@ -962,3 +962,57 @@ TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
     EXPECT_GE(n_in, 9);
   }
 }
+
+// A record on a lattice coarser than its noise (step 2, 2.8 and 3.5 x the white noise's std per
+// sample, an offset of 1 g, a GM of a fifth of the white std, 2e5 samples): the values sit on
+// three to five levels and the MAD of the innovations sees only the fraction of a step the
+// filter's prediction lies off the middle one; a sample two steps out is a normal tail of the
+// rounded noise, not an outlier. No outliers on 9 records; 30 real ones (12 white stds) on the
+// 2.8 x lattice are found, and no others. With the gate's spread the MAD plus the rounding's
+// q^2 / 12, the 2 x records named 654-694 "outliers", the 2.8 x ones 5-11, and the record with
+// 30 real ones 47.
+TEST(AnalyzeSynthetic, ALatticeCoarserThanTheNoiseMakesNoFalseOutliersAndKeepsRealOnes) {
+  constexpr double kFs = 100.0;
+  constexpr std::size_t kN = 200000;
+  constexpr double kWhiteSd = 0.01;
+  const auto record = [&](double ratio, std::uint64_t seed, std::size_t outliers) {
+    std::mt19937_64 rng(seed);
+    std::normal_distribution<double> g(0.0, 1.0);
+    const double a = std::exp(-1.0 / (kFs * 50.0));  // GM, Tb = 50 s
+    const double gm_sd = 0.2 * kWhiteSd * std::sqrt(1.0 - a * a);
+    const double q = ratio * kWhiteSd;
+    double b = 0.0;
+    std::vector<double> y(kN);
+    for (std::size_t i = 0; i < kN; ++i) {
+      b = a * b + gm_sd * g(rng);
+      double v = b + kWhiteSd * g(rng);
+      if (outliers > 0 && i % (kN / outliers) == kN / (2 * outliers)) {
+        v += (i % 2 == 0 ? 12.0 : -12.0) * kWhiteSd;
+      }
+      y[i] = 9.80665 + std::round(v / q) * q;
+    }
+    ia::Options o;
+    o.fs_hz = kFs;
+    ia::Report r;
+    std::string err;
+    EXPECT_TRUE(ia::analyze(y, "acc_z", o, r, err)) << err;
+    std::string why;
+    EXPECT_TRUE(ia::report_consistent(r, why)) << why;
+    std::uint64_t found = 0;
+    for (const ia::Effect& e : r.effects) {
+      found += e.type == "outliers" ? e.count : 0U;
+    }
+    std::printf("lattice %.1f x the white std, seed %llu, %zu outliers put in: %llu named\n",
+                ratio, static_cast<unsigned long long>(seed), outliers,
+                static_cast<unsigned long long>(found));
+    return found;
+  };
+  for (const double ratio : {2.0, 2.8, 3.5}) {
+    for (std::uint64_t seed = 7401; seed <= 7403; ++seed) {
+      EXPECT_EQ(record(ratio, seed, 0), 0U) << "lattice " << ratio << " seed " << seed;
+    }
+  }
+  const std::uint64_t real = record(2.8, 7404, 30);
+  EXPECT_GE(real, 27U);
+  EXPECT_LE(real, 30U);
+}

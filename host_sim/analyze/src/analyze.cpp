@@ -901,6 +901,41 @@ double robust_scale(std::vector<float> c) {
   return 1.4826 * median_inplace(c);
 }
 
+// The spread of normalised innovations for the outlier gate, on the record's lattice of
+// normalised step `step` (0: none). On a coarse lattice most innovations are a fraction of a step
+// and the MAD sees only them (a sample one step away would be an "outlier"): the spread is the
+// larger of the MAD's and the standard deviation of the innovations within 6 of those spreads
+// (the MAD's, or half a step if larger) of their median, which the gross outliers do not reach.
+// A sample's distance is then taken less half a step, the most the rounding can add to it.
+struct GateScale {
+  double scale = 0.0;
+  double half_step = 0.0;
+  [[nodiscard]] double z(float nu) const {
+    const double a = std::max(std::fabs(static_cast<double>(nu)) - half_step, 0.0);
+    return scale > 0.0 ? std::copysign(a / scale, static_cast<double>(nu)) : 0.0;
+  }
+};
+
+GateScale lattice_gate_scale(const std::vector<float>& nu, double step) {
+  GateScale g;
+  g.half_step = 0.5 * step;
+  const double mad = robust_scale(nu);
+  std::vector<float> c(nu);
+  const double med = median_inplace(c);
+  const double clip = 6.0 * std::max(mad, g.half_step);
+  double sum = 0.0;
+  double n = 0.0;
+  for (const float x : nu) {
+    const double d = static_cast<double>(x) - med;
+    if (std::fabs(d) <= clip) {
+      sum += d * d;
+      n += 1.0;
+    }
+  }
+  g.scale = std::max(mad, n > 1.0 ? std::sqrt(sum / (n - 1.0)) : 0.0);
+  return g;
+}
+
 // The known signal of the bias filters, as the node sets it (host_sim/node: init_samples): the
 // mean of the first 1000 samples. The record's mean would be wrong for a record that drifts:
 // its first innovations would be the whole drift (seen as outliers).
@@ -1608,10 +1643,11 @@ double bias_instability_lr(const std::vector<double>& y, double ts, const ModelP
 }
 
 // Keeps the outliers whose after-model innovation also passes the gate (same threshold, the
-// after innovations' robust spread); the rest are dropped with a note.
+// after innovations' spread on the record's lattice of normalised step `step`:
+// lattice_gate_scale); the rest are dropped with a note.
 void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip,
                       const std::vector<std::pair<std::size_t, double>>& found, double alpha,
-                      double ts, Report& out) {
+                      double ts, double step, Report& out) {
   if (found.empty() || !fa.ok) {
     return;
   }
@@ -1622,14 +1658,14 @@ void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip
       used.push_back(fa.nu[i]);
     }
   }
-  const double scale = robust_scale(std::move(used));
+  const GateScale scale = lattice_gate_scale(used, step);
   const double thr =
       two_sided_normal_threshold(alpha / static_cast<double>(fa.nu.size()));
   std::vector<double> times;
   std::uint64_t count = 0;
   double max_abs = 0.0;
   for (const auto& f : found) {
-    const double z = scale > 0.0 ? std::fabs(static_cast<double>(fa.nu[f.first])) / scale : 0.0;
+    const double z = std::fabs(scale.z(fa.nu[f.first]));
     if (z > thr) {
       ++count;
       max_abs = std::max(max_abs, z);
@@ -2921,6 +2957,13 @@ class Analysis {
     return true;
   }
 
+  // The record's lattice step normalised by m's white noise std N / sqrt(Ts) (the least of its
+  // filter's innovation std).
+  double lattice_step(const ModelParams& m) const {
+    const double white_sd = m.n / std::sqrt(ts);
+    return white_sd > 0.0 ? lsb / white_sd : 0.0;
+  }
+
   void find_outliers() {
     // ---- time domain: outliers on the before filter's innovations (gaps are skipped like them)
     // y0 is not read again: y takes its storage.
@@ -2930,28 +2973,28 @@ class Analysis {
     outlier = gap.empty() ? std::vector<std::uint8_t>(y.size(), 0) : gap;
     bool outliers_replaced = false;
     {
-      // On a coarse lattice most innovations are a fraction of a step and the robust scale
-      // sees only them: a sample one step away would be an "outlier". The rounding's own
-      // variance (q^2 / 12, Sheppard) is part of every innovation's; the innovations are
-      // normalised by the filter's, at least the white noise's N^2 / Ts.
-      // With a change of the noise level, each part's own spread (else the louder part's
-      // samples would be "outliers").
+      // The spread on the record's lattice (lattice_gate_scale; the innovations are
+      // normalised by the filter's variance, at least the white noise's N^2 / Ts). With a
+      // change of the noise level, each part's own spread (else the louder part's samples
+      // would be "outliers").
       const std::size_t split = noise_change.found ? noise_change.at : y.size();
-      const auto part = [this](std::size_t a, std::size_t b) {
-        return robust_scale(std::vector<float>(fb.nu.begin() + static_cast<std::ptrdiff_t>(a),
-                                               fb.nu.begin() + static_cast<std::ptrdiff_t>(b)));
+      const double step = lattice_step(out.model_before);
+      const auto part = [this, step](std::size_t a, std::size_t b) {
+        return lattice_gate_scale(
+            std::vector<float>(fb.nu.begin() + static_cast<std::ptrdiff_t>(a),
+                               fb.nu.begin() + static_cast<std::ptrdiff_t>(b)),
+            step);
       };
-      const double mad_a = part(0, split);
-      const double mad_b = split < y.size() ? part(split, y.size()) : mad_a;
-      const double white_var = out.model_before.n * out.model_before.n / ts;
-      const double rounding = white_var > 0.0 ? lsb * lsb / 12.0 / white_var : 0.0;
-      const double scale_a = std::sqrt(mad_a * mad_a + rounding);
-      const double scale_b = std::sqrt(mad_b * mad_b + rounding);
-      const double scale = std::min(scale_a, scale_b);
+      const GateScale scale_a = part(0, split);
+      const GateScale scale_b = split < y.size() ? part(split, y.size()) : scale_a;
+      const double scale = std::min(scale_a.scale, scale_b.scale);
       const double thr = two_sided_normal_threshold(o.alpha / n_d);
       outlier_split = split;
-      outlier_limit_a = thr * scale_a;
-      outlier_limit_b = thr * scale_b;
+      // The gate's limits on |value - prediction|, in the record's units (the innovations are
+      // normalised by at least the white noise's std, which the filter's reaches once settled).
+      const double white_sd = out.model_before.n / std::sqrt(ts);
+      outlier_limit_a = (thr * scale_a.scale + scale_a.half_step) * white_sd;
+      outlier_limit_b = (thr * scale_b.scale + scale_b.half_step) * white_sd;
       if (scale > 0.0) {
         outliers_replaced = gate_outliers(scale_a, scale_b, thr, known_raw);
       }
@@ -2976,14 +3019,15 @@ class Analysis {
   // outlier is replaced by the filter's prediction; true when any was.
   static constexpr std::size_t kShiftRun = 3;
   static constexpr std::size_t kShiftGap = 2;
-  bool gate_outliers(double scale_a, double scale_b, double thr, double known_raw) {
+  bool gate_outliers(const GateScale& scale_a, const GateScale& scale_b, double thr,
+                     double known_raw) {
     OutlierGate gate;
     if (gate.configure(thr) != EffectStatus::kOk) {
       return false;
     }
     std::vector<std::pair<std::size_t, double>> flagged;  // index, nu / scale
     for (std::size_t i = 0; i < y.size(); ++i) {
-      const double z = static_cast<double>(fb.nu[i]) / (i < outlier_split ? scale_a : scale_b);
+      const double z = (i < outlier_split ? scale_a : scale_b).z(fb.nu[i]);
       if ((gap.empty() || gap[i] == 0) && gate.push(z)) {
         flagged.emplace_back(i, z);
       }
@@ -4799,7 +4843,7 @@ class Analysis {
     const double known_clean = initial_level(y_det);
     const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier, false);
     y_det = std::vector<double>{};
-    confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, out);
+    confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, lattice_step(cur_p), out);
     out.error_after.nis_mean = fa.nis_mean;
     out.error_after.nis_flagged_fraction = fa.nis_flagged;
     out.error_after.whiteness_flagged_fraction = fa.whiteness_flagged;
@@ -4837,8 +4881,8 @@ class Analysis {
   std::vector<double> y;
   std::vector<std::uint8_t> outlier;
   std::vector<std::pair<std::size_t, double>> outlier_delta;  // index, value - replacement
-  std::size_t outlier_split = 0;   // the outlier gate's limits on |innovation| before and
-  double outlier_limit_a = 0.0;    // after the noise level's change (the same without one)
+  std::size_t outlier_split = 0;   // the outlier gate's limits on |value - prediction| before
+  double outlier_limit_a = 0.0;    // and after the noise level's change (the same without one)
   double outlier_limit_b = 0.0;
   AdevSet adev_y;
   std::vector<std::uint64_t> step_at;
