@@ -1691,28 +1691,34 @@ double bias_instability_lr(const std::vector<double>& y, double ts, const ModelP
 
 // Keeps the outliers whose after-model innovation also passes the gate (same threshold, the
 // after innovations' spread on the record's lattice of normalised step `step`:
-// lattice_gate_scale); the rest are dropped with a note.
+// lattice_gate_scale, each part's own before and after sample `split`, where the white noise's
+// level changes, as in the gate); the rest are dropped with a note.
 void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip,
                       const std::vector<std::pair<std::size_t, double>>& found, double alpha,
-                      double ts, double step, Report& out) {
+                      double ts, double step, std::size_t split, Report& out) {
   if (found.empty() || !fa.ok) {
     return;
   }
-  std::vector<float> used;
-  used.reserve(fa.nu.size());
-  for (std::size_t i = 0; i < fa.nu.size(); ++i) {
-    if (skip[i] == 0) {
-      used.push_back(fa.nu[i]);
+  const auto part = [&](std::size_t a, std::size_t b) {
+    std::vector<float> used;
+    used.reserve(b - a);
+    for (std::size_t i = a; i < b; ++i) {
+      if (skip[i] == 0) {
+        used.push_back(fa.nu[i]);
+      }
     }
-  }
-  const GateScale scale = lattice_gate_scale(used, step);
+    return lattice_gate_scale(used, step);
+  };
+  const std::size_t n = fa.nu.size();
+  const GateScale scale_a = part(0, std::min(split, n));
+  const GateScale scale_b = split < n ? part(split, n) : scale_a;
   const double thr =
       two_sided_normal_threshold(alpha / static_cast<double>(fa.nu.size()));
   std::vector<double> times;
   std::uint64_t count = 0;
   double max_abs = 0.0;
   for (const auto& f : found) {
-    const double z = std::fabs(scale.z(fa.nu[f.first]));
+    const double z = std::fabs((f.first < split ? scale_a : scale_b).z(fa.nu[f.first]));
     if (z > thr) {
       ++count;
       max_abs = std::max(max_abs, z);
@@ -4890,7 +4896,8 @@ class Analysis {
     const double known_clean = initial_level(y_det);
     const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier, false);
     y_det = std::vector<double>{};
-    confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, lattice_step(cur_p), out);
+    confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, lattice_step(cur_p), outlier_split,
+                     out);
     out.error_after.nis_mean = fa.nis_mean;
     out.error_after.nis_flagged_fraction = fa.nis_flagged;
     out.error_after.whiteness_flagged_fraction = fa.whiteness_flagged;
