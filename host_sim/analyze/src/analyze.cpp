@@ -983,6 +983,18 @@ GateScale lattice_gate_scale(const std::vector<float>& nu, double step) {
   return g;
 }
 
+// Which part's gate spread judges sample i of a record whose white noise changes level at
+// sample `split`, located to within `guard` samples: 0 (before) or 1 (after); within the guard
+// the louder part's, as either level may hold there (else the louder part's first samples
+// would be "outliers" of the quieter one). Without a change (split at the end) always 0.
+int gate_part(std::size_t i, std::size_t split, std::size_t guard, double scale_a,
+              double scale_b) {
+  if (i + guard >= split && i < split + guard) {
+    return scale_a >= scale_b ? 0 : 1;
+  }
+  return i < split ? 0 : 1;
+}
+
 // The known signal of the bias filters, as the node sets it (host_sim/node: init_samples): the
 // mean of the first 1000 samples. The record's mean would be wrong for a record that drifts:
 // its first innovations would be the whole drift (seen as outliers).
@@ -1692,10 +1704,11 @@ double bias_instability_lr(const std::vector<double>& y, double ts, const ModelP
 // Keeps the outliers whose after-model innovation also passes the gate (same threshold, the
 // after innovations' spread on the record's lattice of normalised step `step`:
 // lattice_gate_scale, each part's own before and after sample `split`, where the white noise's
-// level changes, as in the gate); the rest are dropped with a note.
+// level changes, as in the gate: gate_part); the rest are dropped with a note.
 void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip,
                       const std::vector<std::pair<std::size_t, double>>& found, double alpha,
-                      double ts, double step, std::size_t split, Report& out) {
+                      double ts, double step, std::size_t split, std::size_t guard,
+                      Report& out) {
   if (found.empty() || !fa.ok) {
     return;
   }
@@ -1718,7 +1731,8 @@ void confirm_outliers(const FilterRun& fa, const std::vector<std::uint8_t>& skip
   std::uint64_t count = 0;
   double max_abs = 0.0;
   for (const auto& f : found) {
-    const double z = std::fabs((f.first < split ? scale_a : scale_b).z(fa.nu[f.first]));
+    const int k = gate_part(f.first, split, guard, scale_a.scale, scale_b.scale);
+    const double z = std::fabs((k == 0 ? scale_a : scale_b).z(fa.nu[f.first]));
     if (z > thr) {
       ++count;
       max_abs = std::max(max_abs, z);
@@ -3043,6 +3057,7 @@ class Analysis {
       const double scale = std::min(scale_a.scale, scale_b.scale);
       const double thr = two_sided_normal_threshold(o.alpha / n_d);
       outlier_split = split;
+      outlier_guard = noise_change.found ? noise_change.block_len : 0;
       // The gate's limits on |value - prediction|, in the record's units (the innovations are
       // normalised by at least the white noise's std, which the filter's reaches once settled).
       const double white_sd = out.model_before.n / std::sqrt(ts);
@@ -3080,7 +3095,8 @@ class Analysis {
     }
     std::vector<std::pair<std::size_t, double>> flagged;  // index, nu / scale
     for (std::size_t i = 0; i < y.size(); ++i) {
-      const double z = (i < outlier_split ? scale_a : scale_b).z(fb.nu[i]);
+      const int k = gate_part(i, outlier_split, outlier_guard, scale_a.scale, scale_b.scale);
+      const double z = (k == 0 ? scale_a : scale_b).z(fb.nu[i]);
       if ((gap.empty() || gap[i] == 0) && gate.push(z)) {
         flagged.emplace_back(i, z);
       }
@@ -3374,7 +3390,10 @@ class Analysis {
     std::size_t restored = 0;
     for (auto it = outlier_delta.begin(); it != outlier_delta.end();) {
       const std::size_t i = it->first;
-      const double limit = i < outlier_split ? outlier_limit_a : outlier_limit_b;
+      const double limit =
+          gate_part(i, outlier_split, outlier_guard, outlier_limit_a, outlier_limit_b) == 0
+              ? outlier_limit_a
+              : outlier_limit_b;
       if (i >= k && i < end && std::fabs(it->second - size) <= limit) {
         y[i] += it->second;
         outlier[i] = gap.empty() ? 0 : gap[i];
@@ -4897,7 +4916,7 @@ class Analysis {
     const FilterRun fa = run_filter(cur_p, ts, y_det, known_clean, &outlier, false);
     y_det = std::vector<double>{};
     confirm_outliers(fa, outlier, outlier_delta, o.alpha, ts, lattice_step(cur_p), outlier_split,
-                     out);
+                     outlier_guard, out);
     out.error_after.nis_mean = fa.nis_mean;
     out.error_after.nis_flagged_fraction = fa.nis_flagged;
     out.error_after.whiteness_flagged_fraction = fa.whiteness_flagged;
@@ -4938,6 +4957,7 @@ class Analysis {
   std::size_t outlier_split = 0;   // the outlier gate's limits on |value - prediction| before
   double outlier_limit_a = 0.0;    // and after the noise level's change (the same without one)
   double outlier_limit_b = 0.0;
+  std::size_t outlier_guard = 0;   // samples either side of the split judged by the louder part
   AdevSet adev_y;
   std::vector<std::uint64_t> step_at;
   double tb_max = 0.0;
