@@ -938,16 +938,6 @@ double robust_scale(const std::vector<double>& v) {
   return robust_std(c.data(), c.size());
 }
 
-// robust_std (1.4826 x the median absolute deviation) of per-sample float values, on a float
-// copy: the copy of a 2^22-sample record is 16 MB.
-double robust_scale(std::vector<float> c) {
-  const double med = median_inplace(c);
-  for (auto& x : c) {
-    x = static_cast<float>(std::fabs(static_cast<double>(x) - med));
-  }
-  return 1.4826 * median_inplace(c);
-}
-
 // The spread of normalised innovations for the outlier gate, on the record's lattice of
 // normalised step `step` (0: none). On a coarse lattice most innovations are a fraction of a step
 // and the MAD sees only them (a sample one step away would be an "outlier"): the spread is the
@@ -966,9 +956,14 @@ struct GateScale {
 GateScale lattice_gate_scale(const std::vector<float>& nu, double step) {
   GateScale g;
   g.half_step = 0.5 * step;
-  const double mad = robust_scale(nu);
+  // 1.4826 x the median absolute deviation on one float copy (a 2^22-sample record's is 16 MB),
+  // its median also the centre of the clipped std
   std::vector<float> c(nu);
   const double med = median_inplace(c);
+  for (float& x : c) {
+    x = static_cast<float>(std::fabs(static_cast<double>(x) - med));
+  }
+  const double mad = 1.4826 * median_inplace(c);
   const double clip = 6.0 * std::max(mad, g.half_step);
   double sum = 0.0;
   double n = 0.0;
