@@ -219,6 +219,7 @@ EffectStatus check_adev_residual(const AdevPoint* points, std::size_t n, const M
 // Explicit instantiations (so the fw prelude's poison sees the template bodies).
 template class StepDetector<64, 4>;
 template class StepDetector<16, 4>;
+template class StepDetector<16, 64>;  // the analysis: every excursion of a record at a scale
 template EffectStatus check_adev_residual<8>(const AdevPoint*, std::size_t, const ModelParams&,
                                              const AdevCheckOptions&, AdevCheckResult<8>&,
                                              double*);

@@ -30,6 +30,8 @@ constexpr double kPi = 3.14159265358979323846;
 // Block means for the auxiliary likelihood comparisons (steps, the long-tau family, a ramp's
 // bend): half the RRW test's 2048, a quarter of its cost (the step profile is O(blocks^2)).
 constexpr std::size_t kAuxBlocks = 1024;
+// Events each scale's step detector keeps: enough to count repeated level shifts.
+constexpr std::size_t kStepEvents = 64;
 using Adev = OnlineAdev<8, 22>;
 using Points = std::vector<AdevPoint>;
 
@@ -3143,9 +3145,51 @@ class Analysis {
     return true;
   }
 
+  // The places of the excursions above the threshold at one detector scale, merged where
+  // closer than two windows (one level change crosses the threshold more than once).
+  struct ShiftPlaces {
+    std::size_t places = 0;
+    double t_first_s = 0.0;
+    double t_last_s = 0.0;
+    double median_size = 0.0;     // of |size| over the places, in the record's units
+    double median_spacing_s = 0.0;  // 0: not known
+  };
+
+  [[nodiscard]] ShiftPlaces shift_places(const StepDetector<16, kStepEvents>& d,
+                                         double window) const {
+    ShiftPlaces r;
+    std::vector<double> at;
+    std::vector<double> size;
+    for (std::size_t i = 0; i < d.n_events(); ++i) {
+      const StepEvent& ev = d.event(i);
+      const auto t = static_cast<double>(ev.sample_index);
+      const double abs_size = std::fabs(ev.size_counts) * lsb;
+      if (!at.empty() && t - at.back() < 2.0 * window) {
+        size.back() = std::max(size.back(), abs_size);
+        continue;
+      }
+      at.push_back(t);
+      size.push_back(abs_size);
+    }
+    r.places = at.size() + d.stats().events_dropped;
+    if (at.empty()) {
+      return r;
+    }
+    r.t_first_s = at.front() * ts;
+    r.t_last_s = at.back() * ts;
+    r.median_size = median_of(size);
+    std::vector<double> gaps;
+    for (std::size_t i = 1; i < at.size(); ++i) {
+      gaps.push_back((at[i] - at[i - 1]) * ts);
+    }
+    r.median_spacing_s = median_of(gaps);
+    return r;
+  }
+
   // The strongest excursion of the two-window step detectors over the scales the ADEV gives
-  // (windows up to n / 50 samples); false when none passes its threshold thr.
-  bool strongest_step(StepEvent& best, double& best_window, double& thr) {
+  // (windows up to n / 50 samples); false when none passes its threshold thr. places: the
+  // separate excursions at the strongest one's scale.
+  bool strongest_step(StepEvent& best, double& best_window, double& thr, ShiftPlaces& places) {
     const Points& pts = adev_y.by_alpha[2];
     const std::size_t np = pts.size();
     struct Scale {
@@ -3170,7 +3214,7 @@ class Analysis {
       return false;
     }
     thr = two_sided_normal_threshold(o.alpha / n_eff);
-    std::vector<StepDetector<16, 4>> det(scales.size());
+    std::vector<StepDetector<16, kStepEvents>> det(scales.size());
     bool ok = true;
     for (std::size_t s = 0; s < scales.size(); ++s) {
       ok = ok && det[s].configure(scales[s].block, 8, scales[s].avar_counts2, thr) ==
@@ -3186,16 +3230,21 @@ class Analysis {
     }
     bool found = false;
     best_window = 0.0;  // samples on each side of the boundary at the best scale
+    std::size_t best_scale = 0;
     for (std::size_t s = 0; s < det.size(); ++s) {
-      StepDetector<16, 4>& d = det[s];
+      StepDetector<16, kStepEvents>& d = det[s];
       d.finish();
       for (std::size_t i = 0; i < d.n_events(); ++i) {
         if (!found || std::fabs(d.event(i).z) > std::fabs(best.z)) {
           best = d.event(i);
           best_window = 8.0 * scales[s].block;
+          best_scale = s;
           found = true;
         }
       }
+    }
+    if (found) {
+      places = shift_places(det[best_scale], best_window);
     }
     return found;
   }
@@ -3267,13 +3316,76 @@ class Analysis {
     }
   }
 
+  // Level shifts above the step threshold at kRepeatedShiftPlaces separate places or more (a
+  // sawtooth, periodic resets, a square wave): one effect of the record's kind, not a few steps
+  // the model could hold. Naming three of them steps would leave the rest unsaid; they are one
+  // unexplained time range and no step is searched. A few events stay steps (the shared
+  // ADIS16405 accelerometers show 4 to 7 places at the strongest scale: a step and a 20 s
+  // excursion on all three axes at once, and single shifts). sp: the places on the record as it
+  // stands; steps named before are places too, withdrawn here (withdraw_steps).
+  static constexpr std::size_t kRepeatedShiftPlaces = 10;
+  void repeated_shifts(ShiftPlaces sp, const StepEvent& best, double best_window) {
+    shifts_repeat = true;
+    std::vector<double> at{sp.t_first_s, sp.t_last_s};
+    std::vector<double> sizes;
+    withdraw_steps(at, sizes);
+    sp.places += sizes.size();
+    sp.t_first_s = *std::min_element(at.begin(), at.end());
+    sp.t_last_s = *std::max_element(at.begin(), at.end());
+    UnexplainedRun u;
+    u.t_min_s = sp.t_first_s;
+    u.t_max_s = sp.t_last_s;
+    u.tau_min_s = best_window * ts / 8.0;
+    u.tau_max_s = best_window * ts;
+    u.max_abs_z = std::fabs(best.z);
+    u.what = std::to_string(sp.places) + " level shifts of median size " +
+             fmt("%.3g", sp.median_size) +
+             (sp.median_spacing_s > 0.0 ? " about every " + fmt("%.3g", sp.median_spacing_s) + " s"
+                                        : std::string()) +
+             " (repeated: resets, stick-slip or telegraph noise, not a bias step)";
+    time_ranges.push_back(u);
+    out.notes.push_back("step search stopped: level shifts above the threshold at " +
+                        std::to_string(sp.places) + " separate places from t = " +
+                        fmt("%.1f", sp.t_first_s) + " to " + fmt("%.1f", sp.t_last_s) +
+                        " s, more than the " + std::to_string(o.max_steps) +
+                        " steps searched: a repeated effect, reported as unexplained");
+  }
+
+  // The bias steps named so far are withdrawn (the record takes them back); their times and
+  // |sizes| are appended to at_s and sizes.
+  void withdraw_steps(std::vector<double>& at_s, std::vector<double>& sizes) {
+    std::size_t j = 0;
+    for (auto e = out.effects.begin(); e != out.effects.end();) {
+      if (e->type != "bias_step" || j >= step_at.size()) {
+        ++e;
+        continue;
+      }
+      for (auto i = static_cast<std::size_t>(step_at[j]); i < y.size(); ++i) {
+        y[i] += e->size;
+      }
+      at_s.push_back(static_cast<double>(step_at[j++]) * ts);
+      sizes.push_back(std::fabs(e->size));
+      e = out.effects.erase(e);
+    }
+    if (!step_at.empty()) {
+      step_at.clear();
+      counts = to_counts(y, offset, lsb, sat);
+      adev_y = adev_of(counts, gap, ts, lsb);
+    }
+  }
+
   void find_steps_by_windows() {
     // ---- time domain: bias steps (two-window detector at several scales)
     for (int step_no = 0; step_no < o.max_steps; ++step_no) {
       StepEvent best{};
       double best_window = 0.0;
       double thr = 0.0;
-      if (!strongest_step(best, best_window, thr)) {
+      ShiftPlaces places;
+      if (!strongest_step(best, best_window, thr, places)) {
+        break;
+      }
+      if (places.places >= kRepeatedShiftPlaces) {
+        repeated_shifts(places, best, best_window);
         break;
       }
       // A second "step" within one window of an earlier one is the other edge of a transient (or
@@ -3561,7 +3673,7 @@ class Analysis {
     // (profile over the boundaries) against H0 (white + GMs, tb <= tb_max), taken when it is
     // significant over all the positions tried AND explains the record better than a walk would
     // (a walk also raises the step profile; a step also raises the walk's likelihood).
-    while (static_cast<int>(step_at.size()) < o.max_steps) {
+    while (!shifts_repeat && static_cast<int>(step_at.size()) < o.max_steps) {
       const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
       if (b0.status != FitStatus::kOk) {
         break;
@@ -4968,6 +5080,7 @@ class Analysis {
   double walk_lr = -1.0;  // the walk's 2 ln LR on the record (< 0: not tested)
   NoiseLevelChange noise_change;             // of the white noise's level (find_noise_level_change)
   std::vector<UnexplainedRun> time_ranges;   // transients found by the step search
+  bool shifts_repeat = false;                // repeated_shifts: no step is searched
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
   // Terms the record's likelihood could not tell from a look-alike (ramp_or_walk,
   // walk_or_flicker): not proposed again.

@@ -4,7 +4,6 @@
 #include <cmath>
 
 namespace imu::analyze {
-namespace {
 
 double median_of(std::vector<double> v) {
   if (v.empty()) {
@@ -14,6 +13,8 @@ double median_of(std::vector<double> v) {
   std::nth_element(v.begin(), mid, v.end());
   return *mid;
 }
+
+namespace {
 
 // Per block of `len` samples, the mean of the squared first differences (pairs with a gap
 // skipped), each clipped at `clip` (0: none). A block with fewer than half its pairs is NaN.

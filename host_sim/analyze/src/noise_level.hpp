@@ -26,6 +26,9 @@ struct NoiseLevelChange {
   std::size_t block_len = 0;
 };
 
+/// The median of v (the upper one of an even count); 0 for an empty v.
+double median_of(std::vector<double> v);
+
 /// y: the record (gaps marked in `gap`, 1 = missing; may be empty); alpha: the false-alarm rate.
 NoiseLevelChange find_noise_level_change(const std::vector<double>& y,
                                          const std::vector<std::uint8_t>& gap, double alpha,
