@@ -14,6 +14,7 @@
 
 #include "imu/analyze/analyze.hpp"
 #include "imu/analyze/synth.hpp"
+#include "imu/error_model.hpp"
 #include "synth_cases.hpp"
 
 namespace {
@@ -842,6 +843,31 @@ TEST(AnalyzeSynthetic, RepeatedResetsAreOneUnexplainedTimeRangeNotSteps) {
   std::printf("sawtooth: no step named and one time range over half the record on %d of 3\n",
               honest);
   EXPECT_EQ(honest, 3);
+}
+
+// A step far above the noise (5 x the white noise's std per sample, 26 GM sigmas) beside a GM:
+// the model after is fitted to the record without the step and describes it. The before-model,
+// fitted to the record with the step in it, is no stand-in there: on the record without the
+// step its GM is the step's (error above 100 %). Seeds 990411..990413.
+TEST(AnalyzeSynthetic, AfterALargeStepTheModelIsTheRecordsWithoutIt) {
+  int kept = 0;
+  for (std::uint64_t seed = 990411; seed <= 990413; ++seed) {
+    ia::SynthSpec spec = gm_record(200000, seed, 1e-3, 1.2e-3, 95.0);
+    spec.step_time_s = 1000.0;
+    spec.step_size = 5.0 * spec.n * std::sqrt(spec.fs_hz);
+    const ia::Report r = analyze_spec(spec, "large_step_model");
+    const double tb_true = spec.tp_s / imu::kGmPeakTauFactor;
+    const double tb = r.model_after.n_gm > 0 ? r.model_after.gm[0].tb_s : 0.0;
+    const bool ok = is_named(r, "bias_step") && tb > 0.5 * tb_true && tb < 2.0 * tb_true &&
+                    r.error_after.adev_rms_rel < 0.2;
+    kept += ok ? 1 : 0;
+    if (!ok) {
+      print_report("large step, model after", seed, r);
+    }
+  }
+  std::printf("large step: the GM's Tb within a factor 2 and RMS error after < 0.2 on %d of 3\n",
+              kept);
+  EXPECT_EQ(kept, 3);
 }
 
 TEST(AnalyzeSynthetic, MillionSamplesUnderTenSeconds) {

@@ -2180,6 +2180,23 @@ AfterChoice choose_after(const AfterContext& c, std::uint32_t terms, const Model
     return best;
   }
   if (!best.ok || !not_worse(best.e, c.before)) {
+    // The before-model was fitted to the record as measured, its steps and outliers in it; the
+    // after-models are fitted and judged on the record without the named ones. Where the
+    // before-model is worse there than the after-model, it cannot stand in for it.
+    ErrorStats before_clean;
+    fill_errors(points_for_model(c.clean, before_model), before_model, c.o, c.ts, c.tau_max,
+                before_clean);
+    if (best.ok && not_worse(best.e, before_clean)) {
+      notes.push_back("kept: the model after's error over [Ts, T/10] (RMS " +
+                      fmt("%.3f", best.e.adev_rms_rel) + " / max " +
+                      fmt("%.3f", best.e.adev_max_rel) + ") is above the before-model's on the "
+                      "record as measured (" + fmt("%.3f", c.before.adev_rms_rel) + " / " +
+                      fmt("%.3f", c.before.adev_max_rel) + ") but below it on the record without "
+                      "the named steps and outliers (" + fmt("%.3f", before_clean.adev_rms_rel) +
+                      " / " + fmt("%.3f", before_clean.adev_max_rel) + "), the record the model "
+                      "after describes");
+      return best;
+    }
     // Not even the base family is as good: the before-model stays (it is not worse than itself).
     notes.emplace_back("no after-model with the terms found is as good as the before-model at "
                        "every measure: after = before");
