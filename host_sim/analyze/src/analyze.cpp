@@ -3,6 +3,7 @@
 #include "effects.hpp"
 #include "imu/analyze/long_memory.hpp"
 #include "fft.hpp"
+#include "data_faults.hpp"
 #include "noise_level.hpp"
 
 #include <algorithm>
@@ -2915,6 +2916,51 @@ class Analysis {
   }
 
  private:
+  // A frozen output (find_frozen_runs) is no measurement: each run but its first sample is
+  // marked missing, as a non-finite sample is.
+  void mark_frozen_runs() {
+    std::size_t min_length = 0;
+    const std::vector<FrozenRun> runs = find_frozen_runs(y0, o.alpha, &min_length);
+    if (runs.empty()) {
+      return;
+    }
+    std::size_t samples = 0;
+    for (const FrozenRun& r : runs) {
+      for (std::size_t i = r.first + 1; i < r.first + r.length; ++i) {
+        y0[i] = std::numeric_limits<double>::quiet_NaN();
+      }
+      samples += r.length - 1;
+    }
+    frozen_samples = samples;
+    out.notes.push_back(
+        std::to_string(runs.size()) + (runs.size() == 1 ? " run" : " runs") +
+        " of one repeated value (the longest " + std::to_string(runs[0].length) +
+        " samples from t = " + fmt("%.2f", static_cast<double>(runs[0].first) * ts) +
+        " s; on this record's own ties a run of " + std::to_string(min_length) +
+        " or more has a chance below " + fmt("%g", o.alpha) + "): a frozen output, its " +
+        std::to_string(samples) + " repeated samples taken as missing");
+  }
+
+  // A clipped output (find_clipping): the noise's tail is cut there, so the ADEV and the model
+  // understate it; said as an unexplained time range from the first to the last clipped sample.
+  void report_clipping() {
+    const Clipping c = find_clipping(y0);
+    if (!c.found) {
+      return;
+    }
+    UnexplainedRun u;
+    u.t_min_s = static_cast<double>(c.first) * ts;
+    u.t_max_s = static_cast<double>(c.last + 1) * ts;
+    u.tau_min_s = ts;
+    u.tau_max_s = ts;
+    u.what = std::to_string(c.count) + " samples at the record's " +
+             (c.at_min ? "minimum " : "maximum ") + fmt("%.9g", c.value) + " against " +
+             std::to_string(c.next_count) + " at the next value: the output clips there (a range "
+             "or converter limit); the noise's tail is cut";
+    time_ranges.push_back(u);
+    out.notes.push_back("clipped: " + u.what);
+  }
+
   // Inputs checked, gaps marked, the LSB chosen, the counts and the raw ADEV.
   bool prepare() {
     out = Report{};
@@ -2931,6 +2977,9 @@ class Analysis {
               " samples; at least 1000 are needed";
       return false;
     }
+    ts = 1.0 / o.fs_hz;
+    mark_frozen_runs();
+    report_clipping();  // before the gaps are filled (their values are no measurements)
     // Non-finite samples are gaps: the ADEV marks them missing, the filters skip them, and the
     // time-domain steps see them filled by interpolation.
     if (!fill_gaps(y0, gap, out.gap_samples, out.gap_runs)) {
@@ -2938,7 +2987,11 @@ class Analysis {
       return false;
     }
     if (out.gap_samples > 0) {
-      out.notes.push_back(std::to_string(out.gap_samples) + " non-finite samples in " +
+      out.notes.push_back(std::to_string(out.gap_samples) +
+                          (frozen_samples > 0 ? " missing samples (" +
+                                                    std::to_string(frozen_samples) +
+                                                    " of them a frozen output's repeats) in "
+                                              : std::string(" non-finite samples in ")) +
                           std::to_string(out.gap_runs) +
                           " gaps: marked missing in the ADEV, skipped by the filters");
     }
@@ -2948,7 +3001,6 @@ class Analysis {
               " samples are not finite)";
       return false;
     }
-    ts = 1.0 / o.fs_hz;
     n_d = static_cast<double>(n_in);
     t_rec = n_d * ts;
     tau_max = o.tau_max_fraction * t_rec;
@@ -5098,6 +5150,7 @@ class Analysis {
   NoiseLevelChange noise_change;             // of the white noise's level (find_noise_level_change)
   std::vector<UnexplainedRun> time_ranges;   // transients found by the step search
   bool shifts_repeat = false;                // repeated_shifts: no step is searched
+  std::size_t frozen_samples = 0;            // marked missing by mark_frozen_runs
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
   // Terms the record's likelihood could not tell from a look-alike (ramp_or_walk,
   // walk_or_flicker): not proposed again.

@@ -310,7 +310,7 @@ std::string to_text(const Report& r) {
                 static_cast<double>(r.samples) / r.fs_hz, r.lsb_note.c_str());
   s << buf;
   if (r.gap_samples > 0) {
-    std::snprintf(buf, sizeof buf, "gaps: %llu non-finite samples in %llu runs (missing)\n",
+    std::snprintf(buf, sizeof buf, "gaps: %llu missing samples in %llu runs\n",
                   static_cast<unsigned long long>(r.gap_samples),
                   static_cast<unsigned long long>(r.gap_runs));
     s << buf;

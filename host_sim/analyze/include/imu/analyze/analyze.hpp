@@ -170,8 +170,8 @@ struct Report {
   /// Tau ranges where the final model still leaves a significant run of residuals (what no
   /// term explains, rather than a wrong name); empty when nothing remains.
   std::vector<UnexplainedRun> unexplained;
-  std::uint64_t gap_samples = 0;  ///< non-finite samples (gaps, marked missing)
-  std::uint64_t gap_runs = 0;     ///< runs of consecutive non-finite samples
+  std::uint64_t gap_samples = 0;  ///< missing samples: non-finite, or a frozen output's repeats
+  std::uint64_t gap_runs = 0;     ///< runs of consecutive missing samples
   std::vector<std::string> notes;  ///< warnings and decisions, one line each
   FullRateHead head;               ///< a long record's full-rate head (samples 0: none)
   double seconds = 0.0;            ///< wall time of analyze()
