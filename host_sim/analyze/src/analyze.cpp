@@ -3229,10 +3229,21 @@ class Analysis {
     ShiftPlaces r;
     std::vector<double> at;
     std::vector<double> size;
+    // Where the white noise's level changes, the detectors' reference is the record's average:
+    // the louder part's own noise crosses the threshold at many places. Those are the noise
+    // change's (its own time range), not level shifts, and are not counted.
+    const auto change = static_cast<double>(noise_change.at);
+    const bool louder_after = noise_change.std_ratio > 1.0;
+    const auto in_louder_part = [&](double t) {
+      return noise_change.found && (louder_after ? t >= change : t < change);
+    };
     for (std::size_t i = 0; i < d.n_events(); ++i) {
       const StepEvent& ev = d.event(i);
       const auto t = static_cast<double>(ev.sample_index);
       const double abs_size = std::fabs(ev.size_counts) * lsb;
+      if (in_louder_part(t)) {
+        continue;
+      }
       if (!at.empty() && t - at.back() < 2.0 * window) {
         size.back() = std::max(size.back(), abs_size);
         continue;
@@ -3240,7 +3251,7 @@ class Analysis {
       at.push_back(t);
       size.push_back(abs_size);
     }
-    r.places = at.size() + d.stats().events_dropped;
+    r.places = at.size() + (noise_change.found ? 0U : d.stats().events_dropped);
     if (at.empty()) {
       return r;
     }
