@@ -3406,12 +3406,11 @@ class Analysis {
   static constexpr std::size_t kRepeatedShiftPlaces = 10;
   void repeated_shifts(ShiftPlaces sp, const StepEvent& best, double best_window) {
     shifts_repeat = true;
-    std::vector<double> at{sp.t_first_s, sp.t_last_s};
-    std::vector<double> sizes;
-    withdraw_steps(at, sizes);
-    sp.places += sizes.size();
-    sp.t_first_s = *std::min_element(at.begin(), at.end());
-    sp.t_last_s = *std::max_element(at.begin(), at.end());
+    for (const double t : withdraw_steps()) {
+      ++sp.places;
+      sp.t_first_s = std::min(sp.t_first_s, t);
+      sp.t_last_s = std::max(sp.t_last_s, t);
+    }
     UnexplainedRun u;
     u.t_min_s = sp.t_first_s;
     u.t_max_s = sp.t_last_s;
@@ -3431,9 +3430,9 @@ class Analysis {
                         " steps searched: a repeated effect, reported as unexplained");
   }
 
-  // The bias steps named so far are withdrawn (the record takes them back); their times and
-  // |sizes| are appended to at_s and sizes.
-  void withdraw_steps(std::vector<double>& at_s, std::vector<double>& sizes) {
+  // The bias steps named so far are withdrawn (the record takes them back); returns their times.
+  std::vector<double> withdraw_steps() {
+    std::vector<double> at_s;
     std::size_t j = 0;
     for (auto e = out.effects.begin(); e != out.effects.end();) {
       if (e->type != "bias_step" || j >= step_at.size()) {
@@ -3444,7 +3443,6 @@ class Analysis {
         y[i] += e->size;
       }
       at_s.push_back(static_cast<double>(step_at[j++]) * ts);
-      sizes.push_back(std::fabs(e->size));
       e = out.effects.erase(e);
     }
     if (!step_at.empty()) {
@@ -3452,6 +3450,7 @@ class Analysis {
       counts = to_counts(y, offset, lsb, sat);
       adev_y = adev_of(counts, gap, ts, lsb);
     }
+    return at_s;
   }
 
   void find_steps_by_windows() {
