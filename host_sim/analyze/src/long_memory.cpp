@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <utility>
 
 namespace imu::analyze {
 namespace {
@@ -252,6 +253,166 @@ std::vector<double> block_means(const std::vector<double>& y, std::size_t per_bl
 
 namespace {
 
+// The model's independent states as arrays (one per field) for the Kalman pass.
+struct StateSet {
+  std::size_t d = 0;  // states; the walk is the last
+  double r = 0.0;     // variance of the block mean's own noise (white + each state's ru)
+  std::array<double, kMaxStates> f{};
+  std::array<double, kMaxStates> q{};
+  std::array<double, kMaxStates> hm{};
+  std::array<double, kMaxStates> s{};
+  std::array<double, kMaxStates> p0{};
+
+  void add(const Component& c) {
+    f[d] = c.f;
+    q[d] = c.q;
+    hm[d] = c.hm;
+    s[d] = c.s;
+    p0[d] = c.p0;
+    r += c.ru;
+    ++d;
+  }
+};
+
+// sum log(s) as the log of a running product, mantissa and binary exponent kept apart: one log
+// per record instead of one per block. The product is renormalised (exactly, by a power of two)
+// only when it leaves [1e-150, 1e150], so most blocks cost one multiply.
+class LogSum {
+ public:
+  void add(double s) {
+    prod_ *= s;
+    if (!(prod_ >= 1e-150 && prod_ <= 1e150) || !(s >= 1e-150 && s <= 1e150)) {
+      int e = 0;
+      prod_ = std::frexp(prod_, &e);
+      exp_ += e;
+    }
+  }
+  [[nodiscard]] double value() const {
+    return std::log(prod_) + static_cast<double>(exp_) * std::log(2.0);
+  }
+
+ private:
+  double prod_ = 1.0;
+  long exp_ = 0;
+};
+
+struct PassInput {
+  const std::vector<double>* means = nullptr;
+  const StateSet* c = nullptr;
+  bool diffuse = false;
+  double big = 0.0;  // the diffuse variance, added to the walk's at a reset
+  const std::vector<std::size_t>* resets = nullptr;
+  std::vector<double>* whitened = nullptr;
+};
+
+// The Kalman pass over the block means for D states, D known at compile time so that the small
+// loops unroll. P is kept exactly symmetric (each element's update is symmetric in i, j) and only
+// its upper triangle computed.
+template <std::size_t D>
+double kalman_pass(const PassInput& in) {
+  constexpr double kInvalid = -std::numeric_limits<double>::infinity();
+  constexpr std::size_t iw = D - 1;  // the walk's state
+  const std::vector<double>& means = *in.means;
+  const StateSet& c = *in.c;
+  std::array<double, D> x{};
+  std::array<std::array<double, D>, D> p{};
+  for (std::size_t i = 0; i < D; ++i) {
+    p[i][i] = c.p0[i];
+  }
+  x[iw] = in.diffuse ? means[0] : 0.0;
+  double ll = 0.0;
+  LogSum log_s;
+  std::size_t next_reset = 0;
+  // Steady state: the model is time-invariant, so P (and with it s and the gain) converges;
+  // once s repeats to 1e-14 relative, P is a fixed point of its recursion and is no longer
+  // updated (O(D) per block instead of O(D^2), one log for the whole stretch) until a reset
+  // disturbs it.
+  bool steady = false;
+  double s_prev = -1.0;
+  double steady_s = 0.0;
+  double steady_log_s = 0.0;
+  std::array<double, D> g{};
+  for (std::size_t k = 0; k < means.size(); ++k) {
+    bool reset = false;
+    while (next_reset < in.resets->size() && (*in.resets)[next_reset] <= k) {
+      reset = reset || (*in.resets)[next_reset] == k;
+      ++next_reset;
+    }
+    if (reset && k > 0) {  // the walk's level is unknown again
+      p[iw][iw] += in.big;
+      steady = false;
+      s_prev = -1.0;
+    }
+    double pred = 0.0;
+    for (std::size_t i = 0; i < D; ++i) {
+      pred += c.hm[i] * x[i];
+    }
+    const double nu = means[k] - pred;
+    if (steady) {
+      ll -= 0.5 * (steady_log_s + nu * nu / steady_s);
+      if (in.whitened != nullptr) {
+        (*in.whitened)[k] = nu / std::sqrt(steady_s);
+      }
+      for (std::size_t i = 0; i < D; ++i) {
+        x[i] = c.f[i] * x[i] + g[i] * nu;
+      }
+      continue;
+    }
+    std::array<double, D> ph{};  // P hm
+    for (std::size_t i = 0; i < D; ++i) {
+      for (std::size_t j = 0; j < D; ++j) {
+        ph[i] += p[i][j] * c.hm[j];
+      }
+    }
+    double s = c.r;
+    for (std::size_t i = 0; i < D; ++i) {
+      s += c.hm[i] * ph[i];
+    }
+    if (!(s > 0.0)) {
+      return kInvalid;
+    }
+    if ((!in.diffuse || k > 0) && !reset) {
+      log_s.add(s);
+      ll -= 0.5 * (nu * nu / s);
+      if (in.whitened != nullptr) {
+        (*in.whitened)[k] = nu / std::sqrt(s);
+      }
+    }
+    // Predictor form with correlated noise: G = (F P hm + S) / s; x = F x + G nu;
+    // P = F P F + Q - G G s.
+    for (std::size_t i = 0; i < D; ++i) {
+      g[i] = (c.f[i] * ph[i] + c.s[i]) / s;
+      x[i] = c.f[i] * x[i] + g[i] * nu;
+    }
+    if (k > 0 && !reset && std::fabs(s - s_prev) <= 1e-14 * s) {
+      steady = true;
+      steady_s = s;
+      steady_log_s = std::log(s);
+      continue;  // P is at its fixed point
+    }
+    s_prev = s;
+    for (std::size_t i = 0; i < D; ++i) {
+      for (std::size_t j = i; j < D; ++j) {
+        const double v = p[i][j] * (c.f[i] * c.f[j]) - (g[i] * g[j]) * s;
+        p[i][j] = v;
+        p[j][i] = v;
+      }
+      p[i][i] += c.q[i];
+    }
+  }
+  return ll - 0.5 * log_s.value();
+}
+
+using Pass = double (*)(const PassInput&);
+
+template <std::size_t... I>
+constexpr std::array<Pass, sizeof...(I)> make_passes(std::index_sequence<I...> /*unused*/) {
+  return {&kalman_pass<I + 1>...};
+}
+
+constexpr std::array<Pass, kMaxStates> kPasses =
+    make_passes(std::make_index_sequence<kMaxStates>{});
+
 // block_loglik with the sample variance of the means given (fit_block_model evaluates thousands of
 // models on one record: the variance is one pass over it, computed once there).
 // whitened (optional): nu_k / sqrt(s_k) per block, 0 where the term is left out.
@@ -266,17 +427,21 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
   if (whitened != nullptr) {
     whitened->assign(means.size(), 0.0);
   }
-  const bool diffuse = w0_var < 0.0;
+  PassInput in;
+  in.means = &means;
+  in.diffuse = w0_var < 0.0;
   // Diffuse start: a variance far above anything in the data (the limit is reached to ~1e-8).
-  const double big = 1e8 * (means_var + m.white_var);
-  std::array<Component, kMaxStates> c{};
-  double r = m.white_var;
-  std::size_t n_gm = 0;  // GM components (the model's and the flicker bank's long members)
+  in.big = 1e8 * (means_var + m.white_var);
+  in.resets = &resets;
+  in.whitened = whitened;
+  StateSet c;
+  c.r = m.white_var;
+  // GM states: the model's and the flicker bank's long members
   for (std::size_t i = 0; i < m.n_gm; ++i) {
     if (!(m.gm[i].sb > 0.0) || !(m.gm[i].tb_s > 0.0)) {
       return kInvalid;
     }
-    c[n_gm++] = gm_component(m.gm[i].sb, m.gm[i].tb_s, block_s);
+    c.add(gm_component(m.gm[i].sb, m.gm[i].tb_s, block_s));
   }
   if (m.bi > 0.0) {
     GmParam bank[kMaxBankGm];
@@ -286,113 +451,15 @@ double loglik_impl(const std::vector<double>& means, double means_var, double bl
     }
     for (std::size_t i = 0; i < nb; ++i) {
       if (bank[i].tb_s < 0.5 * block_s) {  // white at this scale: AVAR ~ sb tb^2 / tau
-        r += bank[i].sb * bank[i].tb_s * bank[i].tb_s / block_s;
+        c.r += bank[i].sb * bank[i].tb_s * bank[i].tb_s / block_s;
       } else {
-        c[n_gm++] = gm_component(bank[i].sb, bank[i].tb_s, block_s);
+        c.add(gm_component(bank[i].sb, bank[i].tb_s, block_s));
       }
     }
   }
-  const std::size_t iw = n_gm;  // the walk's state
-  const std::size_t d = n_gm + 1;
-  c[iw] = walk_component(m.k, block_s, diffuse ? big : w0_var);
-  for (std::size_t i = 0; i < d; ++i) {
-    r += c[i].ru;
-  }
-  std::array<double, kMaxStates> x{};
-  std::array<std::array<double, kMaxStates>, kMaxStates> p{};
-  for (std::size_t i = 0; i < d; ++i) {
-    p[i][i] = c[i].p0;
-  }
-  x[iw] = diffuse ? means[0] : 0.0;
-  double ll = 0.0;
-  std::size_t next_reset = 0;
-  // Steady state: the model is time-invariant, so P (and with it s and the gain) converges;
-  // once s repeats to 1e-14 relative, P is a fixed point of its recursion and is no longer
-  // updated (O(d) per block instead of O(d^2), one log for the whole stretch) until a reset
-  // disturbs it.
-  bool steady = false;
-  double log_prod = 1.0;  // sum of log(s) = log(log_prod) + log_exp ln 2 (transient blocks)
-  long log_exp = 0;
-  double s_prev = -1.0;
-  double steady_s = 0.0;
-  double steady_log_s = 0.0;
-  std::array<double, kMaxStates> steady_g{};
-  for (std::size_t k = 0; k < means.size(); ++k) {
-    bool reset = false;
-    while (next_reset < resets.size() && resets[next_reset] <= k) {
-      reset = reset || resets[next_reset] == k;
-      ++next_reset;
-    }
-    if (reset && k > 0) {  // the walk's level is unknown again
-      p[iw][iw] += big;
-      steady = false;
-      s_prev = -1.0;
-    }
-    if (steady) {
-      double pred = 0.0;
-      for (std::size_t i = 0; i < d; ++i) {
-        pred += c[i].hm * x[i];
-      }
-      const double nu = means[k] - pred;
-      ll -= 0.5 * (steady_log_s + nu * nu / steady_s);
-      if (whitened != nullptr) {
-        (*whitened)[k] = nu / std::sqrt(steady_s);
-      }
-      for (std::size_t i = 0; i < d; ++i) {
-        x[i] = c[i].f * x[i] + steady_g[i] * nu;
-      }
-      continue;
-    }
-    std::array<double, kMaxStates> ph{};  // P hm
-    double pred = 0.0;
-    for (std::size_t i = 0; i < d; ++i) {
-      pred += c[i].hm * x[i];
-      for (std::size_t j = 0; j < d; ++j) {
-        ph[i] += p[i][j] * c[j].hm;
-      }
-    }
-    double s = r;
-    for (std::size_t i = 0; i < d; ++i) {
-      s += c[i].hm * ph[i];
-    }
-    if (!(s > 0.0)) {
-      return kInvalid;
-    }
-    const double nu = means[k] - pred;
-    if ((!diffuse || k > 0) && !reset) {
-      // sum log(s) as the log of a running product (mantissa and binary exponent kept apart,
-      // renormalised every block): one log per record instead of one per block.
-      log_prod *= s;
-      int e = 0;
-      log_prod = std::frexp(log_prod, &e);
-      log_exp += e;
-      ll -= 0.5 * (nu * nu / s);
-      if (whitened != nullptr) {
-        (*whitened)[k] = nu / std::sqrt(s);
-      }
-    }
-    // Predictor form with correlated noise: G = (F P hm + S) / s; x = F x + G nu;
-    // P = F P F + Q - G G s.
-    std::array<double, kMaxStates> g{};
-    for (std::size_t i = 0; i < d; ++i) {
-      g[i] = (c[i].f * ph[i] + c[i].s) / s;
-      x[i] = c[i].f * x[i] + g[i] * nu;
-    }
-    if (k > 0 && !reset && std::fabs(s - s_prev) <= 1e-14 * s) {
-      steady = true;
-      steady_s = s;
-      steady_log_s = std::log(s);
-      steady_g = g;
-      continue;  // P is at its fixed point
-    }
-    s_prev = s;
-    for (std::size_t i = 0; i < d; ++i) {
-      for (std::size_t j = 0; j < d; ++j) {
-        p[i][j] = c[i].f * p[i][j] * c[j].f - g[i] * g[j] * s + (i == j ? c[i].q : 0.0);
-      }
-    }
-  }
-  return ll - 0.5 * (std::log(log_prod) + static_cast<double>(log_exp) * std::log(2.0));
+  c.add(walk_component(m.k, block_s, in.diffuse ? in.big : w0_var));
+  in.c = &c;
+  return kPasses[c.d - 1](in);
 }
 
 }  // namespace
