@@ -5,6 +5,7 @@
 #include "fft.hpp"
 #include "data_faults.hpp"
 #include "noise_level.hpp"
+#include "radix_sort.hpp"
 
 #include <algorithm>
 #include <array>
@@ -2801,7 +2802,7 @@ double derive_lsb(const std::vector<double>& y, std::string& note) {
       amax = std::max(amax, std::fabs(v));
     }
   }
-  std::sort(s.begin(), s.end());
+  sort_finite(s);
   // Distinct levels: values closer than the floating-point residue of the data's magnitude
   // (1e-9 of max |y|, far above double rounding after scaling or differencing) are one level.
   const double resid = 1e-9 * (amax > 0.0 ? amax : 1.0);
