@@ -2885,6 +2885,16 @@ double derive_lsb(const std::vector<double>& y, std::string& note) {
 
 namespace {
 
+// CPU time of the calling thread: analyze() runs on one thread, and the process's clock would
+// also count the other channels or records analysed beside it.
+double thread_cpu_s() {
+  timespec t{};
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t) != 0) {
+    return 0.0;
+  }
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
 // The analysis of one channel: a pipeline of named steps over one shared state (the record as
 // it is cleaned step by step, its counts and ADEV, the model as it grows). Each step reads what
 // the earlier ones left; analyze() runs them in order.
@@ -5114,7 +5124,7 @@ class Analysis {
     }
     out.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    out.cpu_seconds = static_cast<double>(std::clock() - c0) / CLOCKS_PER_SEC;
+    out.cpu_seconds = thread_cpu_s() - cpu0_s;
   }
 
   // prepare
@@ -5124,7 +5134,7 @@ class Analysis {
   Report& out;
   std::string& error;
   std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
-  std::clock_t c0 = std::clock();
+  double cpu0_s = thread_cpu_s();
   std::vector<std::uint8_t> gap;   // 1 at a non-finite sample
   double ts = 0.0;
   double n_d = 0.0;

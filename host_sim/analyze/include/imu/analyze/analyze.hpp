@@ -175,7 +175,7 @@ struct Report {
   std::vector<std::string> notes;  ///< warnings and decisions, one line each
   FullRateHead head;               ///< a long record's full-rate head (samples 0: none)
   double seconds = 0.0;            ///< wall time of analyze()
-  double cpu_seconds = 0.0;        ///< CPU time of analyze() (the machine may be shared)
+  double cpu_seconds = 0.0;        ///< CPU time of the thread that ran analyze()
 };
 
 /// Analyze one channel (physical units). Fails (returns false, `error` set to one line) on an
