@@ -3149,8 +3149,7 @@ class Analysis {
     // over the record, done only when y changed).
     adev_y = raw;
     if (outliers_replaced) {
-      counts = to_counts(y, offset, lsb, sat);
-      adev_y = adev_of(counts, gap, ts, lsb);
+      refresh_adev();
     }
     // The before filter's per-sample innovations and predictions served the outlier search only.
     fb.nu = std::vector<float>{};
@@ -3361,6 +3360,19 @@ class Analysis {
     time_ranges.push_back(u);
   }
 
+  // y from sample `from` on moves by delta (a step taken out of the record, or put back).
+  void shift_level(std::size_t from, double delta) {
+    for (std::size_t i = from; i < y.size(); ++i) {
+      y[i] += delta;
+    }
+  }
+
+  // The counts and ADEV of y as it now stands (a pass over the record each).
+  void refresh_adev() {
+    counts = to_counts(y, offset, lsb, sat);
+    adev_y = adev_of(counts, gap, ts, lsb);
+  }
+
   // A second "step" within one window of the last one: the other edge of a transient (or the
   // residue of the first estimate), not a new step.
   void near_previous_step(const StepEvent& best, double best_window) {
@@ -3378,9 +3390,7 @@ class Analysis {
     const bool blip = dist < best_window / 8.0;
     if (undoes) {
       const auto from = static_cast<std::size_t>(step_at.back());
-      for (std::size_t i = from; i < y.size(); ++i) {
-        y[i] += prev_size;
-      }
+      shift_level(from, prev_size);
       out.notes.push_back(std::string(blip ? "not a step" : "transient, not a step") +
                           ": the level shift at t = " +
                           fmt("%.1f", static_cast<double>(from) * ts) + " s is undone at t = " +
@@ -3398,8 +3408,7 @@ class Analysis {
       }
       step_at.pop_back();
       out.effects.pop_back();
-      counts = to_counts(y, offset, lsb, sat);
-      adev_y = adev_of(counts, gap, ts, lsb);
+      refresh_adev();
     } else {
       out.notes.push_back("step search stopped: a further excursion at t = " +
                           fmt("%.1f", at * ts) +
@@ -3450,16 +3459,13 @@ class Analysis {
         ++e;
         continue;
       }
-      for (auto i = static_cast<std::size_t>(step_at[j]); i < y.size(); ++i) {
-        y[i] += e->size;
-      }
+      shift_level(static_cast<std::size_t>(step_at[j]), e->size);
       at_s.push_back(static_cast<double>(step_at[j++]) * ts);
       e = out.effects.erase(e);
     }
     if (!step_at.empty()) {
       step_at.clear();
-      counts = to_counts(y, offset, lsb, sat);
-      adev_y = adev_of(counts, gap, ts, lsb);
+      refresh_adev();
     }
     return at_s;
   }
@@ -3508,12 +3514,9 @@ class Analysis {
       e.statistic = std::fabs(best.z);
       e.threshold = thr;
       out.effects.push_back(e);
-      for (std::size_t i = k; i < y.size(); ++i) {
-        y[i] -= e.size;
-      }
+      shift_level(k, -e.size);
       restore_step_outliers(k, best_window / 8.0, size);
-      counts = to_counts(y, offset, lsb, sat);
-      adev_y = adev_of(counts, gap, ts, lsb);
+      refresh_adev();
     }
   }
 
@@ -3813,11 +3816,8 @@ class Analysis {
                           (lr_alt > 0.0 ? "> a walk's or bias instability's " + fmt("%.1f", lr_alt)
                                         : std::string("beside the walk, above")) +
                           ")");
-      for (std::size_t i = sl.sample; i < y.size(); ++i) {
-        y[i] -= e.size;
-      }
-      counts = to_counts(y, offset, lsb, sat);
-      adev_y = adev_of(counts, gap, ts, lsb);
+      shift_level(sl.sample, -e.size);
+      refresh_adev();
     }
   }
 
