@@ -302,6 +302,142 @@ bool report_consistent(const Report& r, std::string& why) {
   return true;
 }
 
+namespace {
+
+// One model's line of the text report.
+void model_text(std::ostringstream& s, const char* name, const ModelParams& p) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf, "%s: N = %.4e", name, p.n);
+  s << buf;
+  if (p.n_filter_s > 0.0) {
+    std::snprintf(buf, sizeof buf, " (through an output filter of %.3g ms)", 1e3 * p.n_filter_s);
+    s << buf;
+  }
+  if (p.q > 0.0) {
+    std::snprintf(buf, sizeof buf, ", Q = %.4e", p.q);
+    s << buf;
+  }
+  for (std::size_t i = 0; i < p.n_gm; ++i) {
+    std::snprintf(buf, sizeof buf, ", GM Sb = %.4e Tb = %.1f s (peak ADEV %.3e)", p.gm[i].sb,
+                  p.gm[i].tb_s, kGmPeakAdevFactor * std::sqrt(p.gm[i].sb * p.gm[i].tb_s));
+    s << buf;
+  }
+  if (p.k > 0.0) {
+    std::snprintf(buf, sizeof buf, ", K = %.4e", p.k);
+    s << buf;
+  }
+  if (p.r > 0.0) {
+    std::snprintf(buf, sizeof buf, ", R = %.4e", p.r);
+    s << buf;
+  }
+  if (p.sin_a > 0.0) {
+    std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin_a, p.sin_f0_hz);
+    s << buf;
+  }
+  if (p.sin2_a > 0.0) {
+    std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin2_a, p.sin2_f0_hz);
+    s << buf;
+  }
+  if (p.osc_sigma > 0.0) {
+    std::snprintf(buf, sizeof buf,
+                  ", oscillation sigma = %.4e f0 = %.5g Hz beta = %.3g /s (ADEV of %s)",
+                  p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s,
+                  p.osc_ts_s > 0.0 ? "point samples" : "averages over each sample period");
+    s << buf;
+  }
+  if (p.bi > 0.0) {
+    std::snprintf(buf, sizeof buf, ", bias instability B = %.4e (flicker bank over [%.3g, %.4g] s)",
+                  p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s);
+    s << buf;
+  }
+  s << "\n";
+}
+
+// One model's error line (its ADEV against the data's, and its bias filter's checks).
+void error_text(std::ostringstream& s, const char* name, const ErrorStats& e) {
+  char buf[512];
+  if (e.filter_states == 0) {
+    // White noise alone (a failed fit's fallback): no bias state, so no filter to check.
+    std::snprintf(buf, sizeof buf,
+                  "%s: |ADEV_model/ADEV_data - 1| RMS %.3f max %.3f over %zu taus [%.3g, %.4g] s;"
+                  " no bias filter (the model has no state)\n",
+                  name, e.adev_rms_rel, e.adev_max_rel, e.n_taus, e.tau_min_s, e.tau_max_s);
+    s << buf;
+    return;
+  }
+  std::snprintf(buf, sizeof buf,
+                "%s: |ADEV_model/ADEV_data - 1| RMS %.3f max %.3f over %zu taus [%.3g, %.4g] s;"
+                " RMS %.3f max %.3f over [%.3g, %.4g] s; covariance ratio %.3f; NIS mean %.3f "
+                "(%zu-state filter; innovation blocks flagged: NIS %.0f %%, whiteness %.0f %%)\n",
+                name, e.adev_rms_rel, e.adev_max_rel, e.n_taus, e.tau_min_s, e.tau_max_s,
+                e.example_rms_rel, e.example_max_rel, e.tau_min_s, e.example_tau_max_s,
+                e.cov_ratio, e.nis_mean, e.filter_states, 100.0 * e.nis_flagged_fraction,
+                100.0 * e.whiteness_flagged_fraction);
+  s << buf;
+}
+
+// The effects line when none is named. The terms the model after holds beyond white noise and
+// one GM are each said: the effect list never reads as if the model after were the first-order
+// one when it is not.
+std::string no_effects_text(const ModelParams& m) {
+  std::string held;
+  for (const auto& t : terms_beyond_first_order(m)) {
+    held += (held.empty() ? "" : ", ") + t.type;
+  }
+  // The sensor's output filter is a property of the white noise, not a term: said here.
+  const std::string white =
+      m.n_filter_s > 0.0 ? "white noise through the sensor's output filter" : "white noise";
+  return held.empty()
+             ? (m.n_gm == 0 ? "effects: none (" + white + " only; see notes)\n"
+                            : "effects: none (" + white + " and one GM term; the model after "
+                              "is that model refitted over [Ts, T/10])\n")
+             : "effects: none named; the model after also holds " + held + " (see notes)\n";
+}
+
+void unexplained_text(std::ostringstream& s, const std::vector<UnexplainedRun>& runs) {
+  char buf[512];
+  if (runs.empty()) {
+    s << "unexplained: nothing (the model after is inside the intervals, no significant run)\n";
+  }
+  for (const auto& u : runs) {
+    if (u.t_max_s > u.t_min_s) {
+      std::snprintf(buf, sizeof buf, "unexplained: t %.6g - %.6g s (tau %.3g - %.4g s): ",
+                    u.t_min_s, u.t_max_s, u.tau_min_s, u.tau_max_s);
+      s << buf << u.what << "\n";
+      continue;
+    }
+    std::snprintf(buf, sizeof buf,
+                  "unexplained: tau %.3g - %.4g s, max |z| %.1f (model %s the data)\n",
+                  u.tau_min_s, u.tau_max_s, u.max_abs_z, u.sign > 0 ? "above" : "below");
+    s << buf;
+  }
+}
+
+void head_text(std::ostringstream& s, const FullRateHead& h) {
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "full-rate head: the first %llu samples at %g Hz (%.2f h), analysed on their "
+                "own; %s\n",
+                static_cast<unsigned long long>(h.samples), h.fs_hz,
+                static_cast<double>(h.samples) / h.fs_hz / 3600.0,
+                h.merged ? "its fast terms are in the model after (notes)"
+                         : "the model after is the block means' (notes)");
+  s << buf;
+  error_text(s, "  head, error before", h.error_before);
+  model_text(s, "  head, model after", h.model_after);
+  error_text(s, "  head, error after", h.error_after);
+  std::snprintf(buf, sizeof buf,
+                "  head, the model after above: RMS %.3f max %.3f over its %zu taus\n",
+                h.error_record_model.adev_rms_rel, h.error_record_model.adev_max_rel,
+                h.error_record_model.n_taus);
+  s << buf;
+  for (const auto& e : h.effects) {
+    s << "  head, " << effect_text(e) << "\n";
+  }
+}
+
+}  // namespace
+
 std::string to_text(const Report& r) {
   std::ostringstream s;
   char buf[512];
@@ -315,139 +451,26 @@ std::string to_text(const Report& r) {
                   static_cast<unsigned long long>(r.gap_runs));
     s << buf;
   }
-  const auto model_line = [&](const char* name, const ModelParams& p) {
-    std::snprintf(buf, sizeof buf, "%s: N = %.4e", name, p.n);
-    s << buf;
-    if (p.n_filter_s > 0.0) {
-      std::snprintf(buf, sizeof buf, " (through an output filter of %.3g ms)", 1e3 * p.n_filter_s);
-      s << buf;
-    }
-    if (p.q > 0.0) {
-      std::snprintf(buf, sizeof buf, ", Q = %.4e", p.q);
-      s << buf;
-    }
-    for (std::size_t i = 0; i < p.n_gm; ++i) {
-      std::snprintf(buf, sizeof buf, ", GM Sb = %.4e Tb = %.1f s (peak ADEV %.3e)", p.gm[i].sb,
-                    p.gm[i].tb_s, kGmPeakAdevFactor * std::sqrt(p.gm[i].sb * p.gm[i].tb_s));
-      s << buf;
-    }
-    if (p.k > 0.0) {
-      std::snprintf(buf, sizeof buf, ", K = %.4e", p.k);
-      s << buf;
-    }
-    if (p.r > 0.0) {
-      std::snprintf(buf, sizeof buf, ", R = %.4e", p.r);
-      s << buf;
-    }
-    if (p.sin_a > 0.0) {
-      std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin_a, p.sin_f0_hz);
-      s << buf;
-    }
-    if (p.sin2_a > 0.0) {
-      std::snprintf(buf, sizeof buf, ", sinusoid A = %.4e f0 = %.5g Hz", p.sin2_a, p.sin2_f0_hz);
-      s << buf;
-    }
-    if (p.osc_sigma > 0.0) {
-      std::snprintf(buf, sizeof buf,
-                    ", oscillation sigma = %.4e f0 = %.5g Hz beta = %.3g /s (ADEV of %s)",
-                    p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s,
-                    p.osc_ts_s > 0.0 ? "point samples" : "averages over each sample period");
-      s << buf;
-    }
-    if (p.bi > 0.0) {
-      std::snprintf(buf, sizeof buf, ", bias instability B = %.4e (flicker bank over [%.3g, %.4g] s)",
-                    p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s);
-      s << buf;
-    }
-    s << "\n";
-  };
-  const auto error_line = [&](const char* name, const ErrorStats& e) {
-    if (e.filter_states == 0) {
-      // White noise alone (a failed fit's fallback): no bias state, so no filter to check.
-      std::snprintf(buf, sizeof buf,
-                    "%s: |ADEV_model/ADEV_data - 1| RMS %.3f max %.3f over %zu taus [%.3g, %.4g] s;"
-                    " no bias filter (the model has no state)\n",
-                    name, e.adev_rms_rel, e.adev_max_rel, e.n_taus, e.tau_min_s, e.tau_max_s);
-      s << buf;
-      return;
-    }
-    std::snprintf(buf, sizeof buf,
-                  "%s: |ADEV_model/ADEV_data - 1| RMS %.3f max %.3f over %zu taus [%.3g, %.4g] s;"
-                  " RMS %.3f max %.3f over [%.3g, %.4g] s; covariance ratio %.3f; NIS mean %.3f "
-                  "(%zu-state filter; innovation blocks flagged: NIS %.0f %%, whiteness %.0f %%)\n",
-                  name, e.adev_rms_rel, e.adev_max_rel, e.n_taus, e.tau_min_s, e.tau_max_s,
-                  e.example_rms_rel, e.example_max_rel, e.tau_min_s, e.example_tau_max_s,
-                  e.cov_ratio, e.nis_mean, e.filter_states, 100.0 * e.nis_flagged_fraction,
-                  100.0 * e.whiteness_flagged_fraction);
-    s << buf;
-  };
-  model_line(r.model_before.n_gm > 0 ? "model before (white + GM over [Ts, 100 s])"
-                                      : "model before (white noise only: the white + GM fit "
-                                        "failed, see notes)",
+  model_text(s,
+             r.model_before.n_gm > 0 ? "model before (white + GM over [Ts, 100 s])"
+                                     : "model before (white noise only: the white + GM fit "
+                                       "failed, see notes)",
              r.model_before);
-  error_line("error before", r.error_before);
+  error_text(s, "error before", r.error_before);
   if (r.effects.empty()) {
-    // The terms the model after holds beyond white noise and one GM, each said: the effect list
-    // never reads as if the model after were the first-order one when it is not.
-    const ModelParams& m = r.model_after;
-    std::string held;
-    for (const auto& t : terms_beyond_first_order(m)) {
-      held += (held.empty() ? "" : ", ") + t.type;
-    }
-    // The sensor's output filter is a property of the white noise, not a term: said here.
-    const std::string white = m.n_filter_s > 0.0
-                                  ? "white noise through the sensor's output filter"
-                                  : "white noise";
-    s << (held.empty()
-              ? (m.n_gm == 0 ? "effects: none (" + white + " only; see notes)\n"
-                             : "effects: none (" + white + " and one GM term; the model after "
-                               "is that model refitted over [Ts, T/10])\n")
-              : "effects: none named; the model after also holds " + held + " (see notes)\n");
+    s << no_effects_text(r.model_after);
   }
   for (const auto& e : r.effects) {
     s << effect_text(e) << "\n";
   }
-  model_line("model after (joint fit over [Ts, T/10])", r.model_after);
+  model_text(s, "model after (joint fit over [Ts, T/10])", r.model_after);
   if (!r.model_after_ci95.empty()) {
     s << "model after, its white noise and GM" << intervals_text(r.model_after_ci95) << "\n";
   }
-  error_line("error after", r.error_after);
-  if (r.unexplained.empty()) {
-    s << "unexplained: nothing (the model after is inside the intervals, no significant run)\n";
-  }
-  for (const auto& u : r.unexplained) {
-    if (u.t_max_s > u.t_min_s) {
-      std::snprintf(buf, sizeof buf, "unexplained: t %.6g - %.6g s (tau %.3g - %.4g s): ",
-                    u.t_min_s, u.t_max_s, u.tau_min_s, u.tau_max_s);
-      s << buf << u.what << "\n";
-      continue;
-    }
-    std::snprintf(buf, sizeof buf,
-                  "unexplained: tau %.3g - %.4g s, max |z| %.1f (model %s the data)\n",
-                  u.tau_min_s, u.tau_max_s, u.max_abs_z, u.sign > 0 ? "above" : "below");
-    s << buf;
-  }
+  error_text(s, "error after", r.error_after);
+  unexplained_text(s, r.unexplained);
   if (r.head.samples > 0) {
-    const FullRateHead& h = r.head;
-    std::snprintf(buf, sizeof buf,
-                  "full-rate head: the first %llu samples at %g Hz (%.2f h), analysed on their "
-                  "own; %s\n",
-                  static_cast<unsigned long long>(h.samples), h.fs_hz,
-                  static_cast<double>(h.samples) / h.fs_hz / 3600.0,
-                  h.merged ? "its fast terms are in the model after (notes)"
-                           : "the model after is the block means' (notes)");
-    s << buf;
-    error_line("  head, error before", h.error_before);
-    model_line("  head, model after", h.model_after);
-    error_line("  head, error after", h.error_after);
-    std::snprintf(buf, sizeof buf,
-                  "  head, the model after above: RMS %.3f max %.3f over its %zu taus\n",
-                  h.error_record_model.adev_rms_rel, h.error_record_model.adev_max_rel,
-                  h.error_record_model.n_taus);
-    s << buf;
-    for (const auto& e : h.effects) {
-      s << "  head, " << effect_text(e) << "\n";
-    }
+    head_text(s, r.head);
   }
   for (const auto& n : r.notes) {
     s << "note: " << n << "\n";
