@@ -213,6 +213,91 @@ double analysis_fs(const std::string& json, const std::string& name) {
   return fs == std::string::npos ? 0.0 : std::strtod(json.c_str() + fs + 9, nullptr);
 }
 
+// The analysis JSON of `synth --model` (at most 64 MiB); false with the reason.
+bool read_model_json(const std::string& path, std::string& json, std::string& err) {
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(path, ec);
+  std::ifstream in(path, std::ios::binary);
+  if (ec || !in || size > (std::uintmax_t{64} << 20U)) {
+    err = "--model " + path + ": cannot read" +
+          (ec || !in ? std::string() : " (larger than 64 MiB)");
+    return false;
+  }
+  std::stringstream buf;
+  buf << in.rdbuf();
+  json = buf.str();
+  return true;
+}
+
+// A model record's terms as the node runs them (what `run --model` pushes). The output filter
+// is not simulated, said in `dropped`: the node sees the white noise through its averaging
+// sampler, where the filter changes a sample's variance by about 1.5 n_filter_s / Ts, but this
+// simulator takes point samples, whose variance through the filter is N^2 / (2 tf).
+ModelParams params_as_node_runs(const hal::ModelRecord& rec, std::string& dropped) {
+  const auto d = [](float v) { return static_cast<double>(v); };
+  ModelParams mp{};
+  mp.n = d(rec.n);
+  mp.q = d(rec.q);
+  for (std::size_t g = 0; g < 2; ++g) {
+    if (rec.gm_sb[g] > 0.0F && rec.gm_tb_s[g] > 0.0F) {
+      mp.gm[mp.n_gm++] = GmParam{d(rec.gm_sb[g]), d(rec.gm_tb_s[g])};
+    }
+  }
+  mp.k = d(rec.k);
+  mp.bi = d(rec.bi);
+  mp.bi_tau_lo_s = d(rec.bi_tau_lo_s);
+  mp.bi_tau_hi_s = d(rec.bi_tau_hi_s);
+  mp.osc_sigma = d(rec.osc_sigma);
+  mp.osc_f0_hz = d(rec.osc_f0_hz);
+  mp.osc_beta_per_s = d(rec.osc_beta_per_s);
+  if (rec.n_filter_s > 0.0F) {
+    dropped += std::string(dropped.empty() ? "" : "; ") + "output filter (" +
+               imu::cli::num_text(d(rec.n_filter_s)) + " s) not simulated: white N";
+  }
+  return mp;
+}
+
+// z.size() samples of the model at fs, quantised to lsb. 0, or the exit status with err.
+int simulate_channel(const ModelParams& mp, double fs, std::uint64_t seed, double lsb,
+                     const std::string& name, std::vector<double>& z, std::string& err) {
+  ContinuousModel<8> cm;
+  DiscreteModel<8> dm;
+  ModelSimulator<8> sim;
+  if (build_model(mp, cm) != ModelStatus::kOk ||
+      discretize(cm, 1.0 / fs, dm) != ModelStatus::kOk ||
+      sim.configure(dm, seed) != ModelStatus::kOk) {
+    err = name + "'s model could not be built or simulated (at most 8 states, the node's "
+          "largest filter)";
+    return kExitRuntime;
+  }
+  for (double& v : z) {
+    const double x = sim.next();
+    const QuantizeResult q = quantize(x, lsb);
+    if (q.saturated || !std::isfinite(x)) {
+      err = name + ": the model's values reach " + imu::cli::num_text(x) +
+            ", beyond int32 counts of the LSB " + imu::cli::num_text(lsb) + " (raise --lsb)";
+      return kExitUsage;
+    }
+    v = static_cast<double>(q.counts) * lsb;
+  }
+  return 0;
+}
+
+// The channel's model in the MAT-file's `source` string.
+void append_model_text(std::string& source, const std::string& name, const ModelParams& mp,
+                       double lsb) {
+  appendf(source, " %s N=%.4g Q=%.4g", name.c_str(), mp.n, mp.q);
+  for (std::size_t g = 0; g < mp.n_gm; ++g) {
+    appendf(source, " GM(Sb=%.4g,Tb=%.4g s)", mp.gm[g].sb, mp.gm[g].tb_s);
+  }
+  appendf(source, " K=%.4g B=%.4g", mp.k, mp.bi);
+  if (mp.osc_sigma > 0.0) {
+    appendf(source, " OSC(sigma=%.4g,f0=%.4g Hz,beta=%.4g/s)", mp.osc_sigma, mp.osc_f0_hz,
+            mp.osc_beta_per_s);
+  }
+  appendf(source, " LSB=%.4g;", lsb);
+}
+
 // `synth --model A.json`: every channel acc_x..gyro_z an analysis JSON holds, simulated from
 // its model_after (white, quantization, GM terms, rate random walk, bias instability: the
 // model the node runs, read by the reader of run --model; ramp and sinusoids are deterministic
@@ -240,17 +325,8 @@ int synth_from_model(const Args& a, const char* cmd) {
   const std::string path = a.get("--model");
   const std::string out = a.get("--out", "synth.mat");
   std::string json;
-  {
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(path, ec);
-    std::ifstream in(path, std::ios::binary);
-    if (ec || !in || size > (std::uintmax_t{64} << 20U)) {
-      return fail(cmd, "--model " + path + ": cannot read" +
-                           (ec || !in ? std::string() : " (larger than 64 MiB)"));
-    }
-    std::stringstream buf;
-    buf << in.rdbuf();
-    json = buf.str();
+  if (!read_model_json(path, json, err)) {
+    return fail(cmd, err);
   }
   mat::MatWriter w;
   std::string source = "SYNTHETIC data from imu-sim synth --model " + path + ":";
@@ -278,65 +354,18 @@ int synth_from_model(const Args& a, const char* cmd) {
       return fail(cmd, "--duration x rate = " + std::to_string(samples) +
                            " samples, outside [16, 2^26] per channel", kExitUsage);
     }
-    const auto d = [](float v) { return static_cast<double>(v); };
-    ModelParams mp{};
-    mp.n = d(rec.n);
-    mp.q = d(rec.q);
-    for (std::size_t g = 0; g < 2; ++g) {
-      if (rec.gm_sb[g] > 0.0F && rec.gm_tb_s[g] > 0.0F) {
-        mp.gm[mp.n_gm++] = GmParam{d(rec.gm_sb[g]), d(rec.gm_tb_s[g])};
-      }
-    }
-    mp.k = d(rec.k);
-    mp.bi = d(rec.bi);
-    mp.bi_tau_lo_s = d(rec.bi_tau_lo_s);
-    mp.bi_tau_hi_s = d(rec.bi_tau_hi_s);
-    mp.osc_sigma = d(rec.osc_sigma);
-    mp.osc_f0_hz = d(rec.osc_f0_hz);
-    mp.osc_beta_per_s = d(rec.osc_beta_per_s);
-    // The output filter is not simulated: the node sees the white noise through its averaging
-    // sampler, where the filter changes a sample's variance by about 1.5 n_filter_s / Ts, but
-    // this simulator takes point samples, whose variance through the filter is N^2 / (2 tf).
-    if (rec.n_filter_s > 0.0F) {
-      dropped += std::string(dropped.empty() ? "" : "; ") + "output filter (" +
-                 imu::cli::num_text(d(rec.n_filter_s)) + " s) not simulated: white N";
-    }
-    ContinuousModel<8> cm;
-    DiscreteModel<8> dm;
-    ModelSimulator<8> sim;
-    if (build_model(mp, cm) != ModelStatus::kOk ||
-        discretize(cm, 1.0 / fs, dm) != ModelStatus::kOk ||
-        sim.configure(dm, seed + c) != ModelStatus::kOk) {
-      std::string msg = path;
-      msg += ": " + name + "'s model could not be built or simulated (at most 8 states, the "
-             "node's largest filter)";
-      return fail(cmd, msg);
-    }
+    const ModelParams mp = params_as_node_runs(rec, dropped);
     const double lsb = lsb_opt > 0.0 ? lsb_opt : default_lsb(c);
     std::vector<double> z(static_cast<std::size_t>(samples));
-    for (double& v : z) {
-      const double x = sim.next();
-      const QuantizeResult q = quantize(x, lsb);
-      if (q.saturated || !std::isfinite(x)) {
-        return fail(cmd, name + ": the model's values reach " + imu::cli::num_text(x) +
-                             ", beyond int32 counts of the LSB " + imu::cli::num_text(lsb) +
-                             " (raise --lsb)", kExitUsage);
-      }
-      v = static_cast<double>(q.counts) * lsb;
+    if (const int status = simulate_channel(mp, fs, seed + c, lsb, name, z, err); status != 0) {
+      std::string msg = path;
+      msg += ": " + err;
+      return fail(cmd, msg, status);
     }
     if (auto st = w.add_column(name, z); !st.ok()) {
       return fail(cmd, st.error().message);
     }
-    appendf(source, " %s N=%.4g Q=%.4g", name.c_str(), mp.n, mp.q);
-    for (std::size_t g = 0; g < mp.n_gm; ++g) {
-      appendf(source, " GM(Sb=%.4g,Tb=%.4g s)", mp.gm[g].sb, mp.gm[g].tb_s);
-    }
-    appendf(source, " K=%.4g B=%.4g", mp.k, mp.bi);
-    if (mp.osc_sigma > 0.0) {
-      appendf(source, " OSC(sigma=%.4g,f0=%.4g Hz,beta=%.4g/s)", mp.osc_sigma, mp.osc_f0_hz,
-              mp.osc_beta_per_s);
-    }
-    appendf(source, " LSB=%.4g;", lsb);
+    append_model_text(source, name, mp, lsb);
     if (!dropped.empty()) {
       std::printf("note: %s: simulated as the node runs it: %s\n", name.c_str(),
                   imu::cli::term_safe(dropped).c_str());
