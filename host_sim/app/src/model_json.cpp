@@ -238,25 +238,128 @@ bool analysis_holds_channel(const std::string& json, const std::string& channel_
   return string_member_is(json, root, "channel", channel_name);
 }
 
-bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
-                              std::size_t channel_index, hal::ModelRecord& out,
-                              std::string& dropped, std::string& err) {
+namespace {
+
+// The object of `channel_name` in an analysis JSON: the root, or the member of its "channels"
+// object in a whole-IMU analysis (`analyze --channel all`: {"file", "channels": {NAME: {...}}}).
+// npos with err when it is not there.
+std::size_t channel_object(const std::string& json, const std::string& channel_name,
+                           std::string& err) {
   std::size_t root = skip_ws(json, 0);
   if (root >= json.size() || json[root] != '{' || skip_value(json, root) == std::string::npos) {
     err = "not a JSON object";
-    return false;
+    return std::string::npos;
   }
-  // A whole-IMU analysis (`analyze --channel all`): {"file", "channels": {NAME: {...}}}.
   const std::size_t chans = member(json, root, "channels");
   if (chans != std::string::npos && json[chans] == '{') {
     root = member(json, chans, channel_name);
     if (root == std::string::npos || json[root] != '{') {
       err = "its \"channels\" hold no " + channel_name;
-      return false;
+      return std::string::npos;
     }
   }
   if (!string_member_is(json, root, "channel", channel_name)) {
     err = "its \"channel\" is not " + channel_name + " (the analysis of another channel?)";
+    return std::string::npos;
+  }
+  return root;
+}
+
+// model_after.gm: at most the record's two GM terms.
+bool read_gm_terms(const std::string& json, std::size_t m, hal::ModelRecord& rec,
+                   std::string& err) {
+  const std::size_t gm = member(json, m, "gm");
+  if (gm == std::string::npos || json[gm] != '[') {
+    err = "model_after.gm missing or not a list";
+    return false;
+  }
+  std::size_t i = skip_ws(json, gm + 1);
+  std::size_t n_gm = 0;
+  while (i < json.size() && json[i] == '{') {
+    if (n_gm == 2) {
+      err = "model_after.gm has more than the 2 GM terms the node's model record holds";
+      return false;
+    }
+    double sb = 0.0;
+    double tb = 0.0;
+    if (!get_number(json, i, "sb", sb, err) || !get_number(json, i, "tb_s", tb, err)) {
+      err.insert(0, "model_after.gm[]: ");
+      return false;
+    }
+    rec.gm_sb[n_gm] = static_cast<float>(sb);
+    rec.gm_tb_s[n_gm] = static_cast<float>(tb);
+    ++n_gm;
+    i = skip_ws(json, skip_value(json, i));
+    if (i < json.size() && json[i] == ',') {
+      i = skip_ws(json, i + 1);
+    }
+  }
+  return true;
+}
+
+bool read_bias_instability(const std::string& json, std::size_t m, hal::ModelRecord& rec,
+                           std::string& err) {
+  const std::size_t bi = member(json, m, "bias_instability");
+  double b = 0.0;
+  double lo = 0.0;
+  double hi = 0.0;
+  if (bi == std::string::npos || !get_number(json, bi, "b", b, err) ||
+      !get_number(json, bi, "tau_lo_s", lo, err) || !get_number(json, bi, "tau_hi_s", hi, err)) {
+    err = "model_after.bias_instability {B, tau_lo_s, tau_hi_s} missing or malformed";
+    return false;
+  }
+  rec.bi = static_cast<float>(b);
+  rec.bi_tau_lo_s = static_cast<float>(lo);
+  rec.bi_tau_hi_s = static_cast<float>(hi);
+  return true;
+}
+
+// The narrowband oscillation (2 filter states): sigma absent or 0 means none.
+bool read_oscillation(const std::string& json, std::size_t m, hal::ModelRecord& rec,
+                      std::string& dropped, std::string& err) {
+  const std::size_t osc = member(json, m, "oscillation");
+  double osc_sigma = 0.0;
+  if (osc == std::string::npos || !get_number(json, osc, "sigma", osc_sigma, err) ||
+      !(osc_sigma > 0.0)) {
+    return true;
+  }
+  double f0 = 0.0;
+  double beta = 0.0;
+  if (!get_number(json, osc, "f0_hz", f0, err) ||
+      !get_number(json, osc, "beta_per_s", beta, err)) {
+    err = "model_after.oscillation {sigma, f0_hz, beta_per_s} malformed";
+    return false;
+  }
+  // Fitted as point samples (the ADEV of m-sample means): the node sees the process through
+  // its averaging sampler, whose sample means' AVAR is the continuous average's; a band at f0
+  // seen so needs sigma x / sin(x), x = pi f0 Ts, to give the data's ADEV (exact for a line).
+  double point_ts_s = 0.0;
+  if (member(json, osc, "point_sampled_ts_s") != std::string::npos &&
+      !get_number(json, osc, "point_sampled_ts_s", point_ts_s, err)) {
+    err = "model_after.oscillation.point_sampled_ts_s malformed";
+    return false;
+  }
+  const double x = kPi * f0 * point_ts_s;
+  if (x > 0.0 && x < 0.5 * kPi) {
+    const double averaged = osc_sigma * x / std::sin(x);
+    dropped += std::string(dropped.empty() ? "" : "; ") + "oscillation of model_after (sigma " +
+               num_text(osc_sigma) + " in point samples) sent as " + num_text(averaged) +
+               ", the sigma the node's averaging sampler needs for the same ADEV";
+    osc_sigma = averaged;
+  }
+  rec.osc_sigma = static_cast<float>(osc_sigma);
+  rec.osc_f0_hz = static_cast<float>(f0);
+  rec.osc_beta_per_s = static_cast<float>(beta);
+  return true;
+}
+
+}  // namespace
+
+bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
+                              std::size_t channel_index, hal::ModelRecord& out,
+                              std::string& dropped, std::string& err) {
+  const std::size_t root = channel_object(json, channel_name, err);
+  if (root == std::string::npos) {
     return false;
   }
   const std::size_t m = member(json, root, "model_after");
@@ -287,83 +390,16 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
   rec.n = static_cast<float>(n);
   rec.q = static_cast<float>(q);
   rec.k = static_cast<float>(k);
-  const std::size_t gm = member(json, m, "gm");
-  if (gm == std::string::npos || json[gm] != '[') {
-    err = "model_after.gm missing or not a list";
+  if (!read_gm_terms(json, m, rec, err) || !read_bias_instability(json, m, rec, err)) {
     return false;
   }
-  std::size_t i = skip_ws(json, gm + 1);
-  std::size_t n_gm = 0;
-  while (i < json.size() && json[i] == '{') {
-    if (n_gm == 2) {
-      err = "model_after.gm has more than the 2 GM terms the node's model record holds";
-      return false;
-    }
-    double sb = 0.0;
-    double tb = 0.0;
-    if (!get_number(json, i, "sb", sb, err) || !get_number(json, i, "tb_s", tb, err)) {
-      err.insert(0, "model_after.gm[]: ");
-      return false;
-    }
-    rec.gm_sb[n_gm] = static_cast<float>(sb);
-    rec.gm_tb_s[n_gm] = static_cast<float>(tb);
-    ++n_gm;
-    i = skip_ws(json, skip_value(json, i));
-    if (i < json.size() && json[i] == ',') {
-      i = skip_ws(json, i + 1);
-    }
-  }
-  const std::size_t bi = member(json, m, "bias_instability");
-  double b = 0.0;
-  double lo = 0.0;
-  double hi = 0.0;
-  if (bi == std::string::npos || !get_number(json, bi, "b", b, err) ||
-      !get_number(json, bi, "tau_lo_s", lo, err) || !get_number(json, bi, "tau_hi_s", hi, err)) {
-    err = "model_after.bias_instability {B, tau_lo_s, tau_hi_s} missing or malformed";
-    return false;
-  }
-  rec.bi = static_cast<float>(b);
-  rec.bi_tau_lo_s = static_cast<float>(lo);
-  rec.bi_tau_hi_s = static_cast<float>(hi);
   dropped.clear();
   if (r > 0.0 || sin_a > 0.0 || sin2_a > 0.0) {
     dropped = "ramp/sinusoid of model_after not sent: deterministic, not filter states";
   }
   rec.n_filter_s = static_cast<float>(n_filter_s);
-  // The narrowband oscillation (2 filter states): sigma absent or 0 means none.
-  const std::size_t osc = member(json, m, "oscillation");
-  double osc_sigma = 0.0;
-  if (osc != std::string::npos && get_number(json, osc, "sigma", osc_sigma, err) &&
-      osc_sigma > 0.0) {
-    double f0 = 0.0;
-    double beta = 0.0;
-    if (!get_number(json, osc, "f0_hz", f0, err) ||
-        !get_number(json, osc, "beta_per_s", beta, err)) {
-      err = "model_after.oscillation {sigma, f0_hz, beta_per_s} malformed";
-      return false;
-    }
-    // Fitted as point samples (the ADEV of m-sample means): the node sees the process through
-    // its averaging sampler, whose sample means' AVAR is the continuous average's; a band at f0
-    // seen so needs sigma x / sin(x), x = pi f0 Ts, to give the data's ADEV (exact for a line).
-    double point_ts_s = 0.0;
-    if (member(json, osc, "point_sampled_ts_s") != std::string::npos &&
-        !get_number(json, osc, "point_sampled_ts_s", point_ts_s, err)) {
-      err = "model_after.oscillation.point_sampled_ts_s malformed";
-      return false;
-    }
-    const double x = kPi * f0 * point_ts_s;
-    if (x > 0.0 && x < 0.5 * kPi) {
-      const double averaged = osc_sigma * x / std::sin(x);
-      dropped += std::string(dropped.empty() ? "" : "; ") + "oscillation of model_after (sigma " +
-                 num_text(osc_sigma) + " in point samples) sent as " + num_text(averaged) +
-                 ", the sigma the node's averaging sampler needs for the same ADEV";
-      osc_sigma = averaged;
-    }
-    rec.osc_sigma = static_cast<float>(osc_sigma);
-    rec.osc_f0_hz = static_cast<float>(f0);
-    rec.osc_beta_per_s = static_cast<float>(beta);
-  }
-  if (!fit_to_node(json, root, n, rec, dropped, err)) {
+  if (!read_oscillation(json, m, rec, dropped, err) ||
+      !fit_to_node(json, root, n, rec, dropped, err)) {
     return false;
   }
   err.clear();
