@@ -542,17 +542,65 @@ int stream_counts(const std::string& path, std::size_t c, ChannelData& ch, Count
   return st;
 }
 
+namespace {
+
+constexpr std::size_t kCountChunk = 8192;    // samples per chunk of stream_counts
+constexpr double kMaxCounts = 2147483647.0;  // int32's largest count
+
+// After the stream: the counts refused when no sample is finite, when a value overflowed int32
+// counts (nothing was pushed after it), or when the LSB puts nearly every sample in one count
+// (a second pass counts the majority candidate's exact share). 0, or the exit status with err.
+int check_counts(ChunkSource& src, const std::string& where, ChannelData& ch, const Moments& s,
+                 const Moments& q, std::int32_t cand, bool overflow, StreamTiming& timing,
+                 std::string& err) {
+  const double lsb = ch.lsb;
+  if (s.n == 0) {
+    err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
+    return kExitRuntime;
+  }
+  const int misfit = ch.lsb_from_option ? kExitUsage : kExitRuntime;
+  const std::string lsb_origin =
+      ch.lsb_from_option ? "--lsb " : (ch.lsb_from_file ? "the file's LSB " : "the default LSB ");
+  if (overflow) {
+    err = where + "values up to " + num(s.max_abs) + " do not fit int32 counts at " + lsb_origin +
+          num(lsb) + " (the LSB must be at least " + num(s.max_abs / kMaxCounts) + ")";
+    return misfit;
+  }
+  if (q.std_dev() < 0.5 * s.std_dev()) {
+    // Only now is the exact share of the majority candidate needed: a second pass.
+    std::vector<double> values(kCountChunk);
+    std::uint64_t same = 0;
+    double second_read_s = 0.0;
+    if (!for_each_chunk(src, ch, values, second_read_s, err, [&](const double* v, std::size_t n) {
+          for (std::size_t i = 0; i < n; ++i) {
+            same += std::isfinite(v[i]) && quantize(v[i], lsb).counts == cand ? 1U : 0U;
+          }
+        })) {
+      return kExitRuntime;
+    }
+    timing.read_s += second_read_s;
+    const double top_share = static_cast<double>(same) / static_cast<double>(s.n);
+    if (top_share > 0.99) {
+      err = where + lsb_origin + num(lsb) + " puts " + num(100.0 * top_share) +
+            " % of the samples in one count (std " + num(s.std_dev()) + " becomes " +
+            num(q.std_dev()) + "): the LSB is too coarse for these data";
+      return misfit;
+    }
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
 int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch, CountSink& sink,
                   StreamTiming& timing, std::string& err) {
   if (sink.takes_values()) {
     return stream_values(src, where, ch, sink, timing, err);
   }
-  constexpr std::size_t kChunk = 8192;
-  constexpr double kMaxCounts = 2147483647.0;
-  std::vector<double> values(kChunk);
-  std::vector<std::int32_t> counts(kChunk);
-  std::vector<double> fin(kChunk);    // the chunk's finite values
-  std::vector<double> quant(kChunk);  // and their quantised values (counts x LSB)
+  std::vector<double> values(kCountChunk);
+  std::vector<std::int32_t> counts(kCountChunk);
+  std::vector<double> fin(kCountChunk);    // the chunk's finite values
+  std::vector<double> quant(kCountChunk);  // and their quantised values (counts x LSB)
   Moments s;
   Moments q;
   std::int32_t cand = 0;
@@ -630,39 +678,7 @@ int stream_counts(ChunkSource& src, const std::string& where, ChannelData& ch, C
     return kExitRuntime;
   }
   ch.non_finite = total - s.n;
-  if (s.n == 0) {
-    err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
-    return kExitRuntime;
-  }
-  const int misfit = ch.lsb_from_option ? kExitUsage : kExitRuntime;
-  const std::string lsb_origin =
-      ch.lsb_from_option ? "--lsb " : (ch.lsb_from_file ? "the file's LSB " : "the default LSB ");
-  if (overflow) {
-    err = where + "values up to " + num(s.max_abs) + " do not fit int32 counts at " + lsb_origin +
-          num(lsb) + " (the LSB must be at least " + num(s.max_abs / kMaxCounts) + ")";
-    return misfit;
-  }
-  if (q.std_dev() < 0.5 * s.std_dev()) {
-    // Only now is the exact share of the majority candidate needed: a second pass.
-    std::uint64_t same = 0;
-    double second_read_s = 0.0;
-    if (!for_each_chunk(src, ch, values, second_read_s, err, [&](const double* v, std::size_t n) {
-          for (std::size_t i = 0; i < n; ++i) {
-            same += std::isfinite(v[i]) && quantize(v[i], lsb).counts == cand ? 1U : 0U;
-          }
-        })) {
-      return kExitRuntime;
-    }
-    timing.read_s += second_read_s;
-    const double top_share = static_cast<double>(same) / static_cast<double>(s.n);
-    if (top_share > 0.99) {
-      err = where + lsb_origin + num(lsb) + " puts " + num(100.0 * top_share) +
-            " % of the samples in one count (std " + num(s.std_dev()) + " becomes " +
-            num(q.std_dev()) + "): the LSB is too coarse for these data";
-      return misfit;
-    }
-  }
-  return kExitOk;
+  return check_counts(src, where, ch, s, q, cand, overflow, timing, err);
 }
 
 }  // namespace imu::sim
