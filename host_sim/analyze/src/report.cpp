@@ -531,112 +531,119 @@ std::string gq(const std::string& s) { return imu::cli::gnuplot_str(s); }
 
 }  // namespace
 
+namespace {
+
+// The ADEV table of the plots: the data raw and cleaned with their intervals, both models and
+// each term of each.
+std::string adev_csv_text(const Report& r) {
+  std::ostringstream f;
+  f << "tau_s,adev_raw,ci_lo_raw,ci_hi_raw,adev_clean,ci_lo_clean,ci_hi_clean,model_before,"
+       "model_after";
+  for (const TermColumn& t : term_columns()) {
+    f << ",after_" << t.name;
+  }
+  for (const TermColumn& t : term_columns()) {
+    f << ",before_" << t.name;
+  }
+  f << "\n";
+  for (std::size_t i = 0; i < r.adev.size(); ++i) {
+    const AdevPoint& p = r.adev[i];
+    const AdevPoint& c = i < r.adev_clean.size() ? r.adev_clean[i] : p;
+    f << num(p.tau_s) << ',' << num(p.adev) << ',' << num(p.ci_lo) << ',' << num(p.ci_hi) << ','
+      << num(c.adev) << ',' << num(c.ci_lo) << ',' << num(c.ci_hi) << ','
+      << num(model_adev(r.model_before, p.tau_s)) << ','
+      << num(model_adev(r.model_after, p.tau_s));
+    for (const double v : term_adevs(r.model_after, p.tau_s)) {
+      f << ',' << num(v);
+    }
+    for (const double v : term_adevs(r.model_before, p.tau_s)) {
+      f << ',' << num(v);
+    }
+    f << '\n';
+  }
+  return f.str();
+}
+
+// One script that draws both figures (before, after) in SVG and PNG from the table at csv;
+// every path in it is absolute and titles are noenhanced (a channel name like acc_z is not a
+// subscript).
+std::string adev_script_text(const Report& r, const std::string& base, const std::string& csv,
+                             const std::string& gp) {
+  const double tau_fit_hi = r.error_after.tau_max_s;
+  const double tau_fit_lo = r.error_after.tau_min_s;
+  std::ostringstream g;
+  g << "# ADEV of " << imu::cli::term_safe(r.channel)
+    << ": data with its 68 % interval, the model and its terms.\n"
+    << "# Run from any directory: gnuplot " << gq(gp) << "\n"
+    << "set datafile separator ','\nset logscale xy\nset format y '%.0e'\nset grid\n"
+    << "set key bottom left noenhanced\nset xlabel 'tau [s]'\n"
+    << "set ylabel " << gq("Allan deviation [" + unit_of(r) + "]") << "\n"
+    << "set style line 9 lc rgb '#888888' dt 2\n"
+    << "set arrow 1 from " << num(tau_fit_lo) << ", graph 0 to " << num(tau_fit_lo)
+    << ", graph 1 nohead ls 9\n"
+    << "set arrow 2 from " << num(tau_fit_hi) << ", graph 0 to " << num(tau_fit_hi)
+    << ", graph 1 nohead ls 9\n"
+    << "set label 1 'fitted range' at " << num(tau_fit_lo) << ", graph 0.97 offset 1,0\n";
+  // Only the terms the model holds are drawn (and keyed).
+  const auto present = [&r](const ModelParams& m, std::size_t t) {
+    const TermColumn& c = term_columns()[t];
+    for (const AdevPoint& p : r.adev) {
+      if (term_avar(m, c.kind, c.instance, p.tau_s) > 0.0) {
+        return true;
+      }
+    }
+    return false;
+  };
+  const auto figure = [&](const char* which, int data_col, int model_col, int first_term,
+                          const ModelParams& m, const char* title) {
+    for (const char* term : {"svg size 900,600", "pngcairo size 900,600"}) {
+      const bool svg = std::string(term).rfind("svg", 0) == 0;
+      g << "set terminal " << term << "\nset output "
+        << gq(base + "_" + which + (svg ? ".svg" : ".png")) << "\n"
+        << "set title " << gq(r.channel + ": " + title) << " noenhanced\n"
+        << "plot " << gq(csv) << " skip 1 using 1:" << data_col << ":" << data_col + 1 << ":"
+        << data_col + 2 << " with yerrorbars title 'data (68 % interval)', '' skip 1 using 1:"
+        << model_col << " with lines lw 2 title 'model'";
+      for (std::size_t t = 0; t < term_columns().size(); ++t) {
+        if (!present(m, t)) {
+          continue;
+        }
+        g << ", '' skip 1 using 1:($" << first_term + static_cast<int>(t) << " > 0 ? $"
+          << first_term + static_cast<int>(t) << " : 1/0) with lines dt 2 title "
+          << gq(term_columns()[t].title);
+      }
+      g << "\n";
+    }
+  };
+  figure("before", 2, 8, 10 + static_cast<int>(term_columns().size()), r.model_before,
+         "before (white + GM over [Ts, 100 s])");
+  figure("after", 5, 9, 10, r.model_after,
+         "after (joint fit with the effects found; data cleaned)");
+  return g.str();
+}
+
+}  // namespace
+
 bool write_plots(const Report& r, const std::string& dir, const std::string& stem,
                  std::string& message) {
   // One naming rule with adev's plots (adev_NAME, mdev_NAME): what, then the channel, then the
   // part: analyze_NAME_adev.csv, analyze_NAME_{before,after}.{svg,png}.
   const std::string base = absolute(dir) + "/analyze_" + imu::cli::safe_component(stem);
   const std::string csv = base + "_adev.csv";
-  {
-    std::ostringstream f;
-    f << "tau_s,adev_raw,ci_lo_raw,ci_hi_raw,adev_clean,ci_lo_clean,ci_hi_clean,model_before,"
-         "model_after";
-    for (const TermColumn& t : term_columns()) {
-      f << ",after_" << t.name;
-    }
-    for (const TermColumn& t : term_columns()) {
-      f << ",before_" << t.name;
-    }
-    f << "\n";
-    for (std::size_t i = 0; i < r.adev.size(); ++i) {
-      const AdevPoint& p = r.adev[i];
-      const AdevPoint& c = i < r.adev_clean.size() ? r.adev_clean[i] : p;
-      f << num(p.tau_s) << ',' << num(p.adev) << ',' << num(p.ci_lo) << ',' << num(p.ci_hi) << ','
-        << num(c.adev) << ',' << num(c.ci_lo) << ',' << num(c.ci_hi) << ','
-        << num(model_adev(r.model_before, p.tau_s)) << ','
-        << num(model_adev(r.model_after, p.tau_s));
-      for (const double v : term_adevs(r.model_after, p.tau_s)) {
-        f << ',' << num(v);
-      }
-      for (const double v : term_adevs(r.model_before, p.tau_s)) {
-        f << ',' << num(v);
-      }
-      f << '\n';
-    }
-    if (!imu::cli::write_file_atomic(csv, f.str(), message)) {
-      return false;
-    }
+  if (!imu::cli::write_file_atomic(csv, adev_csv_text(r), message)) {
+    return false;
   }
   message = "wrote " + csv;
-  if (std::system("command -v gnuplot >/dev/null 2>&1") != 0) {
+  if (!imu::cli::gnuplot_available()) {
     message += "; gnuplot not found: no SVG/PNG (install gnuplot-nox)";
     return true;
   }
-  // One script draws both figures in SVG and PNG; every path in it is absolute and titles are
-  // noenhanced (a channel name like acc_z is not a subscript).
   const std::string gp = base + "_adev.gp";
-  const double tau_fit_hi = r.error_after.tau_max_s;
-  const double tau_fit_lo = r.error_after.tau_min_s;
-  {
-    std::ostringstream g;
-    g << "# ADEV of " << imu::cli::term_safe(r.channel) << ": data with its 68 % interval, the model and its terms.\n"
-      << "# Run from any directory: gnuplot " << gq(gp) << "\n"
-      << "set datafile separator ','\nset logscale xy\nset format y '%.0e'\nset grid\n"
-      << "set key bottom left noenhanced\nset xlabel 'tau [s]'\n"
-      << "set ylabel " << gq("Allan deviation [" + unit_of(r) + "]") << "\n"
-      << "set style line 9 lc rgb '#888888' dt 2\n"
-      << "set arrow 1 from " << num(tau_fit_lo) << ", graph 0 to " << num(tau_fit_lo)
-      << ", graph 1 nohead ls 9\n"
-      << "set arrow 2 from " << num(tau_fit_hi) << ", graph 0 to " << num(tau_fit_hi)
-      << ", graph 1 nohead ls 9\n"
-      << "set label 1 'fitted range' at " << num(tau_fit_lo) << ", graph 0.97 offset 1,0\n";
-    // Only the terms the model holds are drawn (and keyed).
-    const auto present = [&r](const ModelParams& m, std::size_t t) {
-      const TermColumn& c = term_columns()[t];
-      for (const AdevPoint& p : r.adev) {
-        if (term_avar(m, c.kind, c.instance, p.tau_s) > 0.0) {
-          return true;
-        }
-      }
-      return false;
-    };
-    const auto figure = [&](const char* which, int data_col, int model_col, int first_term,
-                            const ModelParams& m, const char* title) {
-      for (const char* term : {"svg size 900,600", "pngcairo size 900,600"}) {
-        const bool svg = std::string(term).rfind("svg", 0) == 0;
-        g << "set terminal " << term << "\nset output "
-          << gq(base + "_" + which + (svg ? ".svg" : ".png")) << "\n"
-          << "set title " << gq(r.channel + ": " + title) << " noenhanced\n"
-          << "plot " << gq(csv) << " skip 1 using 1:" << data_col << ":" << data_col + 1 << ":"
-          << data_col + 2 << " with yerrorbars title 'data (68 % interval)', '' skip 1 using 1:"
-          << model_col << " with lines lw 2 title 'model'";
-        for (std::size_t t = 0; t < term_columns().size(); ++t) {
-          if (!present(m, t)) {
-            continue;
-          }
-          g << ", '' skip 1 using 1:($" << first_term + static_cast<int>(t) << " > 0 ? $"
-            << first_term + static_cast<int>(t) << " : 1/0) with lines dt 2 title "
-            << gq(term_columns()[t].title);
-        }
-        g << "\n";
-      }
-    };
-    figure("before", 2, 8, 10 + static_cast<int>(term_columns().size()), r.model_before,
-           "before (white + GM over [Ts, 100 s])");
-    figure("after", 5, 9, 10, r.model_after,
-           "after (joint fit with the effects found; data cleaned)");
-    if (!imu::cli::write_file_atomic(gp, g.str(), message)) {
-      return false;
-    }
+  if (!imu::cli::write_file_atomic(gp, adev_script_text(r, base, csv, gp), message)) {
+    return false;
   }
-  // gnuplot is started on the script's absolute path, quoted for the shell (the path passed
-  // check_output_dir: no control characters).
-  std::string sh = "'";
-  for (const char c : gp) {
-    sh += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  }
-  const std::string cmd = "gnuplot " + sh + "' 2>/dev/null";
-  if (std::system(cmd.c_str()) != 0) {
+  // The path passed check_output_dir: no control characters.
+  if (!imu::cli::gnuplot_run(gp)) {
     message = "gnuplot failed on " + gp + " (the CSV and the script were written)";
     return false;
   }

@@ -220,6 +220,11 @@ std::string shell_str(const std::string& s) {
 
 bool gnuplot_available() { return std::system("command -v gnuplot >/dev/null 2>&1") == 0; }
 
+bool gnuplot_run(const std::string& script) {
+  const std::string cmd = "gnuplot " + shell_str(script) + " 2>/dev/null";
+  return std::system(cmd.c_str()) == 0;
+}
+
 bool gnuplot_render(const std::string& dir, const std::string& base, int svg_height) {
   static const bool cairo = std::system("gnuplot -e 'set terminal pngcairo' >/dev/null 2>&1") == 0;
   const std::string svg = "set terminal svg size 1000," + std::to_string(svg_height) +

@@ -97,6 +97,9 @@ void install_cleanup_handlers();
 
 /// gnuplot is on the PATH.
 [[nodiscard]] bool gnuplot_available();
+/// Runs gnuplot on the script at `script` (an absolute path, quoted for the shell), its messages
+/// discarded. False if gnuplot failed.
+[[nodiscard]] bool gnuplot_run(const std::string& script);
 /// Render DIR/BASE.gp into DIR/BASE.svg (1000 x svg_height, dynamic) and DIR/BASE.png
 /// (1100 x 800; pngcairo if this gnuplot has it), gnuplot's messages in DIR/BASE.gnuplot.log
 /// (removed on success). False if gnuplot failed on either. Runs gnuplot twice (std::system).
