@@ -277,14 +277,20 @@ struct StateSet {
 };
 
 // sum log(s) as the log of a running product, mantissa and binary exponent kept apart: one log
-// per record instead of one per block. The product is renormalised (exactly, by a power of two)
-// only when it leaves [1e-150, 1e150], so most blocks cost one multiply.
+// per record instead of one per block. A factor outside [1e-150, 1e150] gives its exponent up
+// before the multiply, and the product is renormalised only when it leaves that range (exactly,
+// by powers of two), so the product stays within [1e-300, 1e300] and most blocks cost one
+// multiply.
 class LogSum {
  public:
   void add(double s) {
+    int e = 0;
+    if (!(s >= 1e-150 && s <= 1e150)) {
+      s = std::frexp(s, &e);
+      exp_ += e;
+    }
     prod_ *= s;
-    if (!(prod_ >= 1e-150 && prod_ <= 1e150) || !(s >= 1e-150 && s <= 1e150)) {
-      int e = 0;
+    if (!(prod_ >= 1e-150 && prod_ <= 1e150)) {
       prod_ = std::frexp(prod_, &e);
       exp_ += e;
     }
