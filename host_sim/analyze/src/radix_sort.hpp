@@ -35,6 +35,10 @@ inline void sort_from(double* a, std::size_t n, int shift) {
   for (std::size_t i = 0; i < n; ++i) {
     ++count[digit(a[i], shift)];
   }
+  if (std::find(count.begin(), count.end(), n) != count.end()) {
+    sort_from(a, n, shift - 8);  // one bucket holds all: nothing to move at this byte
+    return;
+  }
   std::array<std::size_t, 256> next{};
   std::array<std::size_t, 256> end{};
   std::size_t at = 0;
@@ -44,10 +48,6 @@ inline void sort_from(double* a, std::size_t n, int shift) {
     end[b] = at;
   }
   for (std::size_t b = 0; b < 256; ++b) {
-    if (count[b] == n) {  // one bucket holds all: nothing to move at this byte
-      sort_from(a, n, shift - 8);
-      return;
-    }
     while (next[b] < end[b]) {
       const std::size_t d = digit(a[next[b]], shift);
       if (d == b) {

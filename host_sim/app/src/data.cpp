@@ -550,9 +550,9 @@ constexpr double kMaxCounts = 2147483647.0;  // int32's largest count
 // After the stream: the counts refused when no sample is finite, when a value overflowed int32
 // counts (nothing was pushed after it), or when the LSB puts nearly every sample in one count
 // (a second pass counts the majority candidate's exact share). 0, or the exit status with err.
-int check_counts(ChunkSource& src, const std::string& where, ChannelData& ch, const Moments& s,
-                 const Moments& q, std::int32_t cand, bool overflow, StreamTiming& timing,
-                 std::string& err) {
+int check_counts(ChunkSource& src, const std::string& where, const ChannelData& ch,
+                 const Moments& s, const Moments& q, std::int32_t cand, bool overflow,
+                 StreamTiming& timing, std::string& err) {
   const double lsb = ch.lsb;
   if (s.n == 0) {
     err = where + "no finite sample (" + std::to_string(ch.non_finite) + " NaN/Inf)";
