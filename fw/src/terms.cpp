@@ -159,6 +159,49 @@ double term_avar(const ModelParams& p, TermKind k, std::size_t i, double tau_s) 
   return 0.0;
 }
 
+double term_psd(const ModelParams& p, TermKind k, std::size_t i, double f_hz, double ts_s) {
+  constexpr double kPi = 3.14159265358979323846;
+  const auto gm_psd = [f_hz](double sb, double tb_s) {
+    const double w = 2.0 * kPi * f_hz * tb_s;
+    return 2.0 * sb * tb_s * tb_s / (1.0 + w * w);
+  };
+  if (!(f_hz > 0.0) || !present(p, k, i)) {
+    return 0.0;
+  }
+  switch (k) {
+    case TermKind::kWhite: {
+      const double w = 2.0 * kPi * f_hz * p.n_filter_s;
+      return 2.0 * p.n * p.n / (1.0 + w * w);
+    }
+    case TermKind::kQuantization:
+      return ts_s > 0.0 && f_hz <= 0.5 / ts_s ? 8.0 * kPi * kPi * ts_s * p.q * p.q * f_hz * f_hz
+                                              : 0.0;
+    case TermKind::kGaussMarkov:
+      return p.gm[i].tb_s > 0.0 ? gm_psd(p.gm[i].sb, p.gm[i].tb_s) : 0.0;
+    case TermKind::kRateRandomWalk: return p.k * p.k / (2.0 * kPi * kPi * f_hz * f_hz);
+    case TermKind::kRamp:
+    case TermKind::kSinusoid: return 0.0;
+    case TermKind::kBiasInstability: {
+      GmParam bank[kMaxFlickerGm] = {};
+      const std::size_t n = flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank);
+      double s = 0.0;
+      for (std::size_t j = 0; j < n; ++j) {
+        s += gm_psd(bank[j].sb, bank[j].tb_s);
+      }
+      return s;
+    }
+    case TermKind::kOscillation: {
+      const double b = p.osc_beta_per_s;
+      const double lo = 2.0 * kPi * (f_hz - p.osc_f0_hz);
+      const double hi = 2.0 * kPi * (f_hz + p.osc_f0_hz);
+      return b > 0.0 ? 2.0 * p.osc_sigma * p.osc_sigma * (b / (b * b + lo * lo) +
+                                                          b / (b * b + hi * hi))
+                     : 0.0;
+    }
+  }
+  return 0.0;
+}
+
 void remove_term(ModelParams& p, TermKind k, std::size_t from) {
   switch (k) {
     case TermKind::kWhite:

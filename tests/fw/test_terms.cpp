@@ -177,4 +177,55 @@ TEST(Terms, RemovingATermTakesExactlyItsAvarOut) {
   }
 }
 
+// AVAR(tau) = 2 int_0^inf S(f) sin^4(pi f tau) / (pi f tau)^2 df, numerically: a fine linear
+// grid up to 100 / tau, then a log grid with sin^4 at its mean 3/8 (its period in f, 1 / tau,
+// is far below the grid's step there and S varies slowly).
+double avar_from_psd(const imu::ModelParams& p, imu::TermKind k, std::size_t i, double tau_s,
+                     double ts_s) {
+  const auto integrand = [&](double f, bool mean) {
+    const double x = kPi * f * tau_s;
+    const double s4 = mean ? 0.375 : std::pow(std::sin(x), 4);
+    return 2.0 * imu::term_psd(p, k, i, f, ts_s) * s4 / (x * x);
+  };
+  const double f_mid = 100.0 / tau_s;
+  const int n_lin = 40000;
+  const double df = f_mid / n_lin;
+  double sum = 0.0;
+  for (int j = 0; j < n_lin; ++j) {  // midpoints: no f = 0
+    sum += integrand(df * (j + 0.5), false) * df;
+  }
+  const int per_decade = 4000;
+  const double step = std::log(10.0) / per_decade;
+  double prev = integrand(f_mid, true) * f_mid;
+  for (int j = 1; j <= 6 * per_decade; ++j) {
+    const double f = f_mid * std::exp(step * j);
+    const double v = integrand(f, true) * f;
+    sum += 0.5 * (prev + v) * step;
+    prev = v;
+  }
+  return sum;
+}
+
+TEST(Terms, EachRowsPsdGivesItsAvar) {
+  constexpr double kTs = 0.01;
+  imu::ModelParams filtered;
+  filtered.n = 3e-3;
+  filtered.n_filter_s = 0.02;
+  for (const imu::ModelParams& p : {every_term(), filtered}) {
+    for (const imu::TermInfo& t : imu::kTermTable) {
+      for (std::size_t i = 0; i < imu::term_instances(p, t.kind); ++i) {
+        for (const double tau : {0.05, 3.0, 700.0}) {
+          if (t.deterministic) {
+            EXPECT_EQ(imu::term_psd(p, t.kind, i, 1.0 / tau, kTs), 0.0) << t.name;
+            continue;
+          }
+          const double want = imu::term_avar(p, t.kind, i, tau);
+          EXPECT_NEAR(avar_from_psd(p, t.kind, i, tau, kTs), want, 5e-3 * want)
+              << t.name << " " << i << " at tau " << tau;
+        }
+      }
+    }
+  }
+}
+
 }  // namespace

@@ -74,6 +74,16 @@ extern const TermInfo kTermTable[kTermKinds];
 /// sinusoid without a frequency).
 [[nodiscard]] double term_avar(const ModelParams& p, TermKind k, std::size_t instance,
                                double tau_s);
+/// One-sided power spectral density at f_hz > 0 of instance `instance` of kind k in p
+/// [u^2/Hz], the continuous process's, in the convention AVAR(tau) = 2 int_0^inf S(f)
+/// sin^4(pi f tau) / (pi f tau)^2 df (IEEE Std 1139): white 2 N^2 (through the output filter:
+/// / (1 + (2 pi f Tf)^2)), quantization 8 pi^2 Ts Q^2 f^2 below 1 / (2 Ts) (ts_s: the sampling
+/// period; 0 above), a GM 2 Sb Tb^2 / (1 + (2 pi f Tb)^2), the walk K^2 / (2 pi^2 f^2), bias
+/// instability its GM bank's, the oscillation 2 sigma^2 (beta / (beta^2 + (2 pi (f - f0))^2) +
+/// beta / (beta^2 + (2 pi (f + f0))^2)). 0 for the deterministic kinds (ramp, sinusoid) and
+/// for an absent instance.
+[[nodiscard]] double term_psd(const ModelParams& p, TermKind k, std::size_t instance,
+                              double f_hz, double ts_s);
 /// Remove the instances of kind k from `instance` on (0: all of them).
 void remove_term(ModelParams& p, TermKind k, std::size_t from_instance = 0);
 
