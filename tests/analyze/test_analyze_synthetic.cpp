@@ -1033,9 +1033,9 @@ TEST(AnalyzeSynthetic, TheSensorsOutputFilterIsKeptBesideItsOtherTerms) {
 // ---- 95 % intervals (ParamInterval): the true parameter inside the reported interval on at
 // least 9 of 10 records per case (seeds 401..410, which no other test uses) for the model's
 // white noise N and for Q; each interval narrower than a decade on these 2.8-hour records,
-// where every parameter is determined. K's coverage is printed, not required: it was 4 of 9
-// when this test was written (the interval is the ADEV fit's, K often the block-mean
-// likelihood's estimate, whose scatter is about twice as wide); the README says so.
+// where every parameter is determined. K inside on at least 7 of the 9 named: 8 with the
+// interval no narrower than the record's Cramer-Rao bound, 4 with the ADEV fit's alone (its
+// long-tau points count the walk's few increments as independent readings).
 TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
   for (const char* name : {"quantization", "rate_random_walk"}) {
     SCOPED_TRACE(name);
@@ -1071,6 +1071,8 @@ TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
     if (std::string(name) == "quantization") {
       EXPECT_GE(named, 9);
       EXPECT_GE(effect_in, 9) << effect_in << " of " << named;
+    } else {
+      EXPECT_GE(effect_in, 7) << effect_in << " of " << named;
     }
     EXPECT_GE(n_in, 9);
   }

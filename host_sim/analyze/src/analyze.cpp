@@ -15,6 +15,7 @@
 #include <ctime>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <memory>
 
 #include "imu/bias_kf.hpp"
@@ -535,6 +536,101 @@ LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
   return lc;
 }
 
+// The Cramer-Rao bound of m's stochastic log-parameters on a record of t_rec_s seconds
+// sampled every ts: the inverse of the Whittle approximation of a stationary Gaussian record's
+// Fisher information, I_ij = T int d_i(f) d_j(f) df over [1 / T, 1 / (2 Ts)], d_i = d ln S /
+// d ln p_i, S the model's one-sided PSD (term_psd; the deterministic terms, regressors, left
+// out). No unbiased estimator of p_i, however it reads the record, has sd(ln p_i) below
+// sqrt((I^-1)_ii): with K alone, sd(ln K) = 1 / sqrt(2 n) (n chi-square(1) readings of K^2);
+// beside white noise N it is 1.07 sqrt(tau_d / T), tau_d = sqrt(3) N / K where the walk's AVAR
+// meets the white noise's. Whittle, "Estimation and information in stationary time series",
+// Ark. Mat. 2 (1953); Percival and Walden, "Spectral Analysis for Physical Applications" (1993).
+// Names as free_params'; cov empty if the information is singular.
+LogCov whittle_covariance(const ModelParams& m, double ts, double t_rec_s) {
+  LogCov lc;
+  ModelParams w = m;
+  std::vector<double*> params;
+  for (const auto& [name, x] : free_params(w)) {
+    const bool regressor = name == "r" || name.rfind("sin", 0) == 0;
+    if (!regressor) {
+      lc.names.push_back(name);
+      params.push_back(x);
+    }
+  }
+  const double f_lo = 1.0 / t_rec_s;
+  const double f_hi = 0.5 / ts;
+  if (params.empty() || !(f_hi > 4.0 * f_lo)) {
+    lc.names.clear();
+    return lc;
+  }
+  std::vector<double> f;  // 64 per decade, and finer across the oscillation's band
+  const double step = std::log(10.0) / 64.0;
+  const auto n_log = static_cast<int>(std::ceil(std::log(f_hi / f_lo) / step));
+  for (int i = 0; i < n_log; ++i) {
+    f.push_back(f_lo * std::exp(step * i));
+  }
+  f.push_back(f_hi);
+  if (m.osc_sigma > 0.0 && m.osc_beta_per_s > 0.0) {
+    for (int i = -160; i <= 160; ++i) {  // sinh(-8 .. 8): the band's core and its tails
+      const double x = m.osc_f0_hz + m.osc_beta_per_s / (2.0 * kPi) * std::sinh(0.05 * i);
+      if (x > f_lo && x < f_hi) {
+        f.push_back(x);
+      }
+    }
+    std::sort(f.begin(), f.end());
+  }
+  const auto ln_psd = [&w, ts](double fq) {
+    double s = 0.0;
+    for (const TermInfo& t : kTermTable) {
+      for (std::size_t i = 0; i < t.max_instances; ++i) {
+        s += term_psd(w, t.kind, i, fq, ts);
+      }
+    }
+    return std::log(s);
+  };
+  constexpr double kH = 1e-3;
+  const std::size_t np = params.size();
+  Dense d(f.size() * np);
+  for (std::size_t j = 0; j < np; ++j) {
+    const double x0 = *params[j];
+    for (std::size_t k = 0; k < f.size(); ++k) {
+      *params[j] = x0 * std::exp(kH);
+      const double up = ln_psd(f[k]);
+      *params[j] = x0 * std::exp(-kH);
+      d[k * np + j] = (up - ln_psd(f[k])) / (2.0 * kH);
+      *params[j] = x0;
+    }
+  }
+  Dense info(np * np, 0.0);
+  for (std::size_t k = 0; k + 1 < f.size(); ++k) {
+    const double width = 0.5 * (f[k + 1] - f[k]) * t_rec_s;  // trapezoid, T df
+    for (std::size_t a = 0; a < np; ++a) {
+      for (std::size_t b = 0; b < np; ++b) {
+        info[a * np + b] += width * (d[k * np + a] * d[k * np + b] +
+                                     d[(k + 1) * np + a] * d[(k + 1) * np + b]);
+      }
+    }
+  }
+  Dense inv;
+  if (std::isfinite(std::accumulate(info.begin(), info.end(), 0.0)) &&
+      inverse(info, np, inv)) {
+    lc.cov = std::move(inv);
+  }
+  return lc;
+}
+
+// iv (a positive value's 95 % interval) widened to hold `floor` too, when both are determined.
+ParamInterval no_narrower_than(ParamInterval iv, const ParamInterval& floor) {
+  const auto determined = [](const ParamInterval& x) {
+    return x.lo > 0.0 && std::isfinite(x.hi);
+  };
+  if (determined(iv) && determined(floor)) {
+    iv.lo = std::min(iv.lo, floor.lo);
+    iv.hi = std::max(iv.hi, floor.hi);
+  }
+  return iv;
+}
+
 // The 95 % interval of `value` = exp(sum_i a_i ln p_i) (times a constant) from the log
 // covariance; [0, inf) (or (-inf, 0] for a negative value) when a parameter is not in it.
 ParamInterval log_interval(const LogCov& lc, const std::string& name, double value,
@@ -582,13 +678,12 @@ std::size_t gm_index(const ModelParams& m, double tb_s) {
 
 // iv (the 95 % interval of a positive value, from log_interval) widened to no less than
 // value exp(+-1.96 sd_ln_floor).
-ParamInterval with_log_sd_floor(ParamInterval iv, double value, double sd_ln_floor) {
-  if (!(value > 0.0) || !(iv.lo > 0.0) || !std::isfinite(iv.hi) || !(sd_ln_floor > 0.0)) {
+ParamInterval with_log_sd_floor(const ParamInterval& iv, double value, double sd_ln_floor) {
+  if (!(value > 0.0) || !(sd_ln_floor > 0.0)) {
     return iv;
   }
-  iv.lo = std::min(iv.lo, value * std::exp(-1.96 * sd_ln_floor));
-  iv.hi = std::max(iv.hi, value * std::exp(1.96 * sd_ln_floor));
-  return iv;
+  return no_narrower_than(iv, ParamInterval{iv.name, value * std::exp(-1.96 * sd_ln_floor),
+                                            value * std::exp(1.96 * sd_ln_floor)});
 }
 
 // The standard deviation of ln sigma when sigma^2 is a stationary process's variance estimated
@@ -604,42 +699,29 @@ double process_sd_ln_sigma(double corr_integral_s, double t_rec_s) {
                                                 : 0.0;
 }
 
-// The standard deviation of ln K that a walk's record allows. The walk shows in the record's
-// increments over the taus where it dominates the model's other terms, from tau_d on; a record
-// of T seconds holds T / tau_d independent ones, each a chi-square(1) reading of K^2 tau_d / 3:
-// var(ln K^2) >= 2 tau_d / T, sd(ln K) >= sqrt(tau_d / (2 T)). tau_d: the shortest tau of a
-// 10 % grid from Ts where K^2 tau / 3 reaches the rest of the model's AVAR; T / 2 if none below.
-// The ADEV fit's covariance treats its long-tau points as independent readings; they share
-// the same few increments.
-double walk_sd_ln_k(const ModelParams& m, double ts, double t_rec_s) {
-  if (!(m.k > 0.0) || !(ts > 0.0) || !(t_rec_s > 2.0 * ts)) {
-    return 0.0;
-  }
-  ModelParams rest = m;
-  rest.k = 0.0;
-  double tau_d = 0.5 * t_rec_s;
-  const int steps = static_cast<int>(std::ceil(std::log(0.5 * t_rec_s / ts) / std::log(1.1)));
-  for (int i = 0; i < steps; ++i) {
-    const double tau = ts * std::pow(1.1, i);
-    if (m.k * m.k * tau / 3.0 >= model_avar(rest, tau)) {
-      tau_d = tau;
-      break;
-    }
-  }
-  return std::sqrt(tau_d / (2.0 * t_rec_s));
+// The ADEV fit's log covariance and the record's Cramer-Rao bound (whittle_covariance): an
+// interval is the fit's, no narrower than the bound's.
+struct IntervalSources {
+  LogCov fit;
+  LogCov crb;
+};
+
+ParamInterval interval(const IntervalSources& c, const std::string& name, double value,
+                       const std::vector<std::pair<std::string, double>>& comb) {
+  return no_narrower_than(log_interval(c.fit, name, value, comb),
+                          log_interval(c.crb, name, value, comb));
 }
 
 // A GM's sigma = sqrt(Sb Tb / 2) and Tb intervals (GM `g` of the log covariance), named
 // `prefix` + "sigma" and `prefix` + "tb_s"; sigma's no narrower than its record allows.
-void gm_intervals(const LogCov& lc, const ModelParams& m, std::size_t g, const std::string& prefix,
-                  double t_rec_s, std::vector<ParamInterval>& out) {
+void gm_intervals(const IntervalSources& c, const ModelParams& m, std::size_t g,
+                  const std::string& prefix, double t_rec_s, std::vector<ParamInterval>& out) {
   const std::string sb = "gm" + std::to_string(g) + "_sb";
   const std::string tb = "gm" + std::to_string(g) + "_tb_s";
   const double sigma = std::sqrt(m.gm[g].sb * m.gm[g].tb_s / 2.0);
-  out.push_back(with_log_sd_floor(
-      log_interval(lc, prefix + "sigma", sigma, {{sb, 0.5}, {tb, 0.5}}), sigma,
-      process_sd_ln_sigma(m.gm[g].tb_s, t_rec_s)));
-  out.push_back(log_interval(lc, prefix + "tb_s", m.gm[g].tb_s, {{tb, 1.0}}));
+  out.push_back(with_log_sd_floor(interval(c, prefix + "sigma", sigma, {{sb, 0.5}, {tb, 0.5}}),
+                                  sigma, process_sd_ln_sigma(m.gm[g].tb_s, t_rec_s)));
+  out.push_back(interval(c, prefix + "tb_s", m.gm[g].tb_s, {{tb, 1.0}}));
 }
 
 // Each effect's 95 % intervals and the model after's white noise and first GM (see
@@ -648,10 +730,11 @@ void gm_intervals(const LogCov& lc, const ModelParams& m, std::size_t g, const s
 void attach_intervals(const Points& pts, const Options& o, double ts, double tau_max,
                       Report& out) {
   const ModelParams& m = out.model_after;
-  const LogCov lc = log_covariance(pts, m, o, ts, tau_max);
   const double t_rec_s = static_cast<double>(out.samples) * ts;
+  const IntervalSources lc{log_covariance(pts, m, o, ts, tau_max),
+                           whittle_covariance(m, ts, t_rec_s)};
   out.model_after_ci95.clear();
-  out.model_after_ci95.push_back(log_interval(lc, "n", m.n, {{"n", 1.0}}));
+  out.model_after_ci95.push_back(interval(lc, "n", m.n, {{"n", 1.0}}));
   if (m.n_gm > 0) {
     gm_intervals(lc, m, 0, "gm_", t_rec_s, out.model_after_ci95);
   }
@@ -659,25 +742,24 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
     std::vector<ParamInterval>& c = e.ci95;
     c.clear();
     if (e.type == "quantization") {
-      c.push_back(log_interval(lc, "q", e.q, {{"q", 1.0}}));
+      c.push_back(interval(lc, "q", e.q, {{"q", 1.0}}));
     } else if (e.type == "rate_random_walk") {
-      c.push_back(with_log_sd_floor(log_interval(lc, "k", e.k, {{"k", 1.0}}), e.k,
-                                    walk_sd_ln_k(m, ts, t_rec_s)));
+      c.push_back(interval(lc, "k", e.k, {{"k", 1.0}}));
     } else if (e.type == "ramp") {
-      c.push_back(log_interval(lc, "r", e.r, {{"r", 1.0}}));
+      c.push_back(log_interval(lc.fit, "r", e.r, {{"r", 1.0}}));
     } else if (e.type == "bias_instability") {
-      c.push_back(log_interval(lc, "b", e.b, {{"bi", 1.0}}));
+      c.push_back(interval(lc, "b", e.b, {{"bi", 1.0}}));
     } else if (e.type == "sinusoid") {
       const bool first = std::fabs(e.freq_hz - m.sin_f0_hz) <= std::fabs(e.freq_hz - m.sin2_f0_hz);
       const std::string w = first ? "sin" : "sin2";
-      c.push_back(log_interval(lc, "amplitude", e.amplitude, {{w + "_a", 1.0}}));
-      c.push_back(log_interval(lc, "freq_hz", e.freq_hz, {{w + "_f0_hz", 1.0}}));
+      c.push_back(log_interval(lc.fit, "amplitude", e.amplitude, {{w + "_a", 1.0}}));
+      c.push_back(log_interval(lc.fit, "freq_hz", e.freq_hz, {{w + "_f0_hz", 1.0}}));
     } else if (e.type == "oscillation") {
       c.push_back(with_log_sd_floor(
-          log_interval(lc, "sigma", e.amplitude, {{"osc_sigma", 1.0}}), e.amplitude,
+          interval(lc, "sigma", e.amplitude, {{"osc_sigma", 1.0}}), e.amplitude,
           process_sd_ln_sigma(m.osc_beta_per_s > 0.0 ? 0.5 / m.osc_beta_per_s : 0.0, t_rec_s)));
-      c.push_back(log_interval(lc, "freq_hz", e.freq_hz, {{"osc_f0_hz", 1.0}}));
-      c.push_back(log_interval(lc, "bandwidth_hz", e.bandwidth_hz, {{"osc_beta_per_s", 1.0}}));
+      c.push_back(interval(lc, "freq_hz", e.freq_hz, {{"osc_f0_hz", 1.0}}));
+      c.push_back(interval(lc, "bandwidth_hz", e.bandwidth_hz, {{"osc_beta_per_s", 1.0}}));
     } else if (e.type == "gauss_markov" && m.n_gm > 0) {
       gm_intervals(lc, m, gm_index(m, e.tb_s), "", t_rec_s, c);
     } else if (e.type == "bias_step" && e.statistic > 0.0) {
