@@ -512,130 +512,148 @@ bool report_csvs(const ReportInput& in, const ReportOptions& opt, ReportState& r
   return true;
 }
 
+// Fig. 1's gnuplot script: the data's ADEV with its intervals, one dashed line per term of the
+// model (a term absent from the model would be a curve without a single defined point, which
+// gnuplot rejects), the model's total and the simulated model's ADEV. `here` starts it in the
+// report's folder.
+std::string fig1_script(const std::string& here, const char* unit, const std::string& title_chan,
+                        const ModelParams& mp, bool simulated) {
+  std::string g1 = here;
+  appendf(g1,
+          "set datafile separator ','\n"
+          "set logscale xy\nset format y '10^{%%L}'\nset format x '10^{%%L}'\n"
+          "set grid xtics ytics mxtics mytics lc rgb '#dddddd'\n"
+          "set key bottom left box opaque\n"
+          "set xlabel 'tau [s]'\nset ylabel 'Allan deviation [%s]'\n"
+          "set title 'ADEV of %s: data (node telemetry, 68.3%% intervals), model, simulated "
+          "model'\n"
+          "plot 'fig1_adev_data.csv' skip 1 using 1:2:3:4 with yerrorbars pt 7 ps 0.6 "
+          "lc rgb '#1f77b4' title 'data'",
+          unit, title_chan.c_str());
+  // Columns of fig1_adev_model.csv: tau, one per registry row, total.
+  constexpr const char* kColors[kTermKinds] = {"#2ca02c", "#8c564b", "#ff7f0e", "#9467bd",
+                                               "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"};
+  for (const TermInfo& row : kTermTable) {
+    const std::size_t k = static_cast<std::size_t>(row.kind);
+    if (term_instances(mp, row.kind) > 0) {
+      appendf(g1,
+              ", \\\n  'fig1_adev_model.csv' skip 1 using 1:($%zu>0?$%zu:1/0) with lines dt 2 "
+              "lw 2 lc rgb '%s' title 'model: %s'",
+              k + 2, k + 2, kColors[k], row.label);
+    }
+  }
+  appendf(g1,
+          ", \\\n  'fig1_adev_model.csv' skip 1 using 1:%zu with lines lw 2 lc rgb 'black' "
+          "title 'model: total'",
+          kTermKinds + 2);
+  if (simulated) {
+    g1 += ", \\\n  'fig1_adev_sim.csv' skip 1 using 1:2 with points pt 6 ps 0.8 lc rgb "
+          "'#d62728' title 'simulated model'";
+  }
+  g1 += "\n";
+  return g1;
+}
+
+// One panel of Fig. 2: `shown` of `windows` trajectories from `traj_csv`, the robust std of
+// fig2_std.csv's column `std_col` and the predicted std (columns 4 and 5), each +-.
+void fig2_panel(std::string& g2, const char* traj_csv, std::size_t shown, std::size_t std_col) {
+  appendf(g2,
+          "plot for [i=2:%zu] '%s' skip 1 using 1:i with lines lw 0.5 lc rgb '#c8c8c8' "
+          "notitle, \\\n"
+          "  'fig2_std.csv' skip 1 using 1:%zu with lines lw 2 lc rgb '#1f77b4' title 'robust "
+          "std (1.4826 MAD)', '' skip 1 using 1:(-$%zu) with lines lw 2 lc rgb '#1f77b4' "
+          "notitle, \\\n"
+          "  '' skip 1 using 1:4 with lines lw 2 lc rgb 'black' title 'predicted std', '' "
+          "skip 1 using 1:(-$4) with lines lw 2 lc rgb 'black' notitle, \\\n"
+          "  '' skip 1 using 1:5 with lines dt 2 lw 1.5 lc rgb '#d62728' title 'predicted "
+          "(uncorrelated)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' "
+          "notitle\n",
+          shown + 1, traj_csv, std_col, std_col);
+}
+
+// Fig. 2's gnuplot script: the integrated error of the simulated model's windows and of the
+// data's (when it has windows), against the predicted std.
+std::string fig2_script(const std::string& here, const char* unit, const std::string& title_chan,
+                        const CovResult& cov, double t_avg_s) {
+  const std::size_t nw_sim = std::min<std::size_t>(100, cov.sim_windows);
+  const std::size_t nw_data = std::min<std::size_t>(100, cov.data_windows);
+  std::string g2 = here;
+  appendf(g2,
+          "set datafile separator ','\n"
+          "set multiplot layout 2,1\n"
+          "set grid lc rgb '#dddddd'\nset key top left box opaque\n"
+          "set xlabel 't [s] after the %.4g s bias average'\nset ylabel 'integrated error [%s s]'\n"
+          "set title 'Simulated model: %zu of %zu windows, robust std and predicted std'\n",
+          t_avg_s, unit, nw_sim, cov.sim_windows);
+  fig2_panel(g2, "fig2_traj_sim.csv", nw_sim, 2);
+  if (nw_data > 0) {
+    appendf(g2, "set title 'Data (%s): %zu of %zu windows, robust std and predicted std'\n",
+            title_chan.c_str(), nw_data, cov.data_windows);
+    fig2_panel(g2, "fig2_traj_data.csv", nw_data, 3);
+  }
+  g2 += "unset multiplot\n";
+  return g2;
+}
+
+// The figures' SVG/PNG from the scripts in d (unless --no-plots, or no gnuplot: said in
+// plot_note); the files written go to plot_files.
+void render_plots(const ReportOptions& opt, std::string& plot_note,
+                  std::vector<std::string>& plot_files) {
+  const std::string& d = opt.out_dir;
+  if (!opt.plots) {
+    plot_note = "plots: skipped (--no-plots); gnuplot scripts fig1_adev.gp, fig2_covariance.gp";
+    return;
+  }
+  if (!imu::cli::gnuplot_available()) {
+    plot_note =
+        "plots: gnuplot NOT FOUND, no SVG/PNG written (install gnuplot-nox: "
+        "toolchains/install-deps.sh core); the CSV files and the gnuplot scripts are there";
+    return;
+  }
+  bool ok = true;
+  for (const char* base : {"fig1_adev", "fig2_covariance"}) {
+    const std::string b = base;
+    if (!imu::cli::gnuplot_render(d, b, b == "fig1_adev" ? 700 : 900)) {
+      ok = false;
+      appendf(plot_note, "plots: gnuplot failed on %s.gp (see %s.gnuplot.log)\n", b.c_str(),
+              b.c_str());
+    } else {
+      for (const char* ext : {".svg", ".png"}) {
+        plot_files.push_back(d);
+        plot_files.back() += "/" + b + ext;
+      }
+    }
+  }
+  if (ok) {
+    plot_note = "plots: fig1_adev.svg/.png (the example's Fig. 1), fig2_covariance.svg/.png "
+                "(the example's Fig. 2)";
+  }
+}
+
 // The gnuplot scripts, and their SVG/PNG unless --no-plots (or no gnuplot: said). False with
 // err.
 bool report_plots(const ReportInput& in, const ReportOptions& opt, ReportState& rs,
                   std::string& err) {
-  const char* unit = rs.unit;
-  ModelParams& mp = rs.mp;
-  std::vector<AdevRow>& sim_rows = rs.sim_rows;
-  CovResult& cov = rs.cov;
-  std::string& t = rs.text;
-  std::string& plot_note = rs.plot_note;
-  std::vector<std::string>& plot_files = rs.plot_files;
   const std::string& d = opt.out_dir;
-  // ---- Plots (gnuplot) --------------------------------------------------------------------
   std::string title_chan;  // gnuplot enhanced text: '_' would start a subscript
   for (char ch : in.channel) {
     title_chan += ch == '_' ? std::string("\\_") : std::string(1, ch);
   }
-  {
-    const std::size_t nw_sim = std::min<std::size_t>(100, cov.sim_windows);
-    const std::size_t nw_data = std::min<std::size_t>(100, cov.data_windows);
-    // The scripts run from any directory: they start in the report's folder (absolute).
-    std::error_code ec;
-    const std::string here =
-        "cd " + imu::cli::gnuplot_str(std::filesystem::absolute(d, ec).lexically_normal().string()) +
-        "\n";
-    std::string g1 = here;
-    appendf(g1,
-            "set datafile separator ','\n"
-            "set logscale xy\nset format y '10^{%%L}'\nset format x '10^{%%L}'\n"
-            "set grid xtics ytics mxtics mytics lc rgb '#dddddd'\n"
-            "set key bottom left box opaque\n"
-            "set xlabel 'tau [s]'\nset ylabel 'Allan deviation [%s]'\n"
-            "set title 'ADEV of %s: data (node telemetry, 68.3%% intervals), model, simulated "
-            "model'\n"
-            "plot 'fig1_adev_data.csv' skip 1 using 1:2:3:4 with yerrorbars pt 7 ps 0.6 "
-            "lc rgb '#1f77b4' title 'data'",
-            unit, title_chan.c_str());
-    // One dashed line per term present in the model (a term absent from the model would be a
-    // curve without a single defined point, which gnuplot rejects).
-    // Columns: tau, one per registry row, total.
-    constexpr const char* kColors[kTermKinds] = {"#2ca02c", "#8c564b", "#ff7f0e", "#9467bd",
-                                                 "#e377c2", "#17becf", "#bcbd22", "#7f7f7f"};
-    for (const TermInfo& row : kTermTable) {
-      const std::size_t k = static_cast<std::size_t>(row.kind);
-      if (term_instances(mp, row.kind) > 0) {
-        appendf(g1,
-                ", \\\n  'fig1_adev_model.csv' skip 1 using 1:($%zu>0?$%zu:1/0) with lines dt 2 "
-                "lw 2 lc rgb '%s' title 'model: %s'",
-                k + 2, k + 2, kColors[k], row.label);
-      }
-    }
-    appendf(g1,
-            ", \\\n  'fig1_adev_model.csv' skip 1 using 1:%zu with lines lw 2 lc rgb 'black' "
-            "title 'model: total'",
-            kTermKinds + 2);
-    if (!sim_rows.empty()) {
-      g1 += ", \\\n  'fig1_adev_sim.csv' skip 1 using 1:2 with points pt 6 ps 0.8 lc rgb "
-            "'#d62728' title 'simulated model'";
-    }
-    g1 += "\n";
-    std::string g2 = here;
-    appendf(g2,
-            "set datafile separator ','\n"
-            "set multiplot layout 2,1\n"
-            "set grid lc rgb '#dddddd'\nset key top left box opaque\n"
-            "set xlabel 't [s] after the %.4g s bias average'\nset ylabel 'integrated error [%s s]'\n"
-            "set title 'Simulated model: %zu of %zu windows, robust std and predicted std'\n"
-            "plot for [i=2:%zu] 'fig2_traj_sim.csv' skip 1 using 1:i with lines lw 0.5 lc rgb "
-            "'#c8c8c8' notitle, \\\n"
-            "  'fig2_std.csv' skip 1 using 1:2 with lines lw 2 lc rgb '#1f77b4' title 'robust std "
-            "(1.4826 MAD)', '' skip 1 using 1:(-$2) with lines lw 2 lc rgb '#1f77b4' notitle, \\\n"
-            "  '' skip 1 using 1:4 with lines lw 2 lc rgb 'black' title 'predicted std', '' skip 1 "
-            "using 1:(-$4) with lines lw 2 lc rgb 'black' notitle, \\\n"
-            "  '' skip 1 using 1:5 with lines dt 2 lw 1.5 lc rgb '#d62728' title 'predicted "
-            "(uncorrelated)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
-            opt.t_avg_s, unit, nw_sim, cov.sim_windows, nw_sim + 1);
-    if (nw_data > 0) {
-      appendf(g2,
-              "set title 'Data (%s): %zu of %zu windows, robust std and predicted std'\n"
-              "plot for [i=2:%zu] 'fig2_traj_data.csv' skip 1 using 1:i with lines lw 0.5 lc rgb "
-              "'#c8c8c8' notitle, \\\n"
-              "  'fig2_std.csv' skip 1 using 1:3 with lines lw 2 lc rgb '#1f77b4' title 'robust "
-              "std (1.4826 MAD)', '' skip 1 using 1:(-$3) with lines lw 2 lc rgb '#1f77b4' "
-              "notitle, \\\n"
-              "  '' skip 1 using 1:4 with lines lw 2 lc rgb 'black' title 'predicted std', '' "
-              "skip 1 using 1:(-$4) with lines lw 2 lc rgb 'black' notitle, \\\n"
-              "  '' skip 1 using 1:5 with lines dt 2 lw 1.5 lc rgb '#d62728' title 'predicted "
-              "(uncorrelated)', '' skip 1 using 1:(-$5) with lines dt 2 lw 1.5 lc rgb '#d62728' notitle\n",
-              title_chan.c_str(), nw_data, cov.data_windows, nw_data + 1);
-    }
-    g2 += "unset multiplot\n";
-    if (!write_file(d + "/fig1_adev.gp", g1, err) ||
-        !write_file(d + "/fig2_covariance.gp", g2, err)) {
-      return false;
-    }
-    if (!opt.plots) {
-      plot_note = "plots: skipped (--no-plots); gnuplot scripts fig1_adev.gp, fig2_covariance.gp";
-    } else if (!imu::cli::gnuplot_available()) {
-      plot_note =
-          "plots: gnuplot NOT FOUND, no SVG/PNG written (install gnuplot-nox: "
-          "toolchains/install-deps.sh core); the CSV files and the gnuplot scripts are there";
-    } else {
-      bool ok = true;
-      for (const char* base : {"fig1_adev", "fig2_covariance"}) {
-        const std::string b = base;
-        if (!imu::cli::gnuplot_render(d, b, b == "fig1_adev" ? 700 : 900)) {
-          ok = false;
-          appendf(plot_note, "plots: gnuplot failed on %s.gp (see %s.gnuplot.log)\n", b.c_str(),
-                  b.c_str());
-        } else {
-          for (const char* ext : {".svg", ".png"}) {
-            plot_files.push_back(d);
-            plot_files.back() += "/" + b + ext;
-          }
-        }
-      }
-      if (ok) {
-        plot_note = "plots: fig1_adev.svg/.png (the example's Fig. 1), fig2_covariance.svg/.png (the example's Fig. 2)";
-      }
-    }
+  // The scripts run from any directory: they start in the report's folder (absolute).
+  std::error_code ec;
+  const std::string here =
+      "cd " + imu::cli::gnuplot_str(std::filesystem::absolute(d, ec).lexically_normal().string()) +
+      "\n";
+  if (!write_file(d + "/fig1_adev.gp",
+                  fig1_script(here, rs.unit, title_chan, rs.mp, !rs.sim_rows.empty()), err) ||
+      !write_file(d + "/fig2_covariance.gp",
+                  fig2_script(here, rs.unit, title_chan, rs.cov, opt.t_avg_s), err)) {
+    return false;
   }
-  appendf(t, "\n%s\nfiles in %s: report.txt, %s, fig1_adev_{data,model,sim}.csv, fig2_std.csv, "
-             "fig2_traj_{sim,data}.csv\n",
-          plot_note.c_str(), d.c_str(), opt.json_path.c_str());
+  render_plots(opt, rs.plot_note, rs.plot_files);
+  appendf(rs.text, "\n%s\nfiles in %s: report.txt, %s, fig1_adev_{data,model,sim}.csv, "
+                   "fig2_std.csv, fig2_traj_{sim,data}.csv\n",
+          rs.plot_note.c_str(), d.c_str(), opt.json_path.c_str());
   return true;
 }
 
