@@ -651,10 +651,84 @@ bool write_plots(const Report& r, const std::string& dir, const std::string& ste
   return true;
 }
 
+namespace {
+
+constexpr double kFlickerFloor = 0.664;  // sqrt(2 ln 2 / pi): ADEV floor of B (IEEE 952)
+
+// The line of log-log slope `slope` through the point of r's ADEV where the data's slope is
+// nearest it (within 0.25; else false): its log10 intercept, and that point's tau.
+bool read_off(const Report& r, double slope, double& intercept, double& tau_at) {
+  double best = 0.25;
+  bool found = false;
+  for (std::size_t i = 0; i + 1 < r.adev.size(); ++i) {
+    const AdevPoint& p = r.adev[i];
+    const AdevPoint& q = r.adev[i + 1];
+    if (!(p.adev > 0.0 && q.adev > 0.0 && q.tau_s > p.tau_s)) {
+      continue;
+    }
+    const double d = (std::log10(q.adev) - std::log10(p.adev)) /
+                     (std::log10(q.tau_s) - std::log10(p.tau_s));
+    if (std::fabs(d - slope) < best) {
+      best = std::fabs(d - slope);
+      intercept = std::log10(p.adev) - slope * std::log10(p.tau_s);
+      tau_at = p.tau_s;
+      found = true;
+    }
+  }
+  return found;
+}
+
+// Axis `a` of a sensor's plot: its ADEV rows in `csv`, its points and the IEEE 952 lines read
+// off it (N at 1 s, K at 3 s, B's floor) in `plot`, each line's reading point in `marks`.
+void sensor_axis(const Report& r, std::size_t a, const char* colour, const std::string& base,
+                 std::ostringstream& csv, std::ostringstream& plot, std::ostringstream& marks) {
+  for (const AdevPoint& p : r.adev) {
+    csv << a << "," << num(p.tau_s) << "," << num(p.adev) << "," << num(p.ci_lo) << ","
+        << num(p.ci_hi) << "," << imu::cli::json_str(r.channel) << "\n";
+  }
+  double b_n = 0.0;
+  double b_k = 0.0;
+  double b_b = 0.0;
+  double tau_n = 0.0;
+  double tau_k = 0.0;
+  double tau_b = 0.0;
+  const bool has_n = read_off(r, -0.5, b_n, tau_n);
+  const bool has_k = read_off(r, 0.5, b_k, tau_k);
+  const bool has_b = read_off(r, 0.0, b_b, tau_b);
+  const double n = has_n ? std::pow(10.0, b_n) : 0.0;                         // the line at 1 s
+  const double k = has_k ? std::pow(10.0, b_k + 0.5 * std::log10(3.0)) : 0.0;  // at 3 s
+  const double b = has_b ? std::pow(10.0, b_b) / kFlickerFloor : 0.0;
+  const std::string c = std::string("'") + colour + "'";
+  const std::string& name = r.channel;
+  plot << (a > 0 ? ", " : "") << "'" << base << ".csv' skip 1 using 2:(column(1) == " << a
+       << " ? $3 : 1/0):4:5 with yerrorbars pt 7 ps 0.4 lc rgb " << c << " title "
+       << gq(name + " ADEV");
+  const auto mark = [&marks, &c](double tau, double value) {
+    marks << "set object circle at " << num(tau) << "," << num(value) << " size screen 0.006 fc "
+          << "rgb " << c << " fs solid\n";
+  };
+  if (has_n) {
+    plot << ", " << num(n) << " / sqrt(x) with lines dt 2 lc rgb " << c << " title "
+         << gq(name + " N = " + imu::cli::num_text(n));
+    mark(1.0, n);
+  }
+  if (has_k) {
+    plot << ", " << num(k) << " * sqrt(x / 3.0) with lines dt 3 lc rgb " << c << " title "
+         << gq(name + " K = " + imu::cli::num_text(k));
+    mark(3.0, k);
+  }
+  if (has_b) {
+    plot << ", " << num(kFlickerFloor * b) << " with lines dt 4 lc rgb " << c << " title "
+         << gq(name + " B = " + imu::cli::num_text(b));
+    mark(tau_b, kFlickerFloor * b);
+  }
+}
+
+}  // namespace
+
 bool write_sensor_plots(const std::vector<Report>& reports, const std::string& dir,
                         std::string& message) {
   message.clear();
-  constexpr double kFlickerFloor = 0.664;  // sqrt(2 ln 2 / pi): ADEV floor of B (IEEE 952)
   const char* colours[3] = {"#1f77b4", "#d62728", "#2ca02c"};
   const std::string abs = absolute(dir);
   for (const char* sensor : {"accelerometer", "gyroscope"}) {
@@ -684,68 +758,7 @@ bool write_sensor_plots(const std::vector<Report>& reports, const std::string& d
     plot << "plot ";
     std::ostringstream marks;
     for (std::size_t a = 0; a < axes.size(); ++a) {
-      const Report& r = *axes[a];
-      for (const AdevPoint& p : r.adev) {
-        csv << a << "," << num(p.tau_s) << "," << num(p.adev) << "," << num(p.ci_lo) << ","
-            << num(p.ci_hi) << "," << imu::cli::json_str(r.channel) << "\n";
-      }
-      // The line of log-log slope `slope` through the point where the data's slope is nearest
-      // it (within 0.25; else no line): its log10 intercept, and that point's tau.
-      const auto read_off = [&r](double slope, double& intercept, double& tau_at) {
-        double best = 0.25;
-        bool found = false;
-        for (std::size_t i = 0; i + 1 < r.adev.size(); ++i) {
-          const AdevPoint& p = r.adev[i];
-          const AdevPoint& q = r.adev[i + 1];
-          if (!(p.adev > 0.0 && q.adev > 0.0 && q.tau_s > p.tau_s)) {
-            continue;
-          }
-          const double d = (std::log10(q.adev) - std::log10(p.adev)) /
-                           (std::log10(q.tau_s) - std::log10(p.tau_s));
-          if (std::fabs(d - slope) < best) {
-            best = std::fabs(d - slope);
-            intercept = std::log10(p.adev) - slope * std::log10(p.tau_s);
-            tau_at = p.tau_s;
-            found = true;
-          }
-        }
-        return found;
-      };
-      double b_n = 0.0;
-      double b_k = 0.0;
-      double b_b = 0.0;
-      double tau_n = 0.0;
-      double tau_k = 0.0;
-      double tau_b = 0.0;
-      const bool has_n = read_off(-0.5, b_n, tau_n);
-      const bool has_k = read_off(0.5, b_k, tau_k);
-      const bool has_b = read_off(0.0, b_b, tau_b);
-      const double n = has_n ? std::pow(10.0, b_n) : 0.0;              // the line at tau = 1 s
-      const double k = has_k ? std::pow(10.0, b_k + 0.5 * std::log10(3.0)) : 0.0;  // at 3 s
-      const double b = has_b ? std::pow(10.0, b_b) / kFlickerFloor : 0.0;
-      const std::string c = std::string("'") + colours[a] + "'";
-      const std::string name = r.channel;
-      plot << (a > 0 ? ", " : "") << "'" << base << ".csv' skip 1 using 2:(column(1) == " << a
-           << " ? $3 : 1/0):4:5 with yerrorbars pt 7 ps 0.4 lc rgb " << c << " title "
-           << gq(name + " ADEV");
-      if (has_n) {
-        plot << ", " << num(n) << " / sqrt(x) with lines dt 2 lc rgb " << c << " title "
-             << gq(name + " N = " + imu::cli::num_text(n));
-        marks << "set object circle at 1," << num(n) << " size screen 0.006 fc rgb " << c
-              << " fs solid\n";
-      }
-      if (has_k) {
-        plot << ", " << num(k) << " * sqrt(x / 3.0) with lines dt 3 lc rgb " << c << " title "
-             << gq(name + " K = " + imu::cli::num_text(k));
-        marks << "set object circle at 3," << num(k) << " size screen 0.006 fc rgb " << c
-              << " fs solid\n";
-      }
-      if (has_b) {
-        plot << ", " << num(kFlickerFloor * b) << " with lines dt 4 lc rgb " << c << " title "
-             << gq(name + " B = " + imu::cli::num_text(b));
-        marks << "set object circle at " << num(tau_b) << "," << num(kFlickerFloor * b)
-              << " size screen 0.006 fc rgb " << c << " fs solid\n";
-      }
+      sensor_axis(*axes[a], a, colours[a], base, csv, plot, marks);
     }
     gp << marks.str() << plot.str() << "\n";
     std::string path = abs;
