@@ -42,7 +42,8 @@ std::string model_json(const ModelParams& p) {
   GmParam bank[kMaxFlickerGm];
   const std::size_t nb =
       p.bi > 0.0 ? flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank) : 0;
-  s << "{\"n\": " << num(p.n) << ", \"n_filter_s\": " << num(p.n_filter_s) << ", \"q\": " << num(p.q) << ", \"gm\": " << gm_list(p.gm, p.n_gm)
+  s << "{\"n\": " << num(p.n) << ", \"n_filter_s\": " << num(p.n_filter_s)
+    << ", \"q\": " << num(p.q) << ", \"gm\": " << gm_list(p.gm, p.n_gm)
     << ", \"k\": " << num(p.k) << ", \"r\": " << num(p.r) << ", \"sin_a\": " << num(p.sin_a)
     << ", \"sin_f0_hz\": " << num(p.sin_f0_hz) << ", \"sin2_a\": " << num(p.sin2_a)
     << ", \"sin2_f0_hz\": " << num(p.sin2_f0_hz) << ", \"sin_ts_s\": " << num(p.sin_ts_s)
@@ -51,7 +52,8 @@ std::string model_json(const ModelParams& p) {
     << num(p.bi_tau_hi_s) << ", \"gm_bank\": " << gm_list(bank, nb)
     << "}, \"oscillation\": {\"sigma\": " << num(p.osc_sigma) << ", \"f0_hz\": "
     << num(p.osc_f0_hz) << ", \"beta_per_s\": " << num(p.osc_beta_per_s)
-    << ", \"point_sampled_ts_s\": " << num(p.osc_ts_s) << "}, \"n_states\": " << (built ? std::to_string(c.n_states) : std::string("null")) << "}";
+    << ", \"point_sampled_ts_s\": " << num(p.osc_ts_s) << "}, \"n_states\": "
+    << (built ? std::to_string(c.n_states) : std::string("null")) << "}";
   return s.str();
 }
 
@@ -59,7 +61,8 @@ std::string error_json(const ErrorStats& e) {
   std::ostringstream s;
   s << "{\"adev_rms_rel\": " << num(e.adev_rms_rel) << ", \"adev_max_rel\": "
     << num(e.adev_max_rel) << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": "
-    << num(e.tau_max_s) << ", \"n_taus\": " << e.n_taus << ", \"example_range\": {\"adev_rms_rel\": "
+    << num(e.tau_max_s) << ", \"n_taus\": " << e.n_taus
+    << ", \"example_range\": {\"adev_rms_rel\": "
     << num(e.example_rms_rel) << ", \"adev_max_rel\": " << num(e.example_max_rel)
     << ", \"tau_min_s\": " << num(e.tau_min_s) << ", \"tau_max_s\": " << num(e.example_tau_max_s)
     << "}, \"cost_sum_z2\": " << num(e.cost) << ", \"covariance_ratio\": " << num(e.cov_ratio)
@@ -751,8 +754,8 @@ bool write_sensor_plots(const std::vector<Report>& reports, const std::string& d
        << "set key bottom left box opaque noenhanced font ',9'\nset xlabel 'tau [s]'\n"
        << "set ylabel " << gq("Allan deviation [" + unit_of(*axes[0]) + "]") << "\n"
        << "set title " << gq(std::string(sensor) +
-                             ": ADEV per axis, IEEE Std 952 lines read off the slopes -1/2, +1/2, 0 "
-                             "(N at 1 s, K at 3 s)")
+                             ": ADEV per axis, IEEE Std 952 lines read off the slopes -1/2, "
+                             "+1/2, 0 (N at 1 s, K at 3 s)")
        << " noenhanced\nset samples 200\n";
     std::ostringstream plot;
     plot << "plot ";
