@@ -642,23 +642,70 @@ void apply_units(std::vector<Job>& jobs, const Declared& d) {
   }
 }
 
+// A finished job's report with its sensor, unit and the notes of how its data was read (the
+// first note first).
+Report job_report(Job& j, double lsb, const Declared& d) {
+  if (j.o.lsb > 0.0 && declared_lsb(j.sensor, d, lsb) <= 0.0) {
+    j.r.lsb_note = "LSB from the file: " + j.r.lsb_note.substr(j.r.lsb_note.find(':') + 2);
+  }
+  j.r.sensor = imu::cli::sensor_name(j.sensor);
+  j.r.unit = imu::cli::si_unit(j.sensor);
+  std::vector<std::string> first;
+  if (j.counts_scaled) {
+    first.push_back("the variable holds integer counts: analysed as counts x LSB (" +
+                    std::to_string(j.o.lsb) + " per count)");
+  } else if (j.counts_unscaled) {
+    first.emplace_back("the variable holds integer counts and no LSB was found (--lsb, "
+                       "NAME_lsb, <group>_lsb, lsb): analysed in counts");
+  }
+  for (const std::string* note : {&j.block_note, &j.text_note, &j.unit_note}) {
+    if (!note->empty()) {
+      first.push_back(*note);
+    }
+  }
+  j.r.notes.insert(j.r.notes.begin(), first.begin(), first.end());
+  return std::move(j.r);
+}
+
+// The per-channel figures and one per sensor with its axes and the IEEE 952 lines (the
+// field's figure) in `plots`; the files written said on `info`. False with msg.
+bool write_all_plots(const std::vector<Report>& reports, const std::string& plots, FILE* info,
+                     std::string& msg) {
+  // File names from channel names (a CSV header is user data): one safe component each,
+  // distinct, inside DIR.
+  std::vector<std::string> names;
+  names.reserve(reports.size());
+  for (const Report& r : reports) {
+    names.push_back(r.channel);
+  }
+  const std::vector<std::string> stems = imu::cli::safe_components(names);
+  for (std::size_t i = 0; i < reports.size(); ++i) {
+    if (!write_plots(reports[i], plots, stems[i], msg)) {
+      return false;
+    }
+    std::fprintf(info, "%s\n", imu::cli::term_safe(msg).c_str());
+  }
+  if (!write_sensor_plots(reports, plots, msg)) {
+    return false;
+  }
+  if (!msg.empty()) {
+    std::fprintf(info, "%s\n", imu::cli::term_safe(msg).c_str());
+  }
+  return true;
+}
+
 // Analyse the jobs (in parallel), print, write. Exit status.
 int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const Declared& d,
            const std::string& json, const std::string& plots, const std::string& yaml) {
   std::string err;
-  if (!yaml.empty()) {
-    // Kalibr takes both sensors: said before the analysis, not after it.
-    bool acc = false;
-    bool gyro = false;
-    for (const Job& j : jobs) {
-      acc = acc || j.sensor == imu::cli::Sensor::kAcc;
-      gyro = gyro || j.sensor == imu::cli::Sensor::kGyro;
-    }
-    if (!acc || !gyro) {
-      return fail("--yaml needs at least one accelerometer and one gyroscope channel (Kalibr "
-                  "takes both sensors): declare them with --acc COLS --gyro COLS",
-                  kExitUsage);
-    }
+  const auto has = [&jobs](imu::cli::Sensor s) {
+    return std::any_of(jobs.begin(), jobs.end(), [s](const Job& j) { return j.sensor == s; });
+  };
+  // Kalibr takes both sensors: said before the analysis, not after it.
+  if (!yaml.empty() && (!has(imu::cli::Sensor::kAcc) || !has(imu::cli::Sensor::kGyro))) {
+    return fail("--yaml needs at least one accelerometer and one gyroscope channel (Kalibr "
+                "takes both sensors): declare them with --acc COLS --gyro COLS",
+                kExitUsage);
   }
   apply_units(jobs, d);
   run_jobs(jobs);
@@ -667,28 +714,7 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const De
     if (!j.ok) {
       return fail((jobs.size() > 1 ? j.channel + ": " : std::string()) + j.err, kExitRuntime);
     }
-    if (j.o.lsb > 0.0 && declared_lsb(j.sensor, d, lsb) <= 0.0) {
-      j.r.lsb_note = "LSB from the file: " + j.r.lsb_note.substr(j.r.lsb_note.find(':') + 2);
-    }
-    j.r.sensor = imu::cli::sensor_name(j.sensor);
-    j.r.unit = imu::cli::si_unit(j.sensor);
-    if (!j.unit_note.empty()) {
-      j.r.notes.insert(j.r.notes.begin(), j.unit_note);
-    }
-    if (!j.text_note.empty()) {
-      j.r.notes.insert(j.r.notes.begin(), j.text_note);
-    }
-    if (!j.block_note.empty()) {
-      j.r.notes.insert(j.r.notes.begin(), j.block_note);
-    }
-    if (j.counts_scaled) {
-      j.r.notes.insert(j.r.notes.begin(), "the variable holds integer counts: analysed as counts x "
-                       "LSB (" + std::to_string(j.o.lsb) + " per count)");
-    } else if (j.counts_unscaled) {
-      j.r.notes.insert(j.r.notes.begin(), "the variable holds integer counts and no LSB was found "
-                       "(--lsb, NAME_lsb, <group>_lsb, lsb): analysed in counts");
-    }
-    reports.push_back(std::move(j.r));
+    reports.push_back(job_report(j, lsb, d));
   }
   // With --json - (or --yaml -) standard output carries that document alone: the text report
   // and the "wrote" lines go to standard error.
@@ -723,30 +749,8 @@ int finish(const std::string& file, std::vector<Job>& jobs, double lsb, const De
       std::fprintf(info, "wrote %s\n", imu::cli::term_safe(yaml).c_str());
     }
   }
-  if (!plots.empty()) {
-    // File names from channel names (a CSV header is user data): one safe component each,
-    // distinct, inside DIR.
-    std::vector<std::string> names;
-    names.reserve(reports.size());
-    for (const Report& r : reports) {
-      names.push_back(r.channel);
-    }
-    const std::vector<std::string> stems = imu::cli::safe_components(names);
-    for (std::size_t i = 0; i < reports.size(); ++i) {
-      std::string msg;
-      if (!write_plots(reports[i], plots, stems[i], msg)) {
-        return fail(msg, kExitRuntime);
-      }
-      std::fprintf(info, "%s\n", imu::cli::term_safe(msg).c_str());
-    }
-    // One figure per sensor with its axes and the IEEE 952 lines (the field's figure).
-    std::string msg;
-    if (!write_sensor_plots(reports, plots, msg)) {
-      return fail(msg, kExitRuntime);
-    }
-    if (!msg.empty()) {
-      std::fprintf(info, "%s\n", imu::cli::term_safe(msg).c_str());
-    }
+  if (!plots.empty() && !write_all_plots(reports, plots, info, err)) {
+    return fail(err, kExitRuntime);
   }
   return kExitOk;
 }
