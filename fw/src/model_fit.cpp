@@ -343,28 +343,23 @@ ModelParams to_params(const Problem& pb, const Solution& s) {
   return p;
 }
 
-}  // namespace
-
-FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options) {
-  FitResult res;
-  const FitOptions& o = options;
+// The problem's terms and their fixed shapes from the options (kOk, or kBadOptions); tb_lo
+// and tb_hi bound the GMs' correlation times.
+FitStatus set_up(const FitOptions& o, Problem& pb, double& tb_lo, double& tb_hi) {
   const bool range_ok = std::isfinite(o.tau_min_s) && std::isfinite(o.tau_max_s) &&
                         o.tau_min_s > 0.0 && o.tau_max_s > o.tau_min_s;
   const std::uint32_t known = kFitWhite | kFitQuantization | kFitGm1 | kFitGm2 | kFitRrw |
                               kFitRamp | kFitFlicker | kFitOscillation;
   if (!range_ok || (o.terms & known) == 0 || (o.terms & ~known) != 0 ||
       ((o.terms & kFitGm2) != 0 && (o.terms & kFitGm1) == 0) || o.weight_iterations < 0 ||
-      o.weight_iterations > 10 || (points == nullptr && n > 0) || !(o.edf_cap >= 0.0)) {
-    res.status = FitStatus::kBadOptions;
-    return res;
+      o.weight_iterations > 10 || !(o.edf_cap >= 0.0)) {
+    return FitStatus::kBadOptions;
   }
-  const double tb_lo = o.tb_min_s > 0.0 ? o.tb_min_s : o.tau_min_s;
-  const double tb_hi = o.tb_max_s > 0.0 ? o.tb_max_s : 10.0 * o.tau_max_s;
+  tb_lo = o.tb_min_s > 0.0 ? o.tb_min_s : o.tau_min_s;
+  tb_hi = o.tb_max_s > 0.0 ? o.tb_max_s : 10.0 * o.tau_max_s;
   if (!(tb_hi > tb_lo)) {
-    res.status = FitStatus::kBadOptions;
-    return res;
+    return FitStatus::kBadOptions;
   }
-  Problem pb;
   pb.used[kSlotWhite] = (o.terms & kFitWhite) != 0;
   pb.used[kSlotQuant] = (o.terms & kFitQuantization) != 0;
   pb.used[kSlotGm1] = (o.terms & kFitGm1) != 0;
@@ -374,8 +369,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   pb.used[kSlotFlicker] = (o.terms & kFitFlicker) != 0;
   pb.used[kSlotOsc] = (o.terms & kFitOscillation) != 0;
   if (!(std::isfinite(o.white_filter_s) && o.white_filter_s >= 0.0)) {
-    res.status = FitStatus::kBadOptions;
-    return res;
+    return FitStatus::kBadOptions;
   }
   pb.white_filter_s = o.white_filter_s;
   pb.osc_f0_hz = o.osc_f0_hz;
@@ -383,22 +377,22 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
   pb.osc_ts_s = o.osc_ts_s > 0.0 && std::isfinite(o.osc_ts_s) ? o.osc_ts_s : 0.0;
   if (pb.used[kSlotOsc] && !(std::isfinite(o.osc_f0_hz) && o.osc_f0_hz >= 0.0 &&
                              std::isfinite(o.osc_beta_per_s) && o.osc_beta_per_s > 0.0)) {
-    res.status = FitStatus::kBadOptions;
-    return res;
+    return FitStatus::kBadOptions;
   }
   pb.flicker_lo_s = o.flicker_tau_lo_s > 0.0 ? o.flicker_tau_lo_s : o.tau_min_s;
   pb.flicker_hi_s = o.flicker_tau_hi_s > 0.0 ? o.flicker_tau_hi_s : o.tau_max_s;
   if (pb.used[kSlotFlicker]) {
     GmParam bank[kMaxFlickerGm];
     if (flicker_bank(1.0, pb.flicker_lo_s, pb.flicker_hi_s, bank) == 0) {
-      res.status = FitStatus::kBadOptions;
-      return res;
+      return FitStatus::kBadOptions;
     }
   }
-  std::size_t n_params = 0;
-  for (const bool u : pb.used) {
-    n_params += u ? 1U : 0U;
-  }
+  return FitStatus::kOk;
+}
+
+// The points inside [tau_min_s, tau_max_s] with their weights and the fixed shapes' AVAR
+// (kOk, or kTooManyPoints).
+FitStatus load_points(const AdevPoint* points, std::size_t n, const FitOptions& o, Problem& pb) {
   const double lo = o.tau_min_s * (1.0 - 1e-9);
   const double hi = o.tau_max_s * (1.0 + 1e-9);
   for (std::size_t i = 0; i < n; ++i) {
@@ -408,8 +402,7 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
       continue;
     }
     if (pb.n >= kMaxFitPoints) {
-      res.status = FitStatus::kTooManyPoints;
-      return res;
+      return FitStatus::kTooManyPoints;
     }
     pb.tau[pb.n] = p.tau_s;
     pb.avar[pb.n] = p.avar;
@@ -426,11 +419,34 @@ FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options)
                        : 0.0;
     ++pb.n;
   }
+  return FitStatus::kOk;
+}
+
+}  // namespace
+
+FitResult fit(const AdevPoint* points, std::size_t n, const FitOptions& options) {
+  FitResult res;
+  Problem pb;
+  double tb_lo = 0.0;
+  double tb_hi = 0.0;
+  res.status = points == nullptr && n > 0 ? FitStatus::kBadOptions
+                                          : set_up(options, pb, tb_lo, tb_hi);
+  if (res.status == FitStatus::kOk) {
+    res.status = load_points(points, n, options, pb);
+  }
+  if (res.status != FitStatus::kOk) {
+    return res;
+  }
+  std::size_t n_params = 0;
+  for (const bool u : pb.used) {
+    n_params += u ? 1U : 0U;
+  }
   res.n_points = pb.n;
   if (pb.n < n_params || pb.n == 0) {
     res.status = FitStatus::kTooFewPoints;
     return res;
   }
+  const FitOptions& o = options;
   Solution best = search(pb, tb_lo, tb_hi);
   for (int it = 0; it < o.weight_iterations && best.ok; ++it) {
     const ModelParams prev = to_params(pb, best);
