@@ -566,6 +566,7 @@ LogCov whittle_covariance(const ModelParams& m, double ts, double t_rec_s) {
   std::vector<double> f;  // 64 per decade, and finer across the oscillation's band
   const double step = std::log(10.0) / 64.0;
   const auto n_log = static_cast<int>(std::ceil(std::log(f_hi / f_lo) / step));
+  f.reserve(static_cast<std::size_t>(n_log) + 1 + 321);  // + f_hi and the band's points
   for (int i = 0; i < n_log; ++i) {
     f.push_back(f_lo * std::exp(step * i));
   }
