@@ -160,7 +160,6 @@ double term_avar(const ModelParams& p, TermKind k, std::size_t i, double tau_s) 
 }
 
 double term_psd(const ModelParams& p, TermKind k, std::size_t i, double f_hz, double ts_s) {
-  constexpr double kPi = 3.14159265358979323846;
   const auto gm_psd = [f_hz](double sb, double tb_s) {
     const double w = 2.0 * kPi * f_hz * tb_s;
     return 2.0 * sb * tb_s * tb_s / (1.0 + w * w);
