@@ -15,8 +15,8 @@
 #include <ctime>
 #include <limits>
 #include <map>
-#include <numeric>
 #include <memory>
+#include <numeric>
 
 #include "imu/bias_kf.hpp"
 #include "imu/covariance_check.hpp"
@@ -539,8 +539,8 @@ LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
 // The Cramer-Rao bound of m's stochastic log-parameters on a record of t_rec_s seconds
 // sampled every ts: the inverse of the Whittle approximation of a stationary Gaussian record's
 // Fisher information, I_ij = T int d_i(f) d_j(f) df over [1 / T, 1 / (2 Ts)], d_i = d ln S /
-// d ln p_i, S the model's one-sided PSD (term_psd; the deterministic terms, regressors, left
-// out). No unbiased estimator of p_i, however it reads the record, has sd(ln p_i) below
+// d ln p_i, S the model's one-sided PSD (term_psd: the deterministic terms, regressors, have
+// none, and their parameters, which S does not see, are left out). No unbiased estimator of p_i, however it reads the record, has sd(ln p_i) below
 // sqrt((I^-1)_ii): with K alone, sd(ln K) = 1 / sqrt(2 n) (n chi-square(1) readings of K^2);
 // beside white noise N it is 1.07 sqrt(tau_d / T), tau_d = sqrt(3) N / K where the walk's AVAR
 // meets the white noise's. Whittle, "Estimation and information in stationary time series",
@@ -548,19 +548,9 @@ LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
 // Names as free_params'; cov empty if the information is singular.
 LogCov whittle_covariance(const ModelParams& m, double ts, double t_rec_s) {
   LogCov lc;
-  ModelParams w = m;
-  std::vector<double*> params;
-  for (const auto& [name, x] : free_params(w)) {
-    const bool regressor = name == "r" || name.rfind("sin", 0) == 0;
-    if (!regressor) {
-      lc.names.push_back(name);
-      params.push_back(x);
-    }
-  }
   const double f_lo = 1.0 / t_rec_s;
   const double f_hi = 0.5 / ts;
-  if (params.empty() || !(f_hi > 4.0 * f_lo)) {
-    lc.names.clear();
+  if (!(f_hi > 4.0 * f_lo)) {
     return lc;
   }
   std::vector<double> f;  // 64 per decade, and finer across the oscillation's band
@@ -580,6 +570,7 @@ LogCov whittle_covariance(const ModelParams& m, double ts, double t_rec_s) {
     }
     std::sort(f.begin(), f.end());
   }
+  ModelParams w = m;
   const auto ln_psd = [&w, ts](double fq) {
     double s = 0.0;
     for (const TermInfo& t : kTermTable) {
@@ -590,25 +581,32 @@ LogCov whittle_covariance(const ModelParams& m, double ts, double t_rec_s) {
     return std::log(s);
   };
   constexpr double kH = 1e-3;
-  const std::size_t np = params.size();
-  Dense d(f.size() * np);
-  for (std::size_t j = 0; j < np; ++j) {
-    const double x0 = *params[j];
+  std::vector<std::vector<double>> d;  // d[j][k]: parameter j at frequency k
+  for (const auto& [name, x] : free_params(w)) {
+    const double x0 = *x;
+    std::vector<double> dj(f.size());
     for (std::size_t k = 0; k < f.size(); ++k) {
-      *params[j] = x0 * std::exp(kH);
+      *x = x0 * std::exp(kH);
       const double up = ln_psd(f[k]);
-      *params[j] = x0 * std::exp(-kH);
-      d[k * np + j] = (up - ln_psd(f[k])) / (2.0 * kH);
-      *params[j] = x0;
+      *x = x0 * std::exp(-kH);
+      dj[k] = (up - ln_psd(f[k])) / (2.0 * kH);
+      *x = x0;
     }
+    if (std::any_of(dj.begin(), dj.end(), [](double v) { return std::fabs(v) > 0.0; })) {
+      lc.names.push_back(name);
+      d.push_back(std::move(dj));
+    }
+  }
+  const std::size_t np = d.size();
+  if (np == 0) {
+    return lc;
   }
   Dense info(np * np, 0.0);
   for (std::size_t k = 0; k + 1 < f.size(); ++k) {
     const double width = 0.5 * (f[k + 1] - f[k]) * t_rec_s;  // trapezoid, T df
     for (std::size_t a = 0; a < np; ++a) {
       for (std::size_t b = 0; b < np; ++b) {
-        info[a * np + b] += width * (d[k * np + a] * d[k * np + b] +
-                                     d[(k + 1) * np + a] * d[(k + 1) * np + b]);
+        info[a * np + b] += width * (d[a][k] * d[b][k] + d[a][k + 1] * d[b][k + 1]);
       }
     }
   }
