@@ -659,10 +659,16 @@ namespace {
 constexpr double kFlickerFloor = 0.664;  // sqrt(2 ln 2 / pi): ADEV floor of B (IEEE 952)
 
 // The line of log-log slope `slope` through the point of r's ADEV where the data's slope is
-// nearest it (within 0.25; else false): its log10 intercept, and that point's tau.
-bool read_off(const Report& r, double slope, double& intercept, double& tau_at) {
-  double best = 0.25;
+// nearest it (within 0.25; else not found): its log10 intercept, and that point's tau.
+struct SlopeLine {
   bool found = false;
+  double intercept = 0.0;
+  double tau_s = 0.0;
+};
+
+SlopeLine read_off(const Report& r, double slope) {
+  double best = 0.25;
+  SlopeLine line;
   for (std::size_t i = 0; i + 1 < r.adev.size(); ++i) {
     const AdevPoint& p = r.adev[i];
     const AdevPoint& q = r.adev[i + 1];
@@ -673,12 +679,10 @@ bool read_off(const Report& r, double slope, double& intercept, double& tau_at) 
                      (std::log10(q.tau_s) - std::log10(p.tau_s));
     if (std::fabs(d - slope) < best) {
       best = std::fabs(d - slope);
-      intercept = std::log10(p.adev) - slope * std::log10(p.tau_s);
-      tau_at = p.tau_s;
-      found = true;
+      line = SlopeLine{true, std::log10(p.adev) - slope * std::log10(p.tau_s), p.tau_s};
     }
   }
-  return found;
+  return line;
 }
 
 // Axis `a` of a sensor's plot: its ADEV rows in `csv`, its points and the IEEE 952 lines read
@@ -689,18 +693,12 @@ void sensor_axis(const Report& r, std::size_t a, const char* colour, const std::
     csv << a << "," << num(p.tau_s) << "," << num(p.adev) << "," << num(p.ci_lo) << ","
         << num(p.ci_hi) << "," << imu::cli::json_str(r.channel) << "\n";
   }
-  double b_n = 0.0;
-  double b_k = 0.0;
-  double b_b = 0.0;
-  double tau_n = 0.0;
-  double tau_k = 0.0;
-  double tau_b = 0.0;
-  const bool has_n = read_off(r, -0.5, b_n, tau_n);
-  const bool has_k = read_off(r, 0.5, b_k, tau_k);
-  const bool has_b = read_off(r, 0.0, b_b, tau_b);
-  const double n = has_n ? std::pow(10.0, b_n) : 0.0;                         // the line at 1 s
-  const double k = has_k ? std::pow(10.0, b_k + 0.5 * std::log10(3.0)) : 0.0;  // at 3 s
-  const double b = has_b ? std::pow(10.0, b_b) / kFlickerFloor : 0.0;
+  const SlopeLine ln = read_off(r, -0.5);
+  const SlopeLine lk = read_off(r, 0.5);
+  const SlopeLine lb = read_off(r, 0.0);
+  const double n = std::pow(10.0, ln.intercept);                           // the line at 1 s
+  const double k = std::pow(10.0, lk.intercept + 0.5 * std::log10(3.0));  // at 3 s
+  const double b = std::pow(10.0, lb.intercept) / kFlickerFloor;
   const std::string c = std::string("'") + colour + "'";
   const std::string& name = r.channel;
   plot << (a > 0 ? ", " : "") << "'" << base << ".csv' skip 1 using 2:(column(1) == " << a
@@ -710,20 +708,20 @@ void sensor_axis(const Report& r, std::size_t a, const char* colour, const std::
     marks << "set object circle at " << num(tau) << "," << num(value) << " size screen 0.006 fc "
           << "rgb " << c << " fs solid\n";
   };
-  if (has_n) {
+  if (ln.found) {
     plot << ", " << num(n) << " / sqrt(x) with lines dt 2 lc rgb " << c << " title "
          << gq(name + " N = " + imu::cli::num_text(n));
     mark(1.0, n);
   }
-  if (has_k) {
+  if (lk.found) {
     plot << ", " << num(k) << " * sqrt(x / 3.0) with lines dt 3 lc rgb " << c << " title "
          << gq(name + " K = " + imu::cli::num_text(k));
     mark(3.0, k);
   }
-  if (has_b) {
+  if (lb.found) {
     plot << ", " << num(kFlickerFloor * b) << " with lines dt 4 lc rgb " << c << " title "
          << gq(name + " B = " + imu::cli::num_text(b));
-    mark(tau_b, kFlickerFloor * b);
+    mark(lb.tau_s, kFlickerFloor * b);
   }
 }
 
