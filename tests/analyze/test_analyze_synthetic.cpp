@@ -1028,6 +1028,32 @@ TEST(AnalyzeSynthetic, TheSensorsOutputFilterIsKeptBesideItsOtherTerms) {
   EXPECT_GE(near, 5);
 }
 
+// N's 95 % interval beside an output filter it is estimated with: N and Tf both move the first
+// ADEV points, so N's interval holds Tf's uncertainty too. White noise N = 5e-3 through
+// Tf = 3 ms beside a GM peaking at 0.4 s, 2^18 samples at 100 Hz, seeds 990601..990620.
+TEST(AnalyzeSynthetic, NsIntervalBesideTheOutputFilterHoldsIt) {
+  constexpr double kN = 5e-3;
+  constexpr double kTf = 3e-3;
+  int filtered = 0;
+  int n_in = 0;
+  for (std::uint64_t seed = 990601; seed <= 990620; ++seed) {
+    ia::SynthSpec spec = gm_record(262144, seed, 1e-7, 4e-3, 0.4);
+    std::vector<double> y = ia::synthesize(spec);
+    add_filtered_white(y, spec.fs_hz, kN, kTf, seed + 17);
+    const ia::Report r = analyze_record(y, spec, "filtered_white");
+    ASSERT_FALSE(r.model_after_ci95.empty());
+    const ia::ParamInterval& n = r.model_after_ci95.front();
+    filtered += r.model_after.n_filter_s > 0.0 ? 1 : 0;
+    n_in += kN >= n.lo && kN <= n.hi ? 1 : 0;
+    std::printf("filtered white, seed %llu: Tf %.3g ms, N %.4g in [%.5g, %.5g]\n",
+                static_cast<unsigned long long>(seed), 1e3 * r.model_after.n_filter_s, kN, n.lo,
+                n.hi);
+  }
+  std::printf("output filter in the model on %d of 20, N inside its 95 %% interval on %d\n",
+              filtered, n_in);
+  EXPECT_GE(n_in, 17);
+}
+
 }  // namespace
 
 // ---- 95 % intervals (ParamInterval): the true parameter inside the reported interval on at

@@ -435,6 +435,7 @@ std::vector<std::pair<std::string, double*>> free_params(ModelParams& m) {
     }
   };
   add("n", m.n);
+  add("n_filter_s", m.n_filter_s);
   add("q", m.q);
   for (std::size_t i = 0; i < m.n_gm; ++i) {
     add("gm" + std::to_string(i) + "_sb", m.gm[i].sb);
@@ -460,9 +461,70 @@ struct LogCov {
   Dense cov;
 };
 
-LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o, double tau_min,
+// The ADEV fit's two log covariances: `scaled`, the residual's scale times (J^T J)^-1, which
+// takes the model as right; `robust`, the heteroskedasticity and autocorrelation consistent
+// sandwich (J^T J)^-1 S (J^T J)^-1, S = sum_l w_l sum_k g_k g_{k-l}^T over lags -L..L (Bartlett
+// weights w_l = 1 - |l| / (L + 1)) of the points' scores g_k = z_k J_k (Newey and West, "A
+// simple, positive semi-definite, heteroskedasticity and autocorrelation consistent covariance
+// matrix", Econometrica 55(3), 1987; White, Econometrica 48(4), 1980). Where the model misses
+// the data, the misses lie at the taus that carry a parameter's information and widen that
+// parameter's interval, not the others': a term the report does not name leaves its power to
+// N, B or K, whose intervals then hold the truth only by being as wide as that miss.
+struct FitCov {
+  LogCov scaled;
+  LogCov robust;
+};
+
+// The sandwich of FitCov::robust from the points' Jacobian jac (in.size() x np, row-major), the
+// unscaled (J^T J)^-1 and the residuals z at the points `in`; empty if not positive.
+Dense hac_sandwich(const Dense& jac, const Dense& bread, const std::vector<double>& z,
+                   const std::vector<std::size_t>& in, std::size_t np, std::size_t lags) {
+  const std::size_t n = in.size();
+  Dense meat(np * np, 0.0);
+  for (std::size_t lag = 0; lag <= lags && lag < n; ++lag) {
+    const double w =
+        lag == 0 ? 1.0
+                 : 2.0 * (1.0 - static_cast<double>(lag) / (static_cast<double>(lags) + 1.0));
+    for (std::size_t k = lag; k < n; ++k) {
+      const double zz = w * z[in[k]] * z[in[k - lag]];
+      for (std::size_t a = 0; a < np; ++a) {
+        for (std::size_t b = 0; b < np; ++b) {  // symmetric part of g_k g_{k-lag}^T
+          meat[a * np + b] +=
+              0.5 * zz * (jac[k * np + a] * jac[(k - lag) * np + b] +
+                          jac[(k - lag) * np + a] * jac[k * np + b]);
+        }
+      }
+    }
+  }
+  const double small_sample = static_cast<double>(n) / static_cast<double>(n - np);
+  Dense half(np * np, 0.0);  // bread * meat
+  Dense out(np * np, 0.0);
+  for (std::size_t a = 0; a < np; ++a) {
+    for (std::size_t b = 0; b < np; ++b) {
+      for (std::size_t c = 0; c < np; ++c) {
+        half[a * np + b] += bread[a * np + c] * meat[c * np + b];
+      }
+    }
+  }
+  for (std::size_t a = 0; a < np; ++a) {
+    for (std::size_t b = 0; b < np; ++b) {
+      for (std::size_t c = 0; c < np; ++c) {
+        out[a * np + b] += small_sample * half[a * np + c] * bread[c * np + b];
+      }
+    }
+  }
+  for (std::size_t j = 0; j < np; ++j) {
+    if (!(out[j * np + j] > 0.0)) {
+      return {};
+    }
+  }
+  return out;
+}
+
+FitCov log_covariance(const Points& pts, const ModelParams& m, const Options& o, double tau_min,
                       double tau_max) {
-  LogCov lc;
+  FitCov fc;
+  LogCov& lc = fc.scaled;
   ModelParams w = m;
   const auto params = free_params(w);
   const std::size_t np = params.size();
@@ -475,8 +537,9 @@ LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
   for (const auto& pr : params) {
     lc.names.push_back(pr.first);
   }
+  fc.robust.names = lc.names;
   if (np == 0 || in.size() <= np) {
-    return lc;
+    return fc;
   }
   constexpr double kH = 0.01;
   Dense jac(in.size() * np, 0.0);
@@ -502,7 +565,7 @@ LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
   }
   Dense inv;
   if (!inverse(f, np, inv)) {
-    return lc;
+    return fc;
   }
   const Residual r0 = residual(pts, m, o, tau_min, tau_max);
   const double s2 = std::max(1.0, r0.cost / static_cast<double>(in.size() - np));
@@ -523,26 +586,27 @@ LogCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
     }
     long_run += 2.0 * (1.0 - static_cast<double>(lag) / (kLags + 1.0)) * ck / c0;
   }
+  fc.robust.cov = hac_sandwich(jac, inv, r0.z, in, np, kLags);
   const double inflate = std::max(o.cost_factor, long_run) * s2;
   for (double& v : inv) {
     v *= inflate;
   }
   for (std::size_t j = 0; j < np; ++j) {
     if (!(inv[j * np + j] > 0.0)) {
-      return lc;
+      return fc;
     }
   }
   lc.cov = std::move(inv);
-  return lc;
+  return fc;
 }
 
 // The Cramer-Rao bound of m's stochastic log-parameters on a record of t_rec_s seconds
 // sampled every ts: the inverse of the Whittle approximation of a stationary Gaussian record's
 // Fisher information, I_ij = T int d_i(f) d_j(f) df over [1 / T, 1 / (2 Ts)], d_i = d ln S /
 // d ln p_i, S the model's one-sided PSD (term_psd: the deterministic terms, regressors, have
-// none, and their parameters, which S does not see, are left out). No unbiased estimator of p_i, however it reads the record, has sd(ln p_i) below
-// sqrt((I^-1)_ii): with K alone, sd(ln K) = 1 / sqrt(2 n) (n chi-square(1) readings of K^2);
-// beside white noise N it is 1.07 sqrt(tau_d / T), tau_d = sqrt(3) N / K where the walk's AVAR
+// none, and their parameters, which S does not see, are left out). No unbiased estimator of
+// p_i, however it reads the record, has sd(ln p_i) below sqrt((I^-1)_ii): with K alone,
+// sd(ln K) = 1 / sqrt(2 n) (n chi-square(1) readings of K^2); beside white noise N it is 1.07 sqrt(tau_d / T), tau_d = sqrt(3) N / K where the walk's AVAR
 // meets the white noise's. Whittle, "Estimation and information in stationary time series",
 // Ark. Mat. 2 (1953); Percival and Walden, "Spectral Analysis for Physical Applications" (1993).
 // Names as free_params'; cov empty if the information is singular.
@@ -698,16 +762,23 @@ double process_sd_ln_sigma(double corr_integral_s, double t_rec_s) {
                                                 : 0.0;
 }
 
-// The ADEV fit's log covariance and the record's Cramer-Rao bound (whittle_covariance): an
-// interval is the fit's, no narrower than the bound's.
+// The ADEV fit's log covariances and the record's Cramer-Rao bound (whittle_covariance): an
+// interval is the fit's scaled one, no narrower than its robust one (for a parameter the
+// spectrum does not see, a ramp's or a sinusoid's, that is all) or the bound's.
 struct IntervalSources {
-  LogCov fit;
+  FitCov fit;
   LogCov crb;
 };
 
+ParamInterval fit_interval(const IntervalSources& c, const std::string& name, double value,
+                           const std::vector<std::pair<std::string, double>>& comb) {
+  return no_narrower_than(log_interval(c.fit.scaled, name, value, comb),
+                          log_interval(c.fit.robust, name, value, comb));
+}
+
 ParamInterval interval(const IntervalSources& c, const std::string& name, double value,
                        const std::vector<std::pair<std::string, double>>& comb) {
-  return no_narrower_than(log_interval(c.fit, name, value, comb),
+  return no_narrower_than(fit_interval(c, name, value, comb),
                           log_interval(c.crb, name, value, comb));
 }
 
@@ -745,14 +816,14 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
     } else if (e.type == "rate_random_walk") {
       c.push_back(interval(lc, "k", e.k, {{"k", 1.0}}));
     } else if (e.type == "ramp") {
-      c.push_back(log_interval(lc.fit, "r", e.r, {{"r", 1.0}}));
+      c.push_back(fit_interval(lc, "r", e.r, {{"r", 1.0}}));
     } else if (e.type == "bias_instability") {
       c.push_back(interval(lc, "b", e.b, {{"bi", 1.0}}));
     } else if (e.type == "sinusoid") {
       const bool first = std::fabs(e.freq_hz - m.sin_f0_hz) <= std::fabs(e.freq_hz - m.sin2_f0_hz);
       const std::string w = first ? "sin" : "sin2";
-      c.push_back(log_interval(lc.fit, "amplitude", e.amplitude, {{w + "_a", 1.0}}));
-      c.push_back(log_interval(lc.fit, "freq_hz", e.freq_hz, {{w + "_f0_hz", 1.0}}));
+      c.push_back(fit_interval(lc, "amplitude", e.amplitude, {{w + "_a", 1.0}}));
+      c.push_back(fit_interval(lc, "freq_hz", e.freq_hz, {{w + "_f0_hz", 1.0}}));
     } else if (e.type == "oscillation") {
       c.push_back(with_log_sd_floor(
           interval(lc, "sigma", e.amplitude, {{"osc_sigma", 1.0}}), e.amplitude,
