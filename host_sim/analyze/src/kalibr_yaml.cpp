@@ -85,6 +85,63 @@ std::string list(const std::vector<KalibrAxis>& axes, bool walk) {
   return s + "]";
 }
 
+// The largest axis's N (or K with walk).
+double worst(const std::vector<KalibrAxis>& v, bool walk) {
+  double m = 0.0;
+  for (const auto& a : v) {
+    m = std::max(m, walk ? a.k : a.n);
+  }
+  return m;
+}
+
+// The axes' channel names, each a quoted YAML scalar.
+std::string names(const std::vector<KalibrAxis>& v) {
+  std::string s;
+  for (const auto& a : v) {
+    s += (s.empty() ? "" : ", ") + imu::cli::json_str(a.channel);
+  }
+  return s;
+}
+
+// Where each axis's K comes from (see the file's closing comment).
+std::string sources(const std::vector<KalibrAxis>& v) {
+  std::string s;
+  for (const auto& a : v) {
+    const char* from = a.k_bound ? "bound" : (a.k_named ? "named" : "fit");
+    s += std::string(s.empty() ? "" : ", ") + from;
+  }
+  return "[" + s + "]";
+}
+
+// One comment line per channel with its full model after.
+std::string terms(const std::vector<const Report*>& v) {
+  std::string s;
+  for (const Report* r : v) {
+    const ModelParams& p = r->model_after;
+    s += "#   " + imu::cli::term_safe(r->channel) + ": N " + g(p.n);
+    for (std::size_t i = 0; i < p.n_gm; ++i) {
+      s += ", GM (Sb " + g(p.gm[i].sb) + ", Tb " + g(p.gm[i].tb_s) + " s)";
+    }
+    s += p.k > 0.0 ? ", K " + g(p.k) : "";
+    s += p.bi > 0.0 ? ", bias instability B " + g(p.bi) : "";
+    s += p.q > 0.0 ? ", quantization Q " + g(p.q) : "";
+    s += p.osc_sigma > 0.0 ? ", oscillation sigma " + g(p.osc_sigma) + " at " +
+                                 g(p.osc_f0_hz) + " Hz" : "";
+    s += p.sin_a > 0.0 ? ", sinusoid A " + g(p.sin_a) + " at " + g(p.sin_f0_hz) + " Hz" : "";
+    s += "\n";
+  }
+  return s;
+}
+
+// The channels' bias instability B.
+std::string bis(const std::vector<const Report*>& v) {
+  std::string s = "[";
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    s += (i > 0 ? ", " : "") + g(v[i]->model_after.bi);
+  }
+  return s + "]";
+}
+
 }  // namespace
 
 bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, std::string& yaml,
@@ -110,52 +167,6 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
           "both sensors): declare them with --acc COLS --gyro COLS";
     return false;
   }
-  const auto worst = [](const std::vector<KalibrAxis>& v, bool walk) {
-    double m = 0.0;
-    for (const auto& a : v) {
-      m = std::max(m, walk ? a.k : a.n);
-    }
-    return m;
-  };
-  const auto names = [](const std::vector<KalibrAxis>& v) {
-    std::string s;
-    for (const auto& a : v) {
-      s += (s.empty() ? "" : ", ") + imu::cli::json_str(a.channel);  // a quoted YAML scalar
-    }
-    return s;
-  };
-  const auto sources = [](const std::vector<KalibrAxis>& v) {
-    std::string s;
-    for (const auto& a : v) {
-      s += std::string(s.empty() ? "" : ", ") + (a.k_bound ? "bound" : (a.k_named ? "named" : "fit"));
-    }
-    return "[" + s + "]";
-  };
-  const auto terms = [](const std::vector<const Report*>& v) {
-    std::string s;
-    for (const Report* r : v) {
-      const ModelParams& p = r->model_after;
-      s += "#   " + imu::cli::term_safe(r->channel) + ": N " + g(p.n);
-      for (std::size_t i = 0; i < p.n_gm; ++i) {
-        s += ", GM (Sb " + g(p.gm[i].sb) + ", Tb " + g(p.gm[i].tb_s) + " s)";
-      }
-      s += p.k > 0.0 ? ", K " + g(p.k) : "";
-      s += p.bi > 0.0 ? ", bias instability B " + g(p.bi) : "";
-      s += p.q > 0.0 ? ", quantization Q " + g(p.q) : "";
-      s += p.osc_sigma > 0.0 ? ", oscillation sigma " + g(p.osc_sigma) + " at " +
-                                   g(p.osc_f0_hz) + " Hz" : "";
-      s += p.sin_a > 0.0 ? ", sinusoid A " + g(p.sin_a) + " at " + g(p.sin_f0_hz) + " Hz" : "";
-      s += "\n";
-    }
-    return s;
-  };
-  const auto bis = [](const std::vector<const Report*>& v) {
-    std::string s = "[";
-    for (std::size_t i = 0; i < v.size(); ++i) {
-      s += (i > 0 ? ", " : "") + g(v[i]->model_after.bi);
-    }
-    return s + "]";
-  };
   yaml = "# IMU noise parameters for Kalibr (github.com/ethz-asl/kalibr/wiki/IMU-Noise-Model),\n"
          "# written by imu-sim analyze from " + imu::cli::term_safe(source) + ".\n"
          "# noise_density: white noise N, continuous time (AVAR N^2/tau); random_walk: bias\n"
