@@ -1464,6 +1464,52 @@ struct ChannelStream::Impl {
     return Status{};
   }
 
+  // Moves f to the file's top-level variable `top`; the error lists the variables seen.
+  Status find_variable(const std::string& path, std::string_view top) {
+    std::string seen;
+    std::uint64_t off = kHeaderBytes;
+    while (off < file.size) {
+      Status st = file.element(off, f);
+      if (!st.ok()) {
+        return st;
+      }
+      if ((f.e.type == kMiMatrix || f.e.type == kMiCompressed) && !f.m.name.empty()) {
+        if (f.m.name == top) {
+          return Status{};
+        }
+        seen += (seen.empty() ? "" : ", ") + f.m.name;
+      }
+      off = f.e.next;
+    }
+    return MatError{path + ": variable '" + std::string(top) + "' not found; variables: " +
+                    (seen.empty() ? std::string("(none)") : seen)};
+  }
+
+  // The stream reads `column` of the matrix f.m (of a vector, only column 0): count, unit and
+  // the bytes skipped before it.
+  Status select_column(std::size_t column) {
+    const Matrix& m = f.m;
+    std::uint64_t first = 0;
+    count = m.n_elems;
+    if (m.rows == 1U || m.cols == 1U) {
+      if (column != 0U) {
+        return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
+                        std::to_string(column + 1U) + " does not exist (columns count from 1)"};
+      }
+    } else {
+      if (column >= m.cols) {
+        return MatError{where + "has " + std::to_string(m.cols) + " columns (" +
+                        dims_text(m.dims) + "): column " + std::to_string(column + 1U) +
+                        " does not exist (columns count from 1)"};
+      }
+      first = static_cast<std::uint64_t>(column) * m.rows;
+      count = m.rows;
+    }
+    unit = numeric_size(m.data_type);
+    skip_bytes = first * unit;
+    return Status{};
+  }
+
   Status stream_error() const {
     if (f.src->error()) {
       return MatError{where + "read error"};
@@ -1634,26 +1680,9 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
   std::string_view top;
   std::string_view rest;
   split_dotted(name, top, rest);
-  std::string seen;
-  std::uint64_t off = kHeaderBytes;
-  bool found = false;
-  while (off < s.file.size) {
-    st = s.file.element(off, s.f);
-    if (!st.ok()) {
-      return st.error();
-    }
-    if ((s.f.e.type == kMiMatrix || s.f.e.type == kMiCompressed) && !s.f.m.name.empty()) {
-      if (s.f.m.name == top) {
-        found = true;
-        break;
-      }
-      seen += (seen.empty() ? "" : ", ") + s.f.m.name;
-    }
-    off = s.f.e.next;
-  }
-  if (!found) {
-    return MatError{path + ": variable '" + std::string(top) + "' not found; variables: " +
-                    (seen.empty() ? std::string("(none)") : seen)};
+  st = s.find_variable(path, top);
+  if (!st.ok()) {
+    return st.error();
   }
   s.where = path + ": variable '" + std::string(name) + "': ";
   const std::string& where = s.where;
@@ -1706,23 +1735,10 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
   if (m.n_elems == 0U) {
     return MatError{where + "is empty (" + dims_text(m.dims) + ")"};
   }
-  std::uint64_t first = 0;
-  s.count = m.n_elems;
-  if (m.rows == 1U || m.cols == 1U) {
-    if (column != 0U) {
-      return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
-                      std::to_string(column + 1U) + " does not exist (columns count from 1)"};
-    }
-  } else {
-    if (column >= m.cols) {
-      return MatError{where + "has " + std::to_string(m.cols) + " columns (" + dims_text(m.dims) +
-                      "): column " + std::to_string(column + 1U) + " does not exist (columns count from 1)"};
-    }
-    first = static_cast<std::uint64_t>(column) * m.rows;
-    s.count = m.rows;
+  st = s.select_column(column);
+  if (!st.ok()) {
+    return st.error();
   }
-  s.unit = numeric_size(m.data_type);
-  s.skip_bytes = first * s.unit;
   s.info = info_of(s.f);
   s.info.name = std::string(name);
   return ChannelStream(std::move(impl));
