@@ -90,6 +90,30 @@ socklen_t loopback_address(const char* name, sockaddr_un& addr) {
                                 static_cast<std::size_t>(len));
 }
 
+// A received message's control data: the kernel's receive time (false when it sent none)
+// and the socket's cumulative count of frames the kernel dropped (SO_RXQ_OVFL), when present.
+bool read_control(const msghdr& h, std::uint64_t& rx_time_ns, std::uint64_t& kernel_drops) {
+  bool stamped = false;
+  for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr;
+       c = CMSG_NXTHDR(const_cast<msghdr*>(&h), c)) {
+    if (c->cmsg_level != SOL_SOCKET) {
+      continue;
+    }
+    if (c->cmsg_type == SCM_TIMESTAMPNS) {
+      timespec ts{};
+      std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
+      rx_time_ns = static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ULL +
+                   static_cast<std::uint64_t>(ts.tv_nsec);
+      stamped = true;
+    } else if (c->cmsg_type == SO_RXQ_OVFL) {
+      std::uint32_t drops = 0;
+      std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
+      kernel_drops = drops;
+    }
+  }
+  return stamped;
+}
+
 }  // namespace
 
 const char* to_string(IoStatus s) {
@@ -453,25 +477,7 @@ IoStatus CanSocket::receive(RxFrame* out, std::size_t cap, std::size_t& n, int t
       ++stats_.rx_truncated;
       f.nbytes = static_cast<std::uint32_t>(kCanFdMtu + 1);
     }
-    bool stamped = false;
-    for (cmsghdr* c = CMSG_FIRSTHDR(&h); c != nullptr;
-         c = CMSG_NXTHDR(const_cast<msghdr*>(&h), c)) {
-      if (c->cmsg_level != SOL_SOCKET) {
-        continue;
-      }
-      if (c->cmsg_type == SCM_TIMESTAMPNS) {
-        timespec ts{};
-        std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-        f.rx_time_ns = static_cast<std::uint64_t>(ts.tv_sec) * 1'000'000'000ULL +
-                       static_cast<std::uint64_t>(ts.tv_nsec);
-        stamped = true;
-      } else if (c->cmsg_type == SO_RXQ_OVFL) {
-        std::uint32_t drops = 0;
-        std::memcpy(&drops, CMSG_DATA(c), sizeof drops);
-        stats_.kernel_drops = drops;  // cumulative count of the socket
-      }
-    }
-    if (!stamped) {
+    if (!read_control(h, f.rx_time_ns, stats_.kernel_drops)) {
       if (batch_time_ns == 0) {
         batch_time_ns = now_realtime_ns();
       }
