@@ -24,6 +24,41 @@ double ns_per_sample(std::size_t n, Fn fn) {
   return std::chrono::duration<double, std::nano>(t1 - t0).count() / static_cast<double>(n);
 }
 
+// The fit's host cost (it runs rarely, e.g. after a calibration run): the ADEV of 1e6 samples
+// of the first-order model m, fitted white + GM and white + 2 GM + RRW.
+void print_fit_cost(const imu::FirstOrderGm& m) {
+  imu::ContinuousModel<1> c1;
+  (void)c1.add_white(m.n);
+  (void)c1.add_gauss_markov(m.sb, m.tb_s);
+  imu::DiscreteModel<1> d1;
+  (void)imu::discretize(c1, m.ts_s, d1);
+  imu::ModelSimulator<1> sim1;
+  (void)sim1.configure(d1, 20251121);
+  imu::OnlineAdev<8, 22> adev(m.ts_s, 1e-5);
+  for (int i = 0; i < 1000000; ++i) {
+    adev.push(imu::quantize(sim1.next(), 1e-5).counts);
+  }
+  imu::AdevPoint pts[imu::OnlineAdev<8, 22>::kMaxPoints];
+  const std::size_t np = adev.snapshot(pts, imu::OnlineAdev<8, 22>::kMaxPoints);
+  constexpr int kFits = 20;
+  imu::FitResult fr{};
+  const auto f0 = std::chrono::steady_clock::now();
+  for (int i = 0; i < kFits; ++i) {
+    fr = imu::fit(pts, np, imu::FitOptions{});
+  }
+  const double fit_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - f0).count() /
+      kFits;
+  imu::FitOptions o2;
+  o2.terms = imu::kFitWhite | imu::kFitGm1 | imu::kFitGm2 | imu::kFitRrw;
+  const auto f1 = std::chrono::steady_clock::now();
+  const imu::FitResult fr2 = imu::fit(pts, np, o2);
+  const double fit2_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - f1).count();
+  std::printf("fit (host): white+GM %.2f ms (%u NNLS solves, %zu points); white+2GM+RRW %.2f ms "
+              "(%u solves)\n", fit_ms, fr.evaluations, fr.n_points, fit2_ms, fr2.evaluations);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -111,36 +146,6 @@ int main(int argc, char** argv) {
               "(NIS + whiteness lags 1..4 + CUSUM)\n",
               t_scalar_mon, sizeof(imu::ScalarBiasKf<float>), sizeof(imu::ResidualMonitors<4>));
 
-  // The fit (runs rarely, e.g. after a calibration run): first-order model, 1e6 samples, white + GM.
-  imu::ContinuousModel<1> c1;
-  (void)c1.add_white(m.n);
-  (void)c1.add_gauss_markov(m.sb, m.tb_s);
-  imu::DiscreteModel<1> d1;
-  (void)imu::discretize(c1, m.ts_s, d1);
-  imu::ModelSimulator<1> sim1;
-  (void)sim1.configure(d1, 20251121);
-  imu::OnlineAdev<8, 22> adev(m.ts_s, 1e-5);
-  for (int i = 0; i < 1000000; ++i) {
-    adev.push(imu::quantize(sim1.next(), 1e-5).counts);
-  }
-  imu::AdevPoint pts[imu::OnlineAdev<8, 22>::kMaxPoints];
-  const std::size_t np = adev.snapshot(pts, imu::OnlineAdev<8, 22>::kMaxPoints);
-  constexpr int kFits = 20;
-  imu::FitResult fr{};
-  const auto f0 = std::chrono::steady_clock::now();
-  for (int i = 0; i < kFits; ++i) {
-    fr = imu::fit(pts, np, imu::FitOptions{});
-  }
-  const double fit_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - f0).count() /
-      kFits;
-  imu::FitOptions o2;
-  o2.terms = imu::kFitWhite | imu::kFitGm1 | imu::kFitGm2 | imu::kFitRrw;
-  const auto f1 = std::chrono::steady_clock::now();
-  const imu::FitResult fr2 = imu::fit(pts, np, o2);
-  const double fit2_ms =
-      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - f1).count();
-  std::printf("fit (host): white+GM %.2f ms (%u NNLS solves, %zu points); white+2GM+RRW %.2f ms "
-              "(%u solves)\n", fit_ms, fr.evaluations, fr.n_points, fit2_ms, fr2.evaluations);
+  print_fit_cost(m);
   return 0;
 }
