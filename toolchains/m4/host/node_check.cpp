@@ -24,6 +24,82 @@ bool relevant(const std::string& l) {
          l.rfind("IMU-NODE STEADY ", 0) == 0;
 }
 
+// What the target's log holds: its telemetry lines (relevant()) and its cost counters.
+struct TargetLog {
+  std::vector<std::string> lines;
+  unsigned long long ticks = 0;
+  unsigned long long cal_ticks = 0;
+  unsigned long long cal_insns = 0;
+  unsigned long long steady_ticks = 0;
+  unsigned long long steady_samples = 0;
+  unsigned long long adev_frame_ticks = 0;
+  unsigned long long adev_frames = 0;
+  unsigned long long adev_block_ticks = 0;
+  unsigned long long adev_samples = 0;
+};
+
+// Reads a qemu-system-arm log; false if it cannot be opened. Echoes the target's banners.
+bool read_target(const char* path, TargetLog& t) {
+  std::ifstream in(path);
+  if (!in) {
+    return false;
+  }
+  std::string l;
+  while (std::getline(in, l)) {
+    l += "\n";
+    if (relevant(l)) {
+      t.lines.push_back(l);
+    }
+    if (l.rfind("IMU-NODE BEGIN", 0) == 0 || l.rfind("IMU-M4 STACK", 0) == 0) {
+      std::printf("target: %s", l.c_str());
+    }
+    std::sscanf(l.c_str(), "IMU-NODE COST ticks=%llu cal_ticks=%llu cal_insns=%llu", &t.ticks,
+                &t.cal_ticks, &t.cal_insns);
+    std::sscanf(l.c_str(), "IMU-NODE STEADY-COST ticks=%llu samples=%llu", &t.steady_ticks,
+                &t.steady_samples);
+    if (l.rfind("IMU-NODE STEADY ", 0) == 0) {
+      std::printf("target: %s", l.c_str());
+    }
+    std::sscanf(l.c_str(),
+                "IMU-ADEV COST frame_ticks=%llu frames=%llu block_ticks=%llu samples=%llu",
+                &t.adev_frame_ticks, &t.adev_frames, &t.adev_block_ticks, &t.adev_samples);
+  }
+  return true;
+}
+
+// The target's cost per sample per channel: the whole node, in steady state, the ADEV kernel.
+void print_costs(const TargetLog& t) {
+  if (t.cal_ticks > 0 && t.ticks > 0) {
+    const double insns = static_cast<double>(t.ticks) * static_cast<double>(t.cal_insns) /
+                         static_cast<double>(t.cal_ticks);
+    std::printf("node-check: target cost %.0f instructions for %u samples x 6 channels = %.0f "
+                "instructions per sample per channel (SysTick under -icount shift=0, "
+                "calibrated: %llu ticks for %llu instructions)\n",
+                insns, imu::m4::kNodeSamples, insns / (imu::m4::kNodeSamples * 6.0), t.cal_ticks,
+                t.cal_insns);
+  }
+  if (t.cal_ticks > 0 && t.steady_ticks > 0 && t.steady_samples > 0) {
+    const double insns = static_cast<double>(t.steady_ticks) * static_cast<double>(t.cal_insns) /
+                         static_cast<double>(t.cal_ticks);
+    std::printf("node-check: steady state (after %u samples, gains frozen): %.0f instructions "
+                "for %llu samples x 6 channels = %.0f instructions per sample per channel\n",
+                imu::m4::kSteadyWarmSamples, insns, t.steady_samples,
+                insns / (static_cast<double>(t.steady_samples) * 6.0));
+  }
+  if (t.cal_ticks > 0 && t.adev_frames > 0 && t.adev_samples > 0) {
+    const double per_tick = static_cast<double>(t.cal_insns) / static_cast<double>(t.cal_ticks);
+    std::printf("node-check: ADEV kernel alone: %.0f instructions per sample per channel through "
+                "MultiAdev<6,8,22>::push_frame (%llu frames), %.0f through "
+                "OnlineAdev<8,22>::push_block (%llu samples)\n",
+                static_cast<double>(t.adev_frame_ticks) * per_tick /
+                    (static_cast<double>(t.adev_frames) * 6.0),
+                t.adev_frames,
+                static_cast<double>(t.adev_block_ticks) * per_tick /
+                    static_cast<double>(t.adev_samples),
+                t.adev_samples);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -42,40 +118,12 @@ int main(int argc, char** argv) {
     }
     return 0;
   }
-  std::ifstream in(argv[2]);
-  if (!in) {
+  TargetLog t;
+  if (!read_target(argv[2], t)) {
     std::printf("NODE-CHECK FAIL: cannot read %s\n", argv[2]);
     return 1;
   }
-  std::vector<std::string> target;
-  std::string l;
-  unsigned long long ticks = 0;
-  unsigned long long cal_ticks = 0;
-  unsigned long long cal_insns = 0;
-  unsigned long long steady_ticks = 0;
-  unsigned long long steady_samples = 0;
-  unsigned long long adev_frame_ticks = 0;
-  unsigned long long adev_frames = 0;
-  unsigned long long adev_block_ticks = 0;
-  unsigned long long adev_samples = 0;
-  while (std::getline(in, l)) {
-    l += "\n";
-    if (relevant(l)) {
-      target.push_back(l);
-    }
-    if (l.rfind("IMU-NODE BEGIN", 0) == 0 || l.rfind("IMU-M4 STACK", 0) == 0) {
-      std::printf("target: %s", l.c_str());
-    }
-    std::sscanf(l.c_str(), "IMU-NODE COST ticks=%llu cal_ticks=%llu cal_insns=%llu", &ticks,
-                &cal_ticks, &cal_insns);
-    std::sscanf(l.c_str(), "IMU-NODE STEADY-COST ticks=%llu samples=%llu", &steady_ticks,
-                &steady_samples);
-    if (l.rfind("IMU-NODE STEADY ", 0) == 0) {
-      std::printf("target: %s", l.c_str());
-    }
-    std::sscanf(l.c_str(), "IMU-ADEV COST frame_ticks=%llu frames=%llu block_ticks=%llu samples=%llu",
-                &adev_frame_ticks, &adev_frames, &adev_block_ticks, &adev_samples);
-  }
+  const std::vector<std::string>& target = t.lines;
   std::vector<std::string> want;
   for (const std::string& h : host) {
     if (h.rfind("IMU-NODE BEGIN", 0) == 0) {
@@ -102,35 +150,7 @@ int main(int argc, char** argv) {
   }
   std::printf("node-check: %zu lines compared (%zu telemetry frames), %zu differ\n", n, frames,
               diffs);
-  if (cal_ticks > 0 && ticks > 0) {
-    const double insns = static_cast<double>(ticks) * static_cast<double>(cal_insns) /
-                         static_cast<double>(cal_ticks);
-    std::printf("node-check: target cost %.0f instructions for %u samples x 6 channels = %.0f "
-                "instructions per sample per channel (SysTick under -icount shift=0, "
-                "calibrated: %llu ticks for %llu instructions)\n",
-                insns, imu::m4::kNodeSamples, insns / (imu::m4::kNodeSamples * 6.0), cal_ticks,
-                cal_insns);
-  }
-  if (cal_ticks > 0 && steady_ticks > 0 && steady_samples > 0) {
-    const double insns = static_cast<double>(steady_ticks) * static_cast<double>(cal_insns) /
-                         static_cast<double>(cal_ticks);
-    std::printf("node-check: steady state (after %u samples, gains frozen): %.0f instructions "
-                "for %llu samples x 6 channels = %.0f instructions per sample per channel\n",
-                imu::m4::kSteadyWarmSamples, insns, steady_samples,
-                insns / (static_cast<double>(steady_samples) * 6.0));
-  }
-  if (cal_ticks > 0 && adev_frames > 0 && adev_samples > 0) {
-    const double per_tick = static_cast<double>(cal_insns) / static_cast<double>(cal_ticks);
-    std::printf("node-check: ADEV kernel alone: %.0f instructions per sample per channel through "
-                "MultiAdev<6,8,22>::push_frame (%llu frames), %.0f through "
-                "OnlineAdev<8,22>::push_block (%llu samples)\n",
-                static_cast<double>(adev_frame_ticks) * per_tick /
-                    (static_cast<double>(adev_frames) * 6.0),
-                adev_frames,
-                static_cast<double>(adev_block_ticks) * per_tick /
-                    static_cast<double>(adev_samples),
-                adev_samples);
-  }
+  print_costs(t);
   if (diffs != 0 || target.empty()) {
     std::printf("NODE-CHECK FAIL\n");
     return 1;
