@@ -123,6 +123,41 @@ Reference direct_adev(const std::vector<std::int64_t>& x, std::uint64_t af, std:
   return r;
 }
 
+// A bias filter's K line: counters exact; the estimate within 4 of its own sigmas of the true
+// bias (the input is deterministic, so this is not a flaky statistical test: it either holds
+// for this data or not; 4 sigma leaves room for the GM model approximating the walk). Prints it.
+bool filter_line_holds(const Fields& f, const std::vector<std::int32_t>& truth,
+                       std::uint64_t static_samples, const char* who) {
+  const std::uint64_t c = to_u64(f.kv.at("c"));
+  const double bias = static_cast<double>(bits_to_float(f.kv.at("bias")));
+  const double var = static_cast<double>(bits_to_float(f.kv.at("var")));
+  const double printed_truth = bits_to_double(f.kv.at("truth"));
+  const double ref_truth = c < kChannels ? static_cast<double>(truth[c]) * imu::m4::kLsb : 0.0;
+  std::printf("  %s filter c=%llu bias=%.6f truth=%.6f sigma=%.6f updates=%s\n", who,
+              static_cast<unsigned long long>(c), bias, ref_truth, std::sqrt(var),
+              f.kv.at("updates").c_str());
+  return c < kChannels && to_u64(f.kv.at("predictions")) == kSamples &&
+         to_u64(f.kv.at("updates")) == static_samples &&
+         // exact: an integer times 2^-10 on both sides (no == on floats)
+         !(printed_truth < ref_truth) && !(printed_truth > ref_truth) && var > 0.0 &&
+         std::fabs(bias - ref_truth) <= 4.0 * std::sqrt(var);
+}
+
+// The points per channel: every tau that has at least one term is reported (level 0 has
+// m = 1..M, level k >= 1 has m = M/2+1..M at stride 2^k, while 2 m 2^k <= N).
+std::size_t expected_points() {
+  std::size_t expected = 0;
+  for (std::uint64_t m = 1; m <= imu::m4::kAdevM; ++m) {
+    expected += 2 * m <= kSamples ? 1 : 0;
+  }
+  for (std::uint64_t k = 1; k <= imu::m4::kAdevL; ++k) {
+    for (std::uint64_t m = imu::m4::kAdevM / 2 + 1; m <= imu::m4::kAdevM; ++m) {
+      expected += (2 * m) << k <= kSamples ? 1 : 0;
+    }
+  }
+  return expected;
+}
+
 // Every P line of `lines` against the direct reference; counts points per channel.
 int check_against_reference(const std::vector<std::string>& lines, const char* who) {
   std::vector<std::int32_t> truth;
@@ -139,23 +174,7 @@ int check_against_reference(const std::vector<std::string>& lines, const char* w
   for (const auto& line : lines) {
     const Fields f = parse_line(line);
     if (f.tag == "K") {
-      // Bias filter: counters exact; the estimate within 4 of its own sigmas of the true bias
-      // (the input is deterministic, so this is not a flaky statistical test: it either holds
-      // for this data or not; 4 sigma leaves room for the GM model approximating the walk).
-      const std::uint64_t c = to_u64(f.kv.at("c"));
-      const double bias = static_cast<double>(bits_to_float(f.kv.at("bias")));
-      const double var = static_cast<double>(bits_to_float(f.kv.at("var")));
-      const double printed_truth = bits_to_double(f.kv.at("truth"));
-      const double ref_truth = c < kChannels ? static_cast<double>(truth[c]) * imu::m4::kLsb : 0.0;
-      const bool ok = c < kChannels && to_u64(f.kv.at("predictions")) == kSamples &&
-                      to_u64(f.kv.at("updates")) == static_samples &&
-                      // exact: an integer times 2^-10 on both sides (no == on floats)
-                      !(printed_truth < ref_truth) && !(printed_truth > ref_truth) &&
-                      var > 0.0 && std::fabs(bias - ref_truth) <= 4.0 * std::sqrt(var);
-      std::printf("  %s filter c=%llu bias=%.6f truth=%.6f sigma=%.6f updates=%s\n", who,
-                  static_cast<unsigned long long>(c), bias, ref_truth, std::sqrt(var),
-                  f.kv.at("updates").c_str());
-      if (!ok) {
+      if (!filter_line_holds(f, truth, static_samples, who)) {
         std::printf("FAIL %s: filter line %s\n", who, line.c_str());
         ++failures;
       }
@@ -200,17 +219,7 @@ int check_against_reference(const std::vector<std::string>& lines, const char* w
     }
     ++checked;
   }
-  // Every tau that has at least one term must be reported: level 0 has m = 1..M, level k >= 1
-  // has m = M/2+1..M at stride 2^k, while 2 m 2^k <= N.
-  std::size_t expected = 0;
-  for (std::uint64_t m = 1; m <= imu::m4::kAdevM; ++m) {
-    expected += 2 * m <= kSamples ? 1 : 0;
-  }
-  for (std::uint64_t k = 1; k <= imu::m4::kAdevL; ++k) {
-    for (std::uint64_t m = imu::m4::kAdevM / 2 + 1; m <= imu::m4::kAdevM; ++m) {
-      expected += (2 * m) << k <= kSamples ? 1 : 0;
-    }
-  }
+  const std::size_t expected = expected_points();
   for (std::size_t c = 0; c < kChannels; ++c) {
     if (points[c] != expected) {
       std::printf("FAIL %s: channel %zu has %zu points, expected %zu\n", who, c, points[c], expected);
