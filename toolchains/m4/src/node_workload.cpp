@@ -90,11 +90,10 @@ bool encode_header(Take take) {
   return ok;
 }
 
-}  // namespace
-
-NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
-  // The input record, encoded with the hal codec into the in-memory frame array.
-  std::size_t n_in = 0;
+// The input record, encoded with the hal codec into the in-memory frame array: the header
+// frames, then kNodeSamples samples. n_in: the frames written; false if they do not fit.
+bool encode_record(std::size_t& n_in) {
+  n_in = 0;
   bool ok = encode_header([&n_in](const hal::EncodedFrames& f) { return append(f, n_in); });
   hal::EncodedFrames fr{};
   SampleSource src[hal::kChannels] = {SampleSource(0), SampleSource(1), SampleSource(2),
@@ -110,7 +109,14 @@ NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
     hal::encode(s, hal::Layout::kFd, fr);
     ok = ok && append(fr, n_in);
   }
-  if (!ok) {
+  return ok;
+}
+
+}  // namespace
+
+NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
+  std::size_t n_in = 0;
+  if (!encode_record(n_in)) {
     return NodeRunStatus::kFrameOverflow;
   }
 
