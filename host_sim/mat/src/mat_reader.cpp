@@ -710,6 +710,40 @@ Status check_data(const std::string& where, const Matrix& m, std::size_t unit) {
   return Status{};
 }
 
+// Where column `column` of the numeric matrix m starts (elements) and how many it holds (a
+// vector has only column 0), or why m cannot be read as numbers.
+Status numeric_column(const std::string& where, const Matrix& m, std::size_t column,
+                      std::uint64_t& first, std::uint64_t& count) {
+  if (!m.has_data || m.cls == kMxChar) {
+    return MatError{where + "is a " + class_name(m.cls, m.logical) +
+                    " array, not numeric (double, single, int8..uint64)"};
+  }
+  Status st = check_data(where, m, numeric_size(m.data_type));
+  if (!st.ok()) {
+    return st;
+  }
+  if (m.n_elems == 0U) {
+    return MatError{where + "is empty (" + dims_text(m.dims) + ")"};
+  }
+  first = 0;
+  count = m.n_elems;
+  if (m.rows == 1U || m.cols == 1U) {
+    if (column != 0U) {
+      return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
+                      std::to_string(column + 1U) + " does not exist (columns count from 1)"};
+    }
+  } else {
+    if (column >= m.cols) {
+      return MatError{where + "has " + std::to_string(m.cols) + " columns (" +
+                      dims_text(m.dims) + "): column " + std::to_string(column + 1U) +
+                      " does not exist (columns count from 1)"};
+    }
+    first = static_cast<std::uint64_t>(column) * m.rows;
+    count = m.rows;
+  }
+  return Status{};
+}
+
 // Storage unit of the real part for the matrix's class (0: not valid for it).
 std::size_t data_unit(const Matrix& m) {
   return m.cls == kMxChar ? char_unit_size(m.data_type) : numeric_size(m.data_type);
@@ -977,31 +1011,11 @@ Status MatFile::read_column_into(std::string_view name, std::size_t column,
   if (!st.ok()) {
     return st;
   }
-  if (!m.has_data || m.cls == kMxChar) {
-    return MatError{where + "is a " + class_name(m.cls, m.logical) +
-                    " array, not numeric (double, single, int8..uint64)"};
-  }
-  st = check_data(where, m, numeric_size(m.data_type));
+  std::uint64_t first = 0;
+  std::uint64_t count = 0;
+  st = numeric_column(where, m, column, first, count);
   if (!st.ok()) {
     return st;
-  }
-  if (m.n_elems == 0U) {
-    return MatError{where + "is empty (" + dims_text(m.dims) + ")"};
-  }
-  std::uint64_t first = 0;
-  std::uint64_t count = m.n_elems;
-  if (m.rows == 1U || m.cols == 1U) {
-    if (column != 0U) {
-      return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
-                      std::to_string(column + 1U) + " does not exist (columns count from 1)"};
-    }
-  } else {
-    if (column >= m.cols) {
-      return MatError{where + "has " + std::to_string(m.cols) + " columns (" + dims_text(m.dims) +
-                      "): column " + std::to_string(column + 1U) + " does not exist (columns count from 1)"};
-    }
-    first = static_cast<std::uint64_t>(column) * m.rows;
-    count = m.rows;
   }
   if (count > limits_.max_variable_bytes / sizeof(double)) {
     return MatError{where + std::to_string(count) + " elements (" + dims_text(m.dims) +
@@ -1485,27 +1499,15 @@ struct ChannelStream::Impl {
                     (seen.empty() ? std::string("(none)") : seen)};
   }
 
-  // The stream reads `column` of the matrix f.m (of a vector, only column 0): count, unit and
-  // the bytes skipped before it.
+  // The stream reads `column` of the numeric matrix f.m (numeric_column): count, unit and the
+  // bytes skipped before it.
   Status select_column(std::size_t column) {
-    const Matrix& m = f.m;
     std::uint64_t first = 0;
-    count = m.n_elems;
-    if (m.rows == 1U || m.cols == 1U) {
-      if (column != 0U) {
-        return MatError{where + "is a vector (" + dims_text(m.dims) + "): column " +
-                        std::to_string(column + 1U) + " does not exist (columns count from 1)"};
-      }
-    } else {
-      if (column >= m.cols) {
-        return MatError{where + "has " + std::to_string(m.cols) + " columns (" +
-                        dims_text(m.dims) + "): column " + std::to_string(column + 1U) +
-                        " does not exist (columns count from 1)"};
-      }
-      first = static_cast<std::uint64_t>(column) * m.rows;
-      count = m.rows;
+    Status st = numeric_column(where, f.m, column, first, count);
+    if (!st.ok()) {
+      return st;
     }
-    unit = numeric_size(m.data_type);
+    unit = numeric_size(f.m.data_type);
     skip_bytes = first * unit;
     return Status{};
   }
@@ -1722,18 +1724,6 @@ Result<ChannelStream> ChannelStream::open(const std::string& path, std::string_v
       return st.error();
     }
     at += "." + std::string(field);
-  }
-  const Matrix& m = s.f.m;
-  if (!m.has_data || m.cls == kMxChar) {
-    return MatError{where + "is a " + class_name(m.cls, m.logical) +
-                    " array, not numeric (double, single, int8..uint64)"};
-  }
-  st = check_data(where, m, numeric_size(m.data_type));
-  if (!st.ok()) {
-    return st.error();
-  }
-  if (m.n_elems == 0U) {
-    return MatError{where + "is empty (" + dims_text(m.dims) + ")"};
   }
   st = s.select_column(column);
   if (!st.ok()) {
