@@ -606,9 +606,10 @@ FitCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
 // d ln p_i, S the model's one-sided PSD (term_psd: the deterministic terms, regressors, have
 // none, and their parameters, which S does not see, are left out). No unbiased estimator of
 // p_i, however it reads the record, has sd(ln p_i) below sqrt((I^-1)_ii): with K alone,
-// sd(ln K) = 1 / sqrt(2 n) (n chi-square(1) readings of K^2); beside white noise N it is 1.07 sqrt(tau_d / T), tau_d = sqrt(3) N / K where the walk's AVAR
-// meets the white noise's. Whittle, "Estimation and information in stationary time series",
-// Ark. Mat. 2 (1953); Percival and Walden, "Spectral Analysis for Physical Applications" (1993).
+// sd(ln K) = 1 / sqrt(2 n) (n chi-square(1) readings of K^2); beside white noise N it is
+// 1.07 sqrt(tau_d / T), tau_d = sqrt(3) N / K where the walk's AVAR meets the white noise's.
+// Whittle, "Estimation and information in stationary time series", Ark. Mat. 2 (1953);
+// Percival and Walden, "Spectral Analysis for Physical Applications" (1993).
 // Names as free_params'; cov empty if the information is singular.
 LogCov whittle_covariance(const ModelParams& m, double ts, double t_rec_s) {
   LogCov lc;
@@ -2089,17 +2090,22 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
 // the record may hold more than the model says: quantization the search did not keep (its AVAR
 // 3 Q^2 / tau^2 and N's trade there), flicker below the bank's lower end (flicker_tau_lo: the
 // bank stops short of Ts, and the white noise takes the floor's AVAR there), flicker made as a
-// sampled 1/f sequence (its first taus hold more than the floor: without_sampled_flicker_excess)
-// and a white level that changes part way (the model's N is the record's average). An interval
-// that knows only the chosen model's scatter misses the truth wherever that model is one of
-// several the data allow. Each such reading that the ADEV does not rule out (its fit's cost at
-// most cost_thr above the model's own refit, same points and options) moves N and B by the ratio
-// of its fit to that refit (a noise change: N by each part's white level, NoiseParts).
+// sampled 1/f sequence (its first taus hold more than the floor: without_sampled_flicker_excess),
+// a white level that changes part way (the model's N is the record's average) and an
+// oscillation seen through the other sampling (point samples or a sensor's averages over each
+// sample period: oscillation_candidates keeps the cheaper, and the two readings of one band
+// differ in sigma by (pi f0 Ts / sin(pi f0 Ts)), 3.5 % at fs / 7, where the ADEV often cannot
+// tell them apart). An interval that knows only the chosen model's scatter misses the truth
+// wherever that model is one of several the data allow. Each such reading that the ADEV does not
+// rule out (its fit's cost at most cost_thr above the model's own refit, same points and
+// options) moves N, B and the oscillation's sigma by the ratio of its fit to that refit (a noise
+// change: N by each part's white level, NoiseParts).
 struct ShortTauReading {
   std::string what;
   double n_ratio = 1.0;
   double b_ratio = 1.0;
   double n_sd_ln = 0.0;  // the reading's own scatter (sd of ln N), added to the interval's ends
+  double osc_ratio = 1.0;
 };
 
 // The AVAR at tau = Ts of the record before and after a change of the white noise's level, and
@@ -2194,11 +2200,20 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
   const auto add = [&](const char* what, const FitResult& f) {
     if (f.status == FitStatus::kOk && f.params.n > 0.0 && f.cost <= base.cost + c.cost_thr) {
       const bool b = base.params.bi > 0.0 && f.params.bi > 0.0;
-      out.push_back({what, f.params.n / base.params.n, b ? f.params.bi / base.params.bi : 1.0});
+      const bool osc = base.params.osc_sigma > 0.0 && f.params.osc_sigma > 0.0;
+      out.push_back({what, f.params.n / base.params.n, b ? f.params.bi / base.params.bi : 1.0,
+                     0.0, osc ? f.params.osc_sigma / base.params.osc_sigma : 1.0});
     }
   };
   if ((terms & kFitQuantization) == 0U) {
     add("with quantization", refit(terms | kFitQuantization, lo_rule, pts, m.n_filter_s));
+  }
+  if (m.osc_sigma > 0.0) {
+    ModelParams other = m;
+    other.osc_ts_s = m.osc_ts_s > 0.0 ? 0.0 : c.ts;
+    add(m.osc_ts_s > 0.0 ? "with the oscillation averaged over each sample period"
+                         : "with the oscillation point-sampled",
+        fit_terms(pts, terms, c.ts, c.tau_max, tb_hi, &other, m.n_filter_s, tb_lo, lo_rule));
   }
   const double lo_ts = std::max(0.1 * c.ts, 1e-6 * c.tau_max);
   if ((terms & kFitFlicker) != 0U && lo_rule > 1.5 * c.ts) {
@@ -2250,8 +2265,8 @@ bool widen_by_ratio(ParamInterval& iv, double ratio, double sd_ln = 0.0) {
   return grew;
 }
 
-// N's and B's 95 % intervals widened to hold every reading of short_tau_readings; a note names
-// the readings that widened them.
+// N's, B's and the oscillation's sigma's 95 % intervals widened to hold every reading of
+// short_tau_readings; a note names the readings that widened them.
 void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, Report& out) {
   std::string said;
   for (const ShortTauReading& rd : readings) {
@@ -2262,18 +2277,22 @@ void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, 
     for (Effect& e : out.effects) {
       for (ParamInterval& iv : e.ci95) {
         const bool b = e.type == "bias_instability" && iv.name == "b";
+        const bool osc = e.type == "oscillation" && iv.name == "sigma";
         grew = (b && widen_by_ratio(iv, rd.b_ratio)) || grew;
+        grew = (osc && widen_by_ratio(iv, rd.osc_ratio)) || grew;
       }
     }
     if (grew) {
       const bool b = std::fabs(rd.b_ratio - 1.0) > 0.0;
+      const bool osc = std::fabs(rd.osc_ratio - 1.0) > 0.0;
       said += (said.empty() ? "" : ", ") + rd.what + " (N x" + fmt("%.4f", rd.n_ratio) +
-              (b ? ", B x" + fmt("%.4f", rd.b_ratio) : std::string()) + ")";
+              (b ? ", B x" + fmt("%.4f", rd.b_ratio) : std::string()) +
+              (osc ? ", oscillation sigma x" + fmt("%.4f", rd.osc_ratio) : std::string()) + ")";
     }
   }
   if (!said.empty()) {
-    out.notes.push_back("the 95 % intervals of N and B hold the readings of the shortest taus "
-                        "the ADEV does not rule out: " + said);
+    out.notes.push_back("the 95 % intervals of N, B and the oscillation's sigma hold the "
+                        "readings of the shortest taus the ADEV does not rule out: " + said);
   }
 }
 
