@@ -364,7 +364,7 @@ ModelParams stochastic_part(ModelParams p) {
   return p;
 }
 
-// Dense n x n helpers (row-major) for the Riccati doubling below.
+// Dense n x n helpers (row-major) for the intervals' covariances and the Riccati doubling.
 using Dense = std::vector<double>;
 Dense mul(const Dense& a, const Dense& b, std::size_t n, bool transpose_b = false) {
   Dense c(n * n, 0.0);
@@ -475,6 +475,13 @@ struct FitCov {
   LogCov robust;
 };
 
+// The weight of the lag-`lag` autocovariance in a Newey-West long-run sum over lags -L..L
+// (Bartlett, L = lags), both signs of a lag > 0 counted: 1 at lag 0, 2 (1 - lag / (L + 1)).
+double bartlett_weight(std::size_t lag, std::size_t lags) {
+  return lag == 0 ? 1.0
+                  : 2.0 * (1.0 - static_cast<double>(lag) / (static_cast<double>(lags) + 1.0));
+}
+
 // The sandwich of FitCov::robust from the points' Jacobian jac (in.size() x np, row-major), the
 // unscaled (J^T J)^-1 and the residuals z at the points `in`; empty if not positive.
 Dense hac_sandwich(const Dense& jac, const Dense& bread, const std::vector<double>& z,
@@ -482,9 +489,7 @@ Dense hac_sandwich(const Dense& jac, const Dense& bread, const std::vector<doubl
   const std::size_t n = in.size();
   Dense meat(np * np, 0.0);
   for (std::size_t lag = 0; lag <= lags && lag < n; ++lag) {
-    const double w =
-        lag == 0 ? 1.0
-                 : 2.0 * (1.0 - static_cast<double>(lag) / (static_cast<double>(lags) + 1.0));
+    const double w = bartlett_weight(lag, lags);
     for (std::size_t k = lag; k < n; ++k) {
       const double zz = w * z[in[k]] * z[in[k - lag]];
       for (std::size_t a = 0; a < np; ++a) {
@@ -497,21 +502,9 @@ Dense hac_sandwich(const Dense& jac, const Dense& bread, const std::vector<doubl
     }
   }
   const double small_sample = static_cast<double>(n) / static_cast<double>(n - np);
-  Dense half(np * np, 0.0);  // bread * meat
-  Dense out(np * np, 0.0);
-  for (std::size_t a = 0; a < np; ++a) {
-    for (std::size_t b = 0; b < np; ++b) {
-      for (std::size_t c = 0; c < np; ++c) {
-        half[a * np + b] += bread[a * np + c] * meat[c * np + b];
-      }
-    }
-  }
-  for (std::size_t a = 0; a < np; ++a) {
-    for (std::size_t b = 0; b < np; ++b) {
-      for (std::size_t c = 0; c < np; ++c) {
-        out[a * np + b] += small_sample * half[a * np + c] * bread[c * np + b];
-      }
-    }
+  Dense out = mul(mul(bread, meat, np), bread, np);
+  for (double& v : out) {
+    v *= small_sample;
   }
   for (std::size_t j = 0; j < np; ++j) {
     if (!(out[j * np + j] > 0.0)) {
@@ -584,7 +577,7 @@ FitCov log_covariance(const Points& pts, const ModelParams& m, const Options& o,
     for (std::size_t k = lag; k < in.size(); ++k) {
       ck += r0.z[in[k]] * r0.z[in[k - lag]];
     }
-    long_run += 2.0 * (1.0 - static_cast<double>(lag) / (kLags + 1.0)) * ck / c0;
+    long_run += bartlett_weight(lag, kLags) * ck / c0;
   }
   fc.robust.cov = hac_sandwich(jac, inv, r0.z, in, np, kLags);
   const double inflate = std::max(o.cost_factor, long_run) * s2;
@@ -2188,9 +2181,11 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
     tb_lo = i == 0 ? 0.99 * m.gm[i].tb_s : std::min(tb_lo, 0.99 * m.gm[i].tb_s);
     tb_hi = i == 0 ? 1.01 * m.gm[i].tb_s : std::max(tb_hi, 1.01 * m.gm[i].tb_s);
   }
+  // shape: m's, or another reading of its oscillation (its sampling)
   const auto refit = [&](std::uint32_t t, double flicker_lo_s, const Points& on,
-                          double filter_s) {
-    return fit_terms(on, t, c.ts, c.tau_max, tb_hi, &m, filter_s, tb_lo, flicker_lo_s);
+                          double filter_s, const ModelParams* shape = nullptr) {
+    return fit_terms(on, t, c.ts, c.tau_max, tb_hi, shape != nullptr ? shape : &m, filter_s,
+                     tb_lo, flicker_lo_s);
   };
   const double lo_rule = flicker_tau_lo(c.ts, c.tau_max, pts);
   const FitResult base = refit(terms, lo_rule, pts, m.n_filter_s);
@@ -2213,7 +2208,7 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
     other.osc_ts_s = m.osc_ts_s > 0.0 ? 0.0 : c.ts;
     add(m.osc_ts_s > 0.0 ? "with the oscillation averaged over each sample period"
                          : "with the oscillation point-sampled",
-        fit_terms(pts, terms, c.ts, c.tau_max, tb_hi, &other, m.n_filter_s, tb_lo, lo_rule));
+        refit(terms, lo_rule, pts, m.n_filter_s, &other));
   }
   const double lo_ts = std::max(0.1 * c.ts, 1e-6 * c.tau_max);
   if ((terms & kFitFlicker) != 0U && lo_rule > 1.5 * c.ts) {
@@ -2270,24 +2265,25 @@ bool widen_by_ratio(ParamInterval& iv, double ratio, double sd_ln = 0.0) {
 void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, Report& out) {
   std::string said;
   for (const ShortTauReading& rd : readings) {
-    bool grew = false;
+    std::string grew;  // the parameters this reading widened, with its ratio
     for (ParamInterval& iv : out.model_after_ci95) {
-      grew = (iv.name == "n" && widen_by_ratio(iv, rd.n_ratio, rd.n_sd_ln)) || grew;
+      if (iv.name == "n" && widen_by_ratio(iv, rd.n_ratio, rd.n_sd_ln)) {
+        grew += "N x" + fmt("%.4f", rd.n_ratio);
+      }
     }
     for (Effect& e : out.effects) {
       for (ParamInterval& iv : e.ci95) {
-        const bool b = e.type == "bias_instability" && iv.name == "b";
-        const bool osc = e.type == "oscillation" && iv.name == "sigma";
-        grew = (b && widen_by_ratio(iv, rd.b_ratio)) || grew;
-        grew = (osc && widen_by_ratio(iv, rd.osc_ratio)) || grew;
+        if (e.type == "bias_instability" && iv.name == "b" && widen_by_ratio(iv, rd.b_ratio)) {
+          grew += (grew.empty() ? "" : ", ") + std::string("B x") + fmt("%.4f", rd.b_ratio);
+        }
+        if (e.type == "oscillation" && iv.name == "sigma" && widen_by_ratio(iv, rd.osc_ratio)) {
+          grew += (grew.empty() ? "" : ", ") + std::string("oscillation sigma x") +
+                  fmt("%.4f", rd.osc_ratio);
+        }
       }
     }
-    if (grew) {
-      const bool b = std::fabs(rd.b_ratio - 1.0) > 0.0;
-      const bool osc = std::fabs(rd.osc_ratio - 1.0) > 0.0;
-      said += (said.empty() ? "" : ", ") + rd.what + " (N x" + fmt("%.4f", rd.n_ratio) +
-              (b ? ", B x" + fmt("%.4f", rd.b_ratio) : std::string()) +
-              (osc ? ", oscillation sigma x" + fmt("%.4f", rd.osc_ratio) : std::string()) + ")";
+    if (!grew.empty()) {
+      said += (said.empty() ? "" : ", ") + rd.what + " (" + grew + ")";
     }
   }
   if (!said.empty()) {
