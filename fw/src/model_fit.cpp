@@ -37,6 +37,7 @@ struct Problem {
   double flicker_hi_s = 0.0;
   double white_filter_s = 0.0;
   bool used[kP] = {};
+  double fixed_theta[kP] = {};  // > 0: the slot's parameter held there (FitOptions::k_fixed)
   std::uint32_t evaluations = 0;
 };
 
@@ -170,11 +171,15 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
     double f[kP];
     basis(pb.tau[i], tb1, tb2, pb.white[i], pb.flicker[i], pb.osc[i], f);
     const double w = pb.w[i];
+    double target = pb.avar[i];  // less the terms held fixed
+    for (std::size_t a = 0; a < kP; ++a) {
+      target -= pb.fixed_theta[a] * f[a];
+    }
     for (std::size_t a = 0; a < kP; ++a) {
       if (!pb.used[a]) {
         continue;
       }
-      h[a] += w * f[a] * pb.avar[i];
+      h[a] += w * f[a] * target;
       for (std::size_t b = 0; b < kP; ++b) {
         if (pb.used[b]) {
           g(a, b) += w * f[a] * f[b];
@@ -185,7 +190,7 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
   double d[kP] = {};
   bool cols[kP] = {};
   for (std::size_t a = 0; a < kP; ++a) {
-    if (pb.used[a] && g(a, a) > 0.0) {
+    if (pb.used[a] && !(pb.fixed_theta[a] > 0.0) && g(a, a) > 0.0) {
       d[a] = std::sqrt(g(a, a));
       cols[a] = true;
     }
@@ -208,7 +213,7 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
     return s;
   }
   for (std::size_t a = 0; a < kP; ++a) {
-    s.theta[a] = cols[a] ? x[a] / d[a] : 0.0;
+    s.theta[a] = pb.fixed_theta[a] > 0.0 ? pb.fixed_theta[a] : cols[a] ? x[a] / d[a] : 0.0;
   }
   // The basis is evaluated again rather than kept from the first loop: keeping it would add
   // kMaxFitPoints x kP doubles (8 kB) of stack, and the fit runs on small targets.
@@ -365,6 +370,10 @@ FitStatus set_up(const FitOptions& o, Problem& pb, double& tb_lo, double& tb_hi)
   pb.used[kSlotGm1] = (o.terms & kFitGm1) != 0;
   pb.used[kSlotGm2] = (o.terms & kFitGm2) != 0;
   pb.used[kSlotRrw] = (o.terms & kFitRrw) != 0;
+  if (!(std::isfinite(o.k_fixed) && o.k_fixed >= 0.0)) {
+    return FitStatus::kBadOptions;
+  }
+  pb.fixed_theta[kSlotRrw] = pb.used[kSlotRrw] ? o.k_fixed * o.k_fixed : 0.0;
   pb.used[kSlotRamp] = (o.terms & kFitRamp) != 0;
   pb.used[kSlotFlicker] = (o.terms & kFitFlicker) != 0;
   pb.used[kSlotOsc] = (o.terms & kFitOscillation) != 0;

@@ -3,7 +3,8 @@
 // its decades, a deterministic ramp, and a level shift part way through the record. The walk is
 // named only where the record needs it beside them (the line, the step) and where it holds on
 // both halves of the record. The first-order model of synth_cases.hpp, 10^6 samples at 100 Hz,
-// plus one effect; seeds 911..928 (no other test uses them).
+// plus one effect; seeds 911..928 (no other test uses them). And K's interval where a GM
+// beside the walk is slow for the record (seeds 4401..4415).
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -73,6 +74,48 @@ TEST(AnalyzeWalk, AStepIsNotAWalk) {
               kSeeds);
   EXPECT_EQ(walks, 0);
   EXPECT_GE(steps, kSeeds - 1);
+}
+
+// The example's first-order model with synth's walk K = 1.4e-4 (imu-sim synth's defaults) over
+// 1 and 2 h: the GM (Tb ~ 160 s) lies near T/40, the slowest the fit takes, and the walk
+// dominates from ~40 s on. Where the fit places the GM elsewhere (at Tb < 3 s, or not at all),
+// the walk takes its power: K came out 1.3 to 1.7 x the truth, and its interval, which knew only
+// the chosen model's scatter, held the truth on 8 of the 13 records that name the walk. The
+// cost's profile over K with a GM free beside it holds it on at least 90 %. (A walk's wander
+// gathered at one place is also named a step here on 9 of the 30 records: the step's time is
+// priced by AIC's 2. Priced by its search's threshold, 3; but then 4 of the 8 steps of 3 GM
+// sigmas above went unnamed, and 4 steps on three of the shared gyroscope channels, one of
+// which then missed the ADEV target. Printed, not asserted.)
+TEST(AnalyzeWalk, KsIntervalHoldsTheWalkBesideASlowGm) {
+  int steps = 0;
+  int walks = 0;
+  int k_in = 0;
+  int records = 0;
+  for (const double hours : {1.0, 2.0}) {
+    for (std::uint64_t seed = 4401; seed <= 4415; ++seed) {
+      ia::SynthSpec spec = tc::make_case("control", seed);
+      spec.k = 1.4e-4;
+      spec.samples = static_cast<std::size_t>(hours * 3600.0 * spec.fs_hz);
+      const ia::Report r = analyse(spec, "walk_gm");
+      ++records;
+      steps += named(r, "bias_step") ? 1 : 0;
+      for (const ia::Effect& e : r.effects) {
+        if (e.type != "rate_random_walk" || e.ci95.empty()) {
+          continue;
+        }
+        ++walks;
+        const ia::ParamInterval& iv = e.ci95.front();
+        k_in += spec.k >= iv.lo && spec.k <= iv.hi ? 1 : 0;
+        std::printf("%.0f h seed %llu: K %.4g, 95 %% [%.4g, %.4g]\n", hours,
+                    static_cast<unsigned long long>(seed), e.k, iv.lo, iv.hi);
+      }
+    }
+  }
+  std::printf("GM + walk records (1 and 2 h, seeds 4401..4415): walk named on %d of %d, K inside "
+              "its 95 %% interval on %d; a step named on %d\n",
+              walks, records, k_in, steps);
+  EXPECT_GE(walks, 10);
+  EXPECT_GE(10 * k_in, 9 * walks);
 }
 
 }  // namespace

@@ -94,6 +94,40 @@ TEST(ModelFit, AbsentTermIsClampedToZeroNotNegative) {
   EXPECT_LT(r.params.r, 1e-12);
 }
 
+// K held (FitOptions::k_fixed): the other terms are fitted beside it. Held at the truth they
+// come back exactly; held at half of it, a GM takes the walk's rise and the cost grows, never
+// below the free fit's (a profile of the cost over K).
+TEST(ModelFit, HeldWalkLeavesTheOtherTermsToTheFit) {
+  imu::ModelParams p;
+  p.n = 1e-3;
+  p.n_gm = 1;
+  p.gm[0] = {2e-9, 50.0};
+  p.k = 3e-5;
+  const auto pts = exact_points(p, 0.01, 2000.0, 10);
+  imu::FitOptions o;
+  o.terms = imu::kFitWhite | imu::kFitGm1 | imu::kFitRrw;
+  o.tau_max_s = 2000.0;
+  const imu::FitResult free_fit = imu::fit(pts.data(), pts.size(), o);
+  ASSERT_EQ(free_fit.status, imu::FitStatus::kOk);
+  o.k_fixed = p.k;
+  const imu::FitResult held = imu::fit(pts.data(), pts.size(), o);
+  ASSERT_EQ(held.status, imu::FitStatus::kOk);
+  EXPECT_EQ(held.params.k, p.k);
+  EXPECT_NEAR(held.params.n, p.n, 1e-3 * p.n);
+  ASSERT_EQ(held.params.n_gm, 1U);
+  EXPECT_NEAR(held.params.gm[0].tb_s, 50.0, 0.01 * 50.0);
+  EXPECT_LT(held.rms_rel, 1e-3);
+  o.k_fixed = 0.5 * p.k;
+  const imu::FitResult half = imu::fit(pts.data(), pts.size(), o);
+  ASSERT_EQ(half.status, imu::FitStatus::kOk);
+  EXPECT_EQ(half.params.k, 0.5 * p.k);
+  EXPECT_GT(half.cost, held.cost);
+  EXPECT_GE(half.cost, free_fit.cost);
+  EXPECT_GT(half.params.gm[0].tb_s, 50.0);  // the GM reaches for the walk's rise
+  o.k_fixed = -1.0;
+  EXPECT_EQ(imu::fit(pts.data(), pts.size(), o).status, imu::FitStatus::kBadOptions);
+}
+
 TEST(ModelFit, RejectsBadOptionsAndTooFewPoints) {
   imu::ModelParams p;
   p.n = 1e-3;

@@ -53,6 +53,9 @@ struct FitOptions {
   double tau_max_s = 100.0;
   double tb_min_s = 0.0;  ///< correlation time search range; 0: tau_min_s
   double tb_max_s = 0.0;  ///< 0: 10 * tau_max_s
+  /// > 0 (with kFitRrw): the walk's K held at this value, the other terms fitted beside it (a
+  /// profile of the cost over K).
+  double k_fixed = 0.0;
   int weight_iterations = 2;  ///< reweighting passes after the first (0..10)
   /// Upper limit on the EDF used in the weights (0: none, the pure CSM weighting). The
   /// estimates at neighbouring taus are strongly correlated, which 1/var weights ignore: with a

@@ -298,8 +298,9 @@ const char* fit_status_text(FitStatus s) {
 FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
                     double tb_max_s = 0.0, const ModelParams* shape = nullptr,
                     double white_filter_s = 0.0, double tb_min_s = 0.0,
-                    double flicker_lo_s = 0.0) {
+                    double flicker_lo_s = 0.0, double k_fixed = 0.0) {
   FitOptions fo;
+  fo.k_fixed = k_fixed;
   fo.white_filter_s = white_filter_s;
   if (shape != nullptr) {
     fo.osc_f0_hz = shape->osc_f0_hz;
@@ -2092,13 +2093,14 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
 // wherever that model is one of several the data allow. Each such reading that the ADEV does not
 // rule out (its fit's cost at most cost_thr above the model's own refit, same points and
 // options) moves N, B and the oscillation's sigma by the ratio of its fit to that refit (a noise
-// change: N by each part's white level, NoiseParts).
-struct ShortTauReading {
+// change: N by each part's white level, NoiseParts). long_tau_readings does the same for K.
+struct AdevReading {
   std::string what;
   double n_ratio = 1.0;
   double b_ratio = 1.0;
   double n_sd_ln = 0.0;  // the reading's own scatter (sd of ln N), added to the interval's ends
   double osc_ratio = 1.0;
+  double k_ratio = 1.0;
 };
 
 // The AVAR at tau = Ts of the record before and after a change of the white noise's level, and
@@ -2169,9 +2171,9 @@ bool without_sampled_flicker_excess(const Points& pts, double b, Points& out) {
   return true;
 }
 
-std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint32_t terms,
+std::vector<AdevReading> short_tau_readings(const AfterContext& c, std::uint32_t terms,
                                                 const ModelParams& m, const NoiseParts& np) {
-  std::vector<ShortTauReading> out;
+  std::vector<AdevReading> out;
   const Points pts =
       in_range(points_for_model(m.sin_a > 0.0 ? c.fit_set : c.clean, m), c.tau_max);
   // The GMs' correlation times held near the model's (the readings differ at the shortest taus)
@@ -2197,7 +2199,7 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
       const bool b = base.params.bi > 0.0 && f.params.bi > 0.0;
       const bool osc = base.params.osc_sigma > 0.0 && f.params.osc_sigma > 0.0;
       out.push_back({what, f.params.n / base.params.n, b ? f.params.bi / base.params.bi : 1.0,
-                     0.0, osc ? f.params.osc_sigma / base.params.osc_sigma : 1.0});
+                     0.0, osc ? f.params.osc_sigma / base.params.osc_sigma : 1.0, 1.0});
     }
   };
   if ((terms & kFitQuantization) == 0U) {
@@ -2246,10 +2248,59 @@ std::vector<ShortTauReading> short_tau_readings(const AfterContext& c, std::uint
   return out;
 }
 
-// iv (a positive parameter's 95 % interval) widened to hold the same interval moved by `ratio`
-// and widened by the reading's own scatter sd_ln; true if it grew.
+// The walk's K of model_after is read off the longest taus, where a GM near the fit's bound on
+// the correlation times (tb_max, about T/40) makes much the same rise as the walk: the fit may
+// place its GM elsewhere (Tb of a few seconds, or none) and leave that rise to the walk. On
+// records of 1 and 2 h of a GM at Tb ~ T/40 beside a walk, K came out 1.3 to 1.7 x the truth
+// with an interval that excluded it. The cost's profile over K: K held at 0.9, 0.8, .. x its
+// value (0: no walk) and the other terms refitted with one GM more (the only one, if the model
+// has none; tb <= tb_max) while the cost stays within cost_thr of the model's own refit; the
+// lowest such K is a reading the ADEV does not rule out.
+std::vector<AdevReading> long_tau_readings(const AfterContext& c, std::uint32_t terms,
+                                           const ModelParams& m) {
+  std::vector<AdevReading> out;
+  if ((terms & kFitRrw) == 0U || !(m.k > 0.0) || !(c.tb_max > 0.0)) {
+    return out;
+  }
+  const Points pts =
+      in_range(points_for_model(m.sin_a > 0.0 ? c.fit_set : c.clean, m), c.tau_max);
+  double tb_lo = 0.0;  // 0: the fit's default (Ts)
+  for (std::size_t i = 0; i < m.n_gm; ++i) {
+    tb_lo = i == 0 ? 0.99 * m.gm[i].tb_s : std::min(tb_lo, 0.99 * m.gm[i].tb_s);
+  }
+  const auto refit = [&](std::uint32_t t, double tb_hi, double k_fixed) {
+    return fit_terms(pts, t, c.ts, c.tau_max, tb_hi, &m, m.n_filter_s, tb_lo, 0.0, k_fixed);
+  };
+  const FitResult base = refit(terms, c.tb_max, 0.0);
+  if (base.status != FitStatus::kOk || !(base.params.k > 0.0)) {
+    return out;
+  }
+  const std::uint32_t slow = terms | ((terms & kFitGm1) != 0U ? kFitGm2 : kFitGm1);
+  constexpr int kSteps = 10;
+  double lowest = 1.0;
+  for (int i = kSteps - 1; i >= 0; --i) {
+    const double ratio = static_cast<double>(i) / kSteps;
+    const FitResult f = i > 0 ? refit(slow, c.tb_max, ratio * base.params.k)
+                              : refit(slow & ~kFitRrw, c.tb_max, 0.0);
+    if (f.status != FitStatus::kOk || f.cost > base.cost + c.cost_thr) {
+      break;
+    }
+    lowest = ratio;
+  }
+  if (lowest < 1.0) {
+    AdevReading rd;
+    rd.what = "with K held lower and one GM more (Tb <= " + fmt("%.3g", c.tb_max) + " s)";
+    rd.k_ratio = lowest;
+    out.push_back(rd);
+  }
+  return out;
+}
+
+// iv (a non-negative parameter's 95 % interval) widened to hold the same interval moved by
+// `ratio` (0: a reading without the parameter) and widened by the reading's own scatter sd_ln;
+// true if it grew.
 bool widen_by_ratio(ParamInterval& iv, double ratio, double sd_ln = 0.0) {
-  if (!(iv.lo > 0.0) || !std::isfinite(iv.hi) || !(ratio > 0.0)) {
+  if (!(iv.lo >= 0.0) || !std::isfinite(iv.hi) || !(ratio >= 0.0)) {
     return false;
   }
   const double lo = std::min(iv.lo, iv.lo * ratio * std::exp(-1.96 * sd_ln));
@@ -2260,11 +2311,11 @@ bool widen_by_ratio(ParamInterval& iv, double ratio, double sd_ln = 0.0) {
   return grew;
 }
 
-// N's, B's and the oscillation's sigma's 95 % intervals widened to hold every reading of
-// short_tau_readings; a note names the readings that widened them.
-void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, Report& out) {
+// N's, B's, the oscillation's sigma's and K's 95 % intervals widened to hold every reading of
+// short_tau_readings and long_tau_readings; a note names the readings that widened them.
+void widen_for_readings(const std::vector<AdevReading>& readings, Report& out) {
   std::string said;
-  for (const ShortTauReading& rd : readings) {
+  for (const AdevReading& rd : readings) {
     std::string grew;  // the parameters this reading widened, with its ratio
     for (ParamInterval& iv : out.model_after_ci95) {
       if (iv.name == "n" && widen_by_ratio(iv, rd.n_ratio, rd.n_sd_ln)) {
@@ -2280,6 +2331,9 @@ void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, 
           grew += (grew.empty() ? "" : ", ") + std::string("oscillation sigma x") +
                   fmt("%.4f", rd.osc_ratio);
         }
+        if (e.type == "rate_random_walk" && iv.name == "k" && widen_by_ratio(iv, rd.k_ratio)) {
+          grew += (grew.empty() ? "" : ", ") + std::string("K x") + fmt("%.4f", rd.k_ratio);
+        }
       }
     }
     if (!grew.empty()) {
@@ -2287,8 +2341,8 @@ void widen_for_short_tau_readings(const std::vector<ShortTauReading>& readings, 
     }
   }
   if (!said.empty()) {
-    out.notes.push_back("the 95 % intervals of N, B and the oscillation's sigma hold the "
-                        "readings of the shortest taus the ADEV does not rule out: " + said);
+    out.notes.push_back("the 95 % intervals hold the readings of the ADEV it does not rule out "
+                        "at its shortest and longest taus: " + said);
   }
 }
 
@@ -5230,8 +5284,12 @@ class Analysis {
     add_time_ranges();
     std::vector<TermPart> parts = check_terms_on_halves();
     attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
-    widen_for_short_tau_readings(
-        short_tau_readings(ac, choice.terms, cur_p, noise_parts(y, gap, noise_change)), out);
+    std::vector<AdevReading> readings =
+        short_tau_readings(ac, choice.terms, cur_p, noise_parts(y, gap, noise_change));
+    for (AdevReading& rd : long_tau_readings(ac, choice.terms, cur_p)) {
+      readings.push_back(std::move(rd));
+    }
+    widen_for_readings(readings, out);
     for (const auto& w : withdrawn) {
       bool covered = false;
       for (const auto& u : out.unexplained) {
