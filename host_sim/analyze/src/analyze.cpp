@@ -5137,8 +5137,11 @@ class Analysis {
     } else {
       settle_terms(ac0, choice, withdrawn);
       if (!filter_on_settled(ac0, choice)) {
-        out.notes.push_back("not added: an output filter on the white noise (cost drop " +
-                            fmt("%.1f", drop) + " <= " + fmt("%.1f", cost_thr) + ")");
+        out.notes.push_back(std::isfinite(drop)
+                                ? "not added: an output filter on the white noise (cost drop " +
+                                      fmt("%.1f", drop) + " <= " + fmt("%.1f", cost_thr) + ")"
+                                : std::string("not tried: an output filter on the white noise "
+                                              "(no ADEV points to fit it on)"));
       }
     }
   }
