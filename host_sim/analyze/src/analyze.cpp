@@ -2337,9 +2337,10 @@ std::vector<AdevReading> short_tau_readings(const AfterContext& c, std::uint32_t
 // place its GM elsewhere (Tb of a few seconds, or none) and leave that rise to the walk. On
 // records of 1 and 2 h of a GM at Tb ~ T/40 beside a walk, K came out 1.3 to 1.7 x the truth
 // with an interval that excluded it. The cost's profile over K: K held at 0.9, 0.8, .. x its
-// value (0: no walk) and the other terms refitted with one GM more (the only one, if the model
-// has none; tb <= tb_max) while the cost stays within cost_thr of the model's own refit; the
-// lowest such K is a reading the ADEV does not rule out.
+// value (0: no walk, unless the record's likelihood requires the walk: AfterContext::required)
+// and the other terms refitted with one GM more (the only one, if the model has none;
+// tb <= tb_max) while the cost stays within cost_thr of the model's own refit; the lowest such K
+// is a reading the ADEV does not rule out.
 std::vector<AdevReading> long_tau_readings(const AfterContext& c, std::uint32_t terms,
                                            const ModelParams& m) {
   std::vector<AdevReading> out;
@@ -2361,8 +2362,9 @@ std::vector<AdevReading> long_tau_readings(const AfterContext& c, std::uint32_t 
   }
   const std::uint32_t slow = terms | ((terms & kFitGm1) != 0U ? kFitGm2 : kFitGm1);
   constexpr int kSteps = 10;
+  const int last = (c.required & kFitRrw) != 0U ? 1 : 0;
   double lowest = 1.0;
-  for (int i = kSteps - 1; i >= 0; --i) {
+  for (int i = kSteps - 1; i >= last; --i) {
     const double ratio = static_cast<double>(i) / kSteps;
     const FitResult f = i > 0 ? refit(slow, c.tb_max, ratio * base.params.k)
                               : refit(slow & ~kFitRrw, c.tb_max, 0.0);
