@@ -2339,8 +2339,9 @@ std::vector<AdevReading> short_tau_readings(const AfterContext& c, std::uint32_t
 // with an interval that excluded it. The cost's profile over K: K held at 0.9, 0.8, .. x its
 // value (0: no walk, unless the record's likelihood requires the walk: AfterContext::required)
 // and the other terms refitted with one GM more (the only one, if the model has none;
-// tb <= tb_max) while the cost stays within cost_thr of the model's own refit; the lowest such K
-// is a reading the ADEV does not rule out.
+// tb <= tb_max) while the cost stays within the 95 % level of the model's own refit
+// (cost_factor x chi-square(1) at 0.95, the profile's bound for a 95 % interval, with the same
+// allowance for the correlated taus as the covariance's); the lowest such K is the reading.
 std::vector<AdevReading> long_tau_readings(const AfterContext& c, std::uint32_t terms,
                                            const ModelParams& m) {
   std::vector<AdevReading> out;
@@ -2363,12 +2364,13 @@ std::vector<AdevReading> long_tau_readings(const AfterContext& c, std::uint32_t 
   const std::uint32_t slow = terms | ((terms & kFitGm1) != 0U ? kFitGm2 : kFitGm1);
   constexpr int kSteps = 10;
   const int last = (c.required & kFitRrw) != 0U ? 1 : 0;
+  const double allowed = c.o.cost_factor * chi2_quantile(0.95, 1.0);
   double lowest = 1.0;
   for (int i = kSteps - 1; i >= last; --i) {
     const double ratio = static_cast<double>(i) / kSteps;
     const FitResult f = i > 0 ? refit(slow, c.tb_max, ratio * base.params.k)
                               : refit(slow & ~kFitRrw, c.tb_max, 0.0);
-    if (f.status != FitStatus::kOk || f.cost > base.cost + c.cost_thr) {
+    if (f.status != FitStatus::kOk || f.cost > base.cost + allowed) {
       break;
     }
     lowest = ratio;
