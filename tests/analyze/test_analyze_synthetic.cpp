@@ -795,6 +795,15 @@ TEST(AnalyzeSynthetic, TwentyControlsGiveNoEffect) {
   EXPECT_GE(clean, 19);  // target: >= 19 of 20
 }
 
+// The types of a report's effects.
+std::set<std::string> effect_types(const ia::Report& r) {
+  std::set<std::string> t;
+  for (const auto& e : r.effects) {
+    t.insert(e.type);
+  }
+  return t;
+}
+
 TEST(AnalyzeSynthetic, NanDropoutsGiveTheControlsAnswer) {
   int same = 0;
   for (int i = 0; i < kSeeds11; ++i) {
@@ -803,14 +812,8 @@ TEST(AnalyzeSynthetic, NanDropoutsGiveTheControlsAnswer) {
     const ia::Report r = run("control_nan", seed);
     EXPECT_EQ(r.gap_samples, 5000U);  // five dropouts of 1000 samples (synth_cases.hpp)
     EXPECT_EQ(r.gap_runs, 5U);
-    std::set<std::string> tc_types;
-    std::set<std::string> tn_types;
-    for (const auto& e : c.effects) {
-      tc_types.insert(e.type);
-    }
-    for (const auto& e : r.effects) {
-      tn_types.insert(e.type);
-    }
+    const std::set<std::string> tc_types = effect_types(c);
+    const std::set<std::string> tn_types = effect_types(r);
     same += tc_types == tn_types ? 1 : 0;
     if (tc_types != tn_types) {
       std::printf("seed %llu differs:\n%s", static_cast<unsigned long long>(seed),
@@ -1206,15 +1209,7 @@ TEST(AnalyzeSynthetic, FivePercentMissingSamplesReadAsTheWholeRecord) {
     EXPECT_NEAR(holed.model_after.n / whole.model_after.n, 1.0, 0.01) << describe(holed);
     EXPECT_EQ(holed.model_after.n_filter_s > 0.0, whole.model_after.n_filter_s > 0.0)
         << describe(holed);
-    std::set<std::string> tw;
-    std::set<std::string> th;
-    for (const auto& e : whole.effects) {
-      tw.insert(e.type);
-    }
-    for (const auto& e : holed.effects) {
-      th.insert(e.type);
-    }
-    same += tw == th ? 1 : 0;
+    same += effect_types(whole) == effect_types(holed) ? 1 : 0;
     std::printf("seed %llu: N %.5g (whole %.5g), effects %zu (whole %zu)\n",
                 static_cast<unsigned long long>(seed), holed.model_after.n, whole.model_after.n,
                 holed.effects.size(), whole.effects.size());
