@@ -37,7 +37,7 @@ struct Problem {
   double flicker_hi_s = 0.0;
   double white_filter_s = 0.0;
   bool used[kP] = {};
-  double fixed_theta[kP] = {};  // > 0: the slot's parameter held there (FitOptions::k_fixed)
+  double k2_fixed = 0.0;  // > 0: the walk's K^2 held there (FitOptions::k_fixed)
   std::uint32_t evaluations = 0;
 };
 
@@ -171,10 +171,7 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
     double f[kP];
     basis(pb.tau[i], tb1, tb2, pb.white[i], pb.flicker[i], pb.osc[i], f);
     const double w = pb.w[i];
-    double target = pb.avar[i];  // less the terms held fixed
-    for (std::size_t a = 0; a < kP; ++a) {
-      target -= pb.fixed_theta[a] * f[a];
-    }
+    const double target = pb.avar[i] - pb.k2_fixed * f[kSlotRrw];  // less a walk held fixed
     for (std::size_t a = 0; a < kP; ++a) {
       if (!pb.used[a]) {
         continue;
@@ -190,7 +187,8 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
   double d[kP] = {};
   bool cols[kP] = {};
   for (std::size_t a = 0; a < kP; ++a) {
-    if (pb.used[a] && !(pb.fixed_theta[a] > 0.0) && g(a, a) > 0.0) {
+    const bool held = a == kSlotRrw && pb.k2_fixed > 0.0;
+    if (pb.used[a] && !held && g(a, a) > 0.0) {
       d[a] = std::sqrt(g(a, a));
       cols[a] = true;
     }
@@ -213,7 +211,10 @@ Solution solve_at(Problem& pb, double tb1, double tb2) {
     return s;
   }
   for (std::size_t a = 0; a < kP; ++a) {
-    s.theta[a] = pb.fixed_theta[a] > 0.0 ? pb.fixed_theta[a] : cols[a] ? x[a] / d[a] : 0.0;
+    s.theta[a] = cols[a] ? x[a] / d[a] : 0.0;
+  }
+  if (pb.k2_fixed > 0.0) {
+    s.theta[kSlotRrw] = pb.k2_fixed;
   }
   // The basis is evaluated again rather than kept from the first loop: keeping it would add
   // kMaxFitPoints x kP doubles (8 kB) of stack, and the fit runs on small targets.
@@ -373,7 +374,7 @@ FitStatus set_up(const FitOptions& o, Problem& pb, double& tb_lo, double& tb_hi)
   if (!(std::isfinite(o.k_fixed) && o.k_fixed >= 0.0)) {
     return FitStatus::kBadOptions;
   }
-  pb.fixed_theta[kSlotRrw] = pb.used[kSlotRrw] ? o.k_fixed * o.k_fixed : 0.0;
+  pb.k2_fixed = pb.used[kSlotRrw] ? o.k_fixed * o.k_fixed : 0.0;
   pb.used[kSlotRamp] = (o.terms & kFitRamp) != 0;
   pb.used[kSlotFlicker] = (o.terms & kFitFlicker) != 0;
   pb.used[kSlotOsc] = (o.terms & kFitOscillation) != 0;

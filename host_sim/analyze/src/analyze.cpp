@@ -62,17 +62,14 @@ std::vector<std::int32_t> to_counts(const std::vector<double>& y, double offset,
 
 // The ADEV of counts through the online estimator; gap (may be empty): 1 marks a sample that
 // is missing (non-finite in the record): the estimator skips it with mark_missing (no term spans
-// it), the other samples go in runs through push_block. bridge: each gap of at most that many
-// samples pushed as the straight line between its neighbours instead (0: none).
+// it), the other samples go in runs through push_block.
 std::unique_ptr<Adev> adev_estimate(const std::vector<std::int32_t>& counts,
-                                    const std::vector<std::uint8_t>& gap, double ts, double lsb,
-                                    std::size_t bridge) {
+                                    const std::vector<std::uint8_t>& gap, double ts, double lsb) {
   auto est = std::make_unique<Adev>(ts, lsb);
   if (gap.empty()) {
     est->push_block(counts.data(), counts.size());
     return est;
   }
-  std::vector<std::int32_t> line;
   std::size_t i = 0;
   while (i < counts.size()) {
     std::size_t j = i;
@@ -82,18 +79,8 @@ std::unique_ptr<Adev> adev_estimate(const std::vector<std::int32_t>& counts,
     }
     if (!missing) {
       est->push_block(counts.data() + i, j - i);
-    } else if (j - i > bridge) {
-      est->mark_missing(j - i);
     } else {
-      const bool after = j < counts.size();
-      const double a = static_cast<double>(i > 0 ? counts[i - 1] : (after ? counts[j] : 0));
-      const double b = after ? static_cast<double>(counts[j]) : a;
-      line.resize(j - i);
-      for (std::size_t k = 0; k < line.size(); ++k) {
-        const double w = static_cast<double>(k + 1) / static_cast<double>(line.size() + 1);
-        line[k] = static_cast<std::int32_t>(std::lround(a + w * (b - a)));
-      }
-      est->push_block(line.data(), line.size());
+      est->mark_missing(j - i);
     }
     i = j;
   }
@@ -188,13 +175,13 @@ GapAvar gap_avar(const RecordedPrefix& p, std::size_t m, std::size_t stride) {
 
 AdevSet adev_of(const std::vector<std::int32_t>& counts, const std::vector<std::uint8_t>& gap,
                 double ts, double lsb) {
-  AdevSet s = snapshots(*adev_estimate(counts, gap, ts, lsb, 0));
+  AdevSet s = snapshots(*adev_estimate(counts, gap, ts, lsb));
   if (std::find(gap.begin(), gap.end(), std::uint8_t{1}) == gap.end()) {
     return s;
   }
-  // Every gap bridged: the estimator's taus, strides, term counts and EDF for the record without
-  // gaps; its AVAR is replaced where the gap-free terms are too few.
-  const AdevSet full = snapshots(*adev_estimate(counts, gap, ts, lsb, counts.size()));
+  // The estimator's taus, strides, term counts and EDF for the record without gaps, from its
+  // counts as they stand (the gaps hold fill_gaps' values); only that layout is kept from it.
+  const AdevSet full = snapshots(*adev_estimate(counts, {}, ts, lsb));
   const RecordedPrefix prefix = recorded_prefix(counts, gap);
   std::map<std::uint32_t, GapAvar> by_af;
   for (std::size_t i = 0; i < s.by_alpha.size(); ++i) {
@@ -2255,16 +2242,30 @@ bool without_sampled_flicker_excess(const Points& pts, double b, Points& out) {
   return true;
 }
 
+// The points a reading of model m refits: the ADEV over [Ts, T/10] without the sinusoids m
+// holds (the linear terms' fit set), else the cleaned record's.
+Points reading_points(const AfterContext& c, const ModelParams& m) {
+  return in_range(points_for_model(m.sin_a > 0.0 ? c.fit_set : c.clean, m), c.tau_max);
+}
+
+// The lower bound of a reading's GM search: the fastest of m's GMs less 1 % (0 without a GM:
+// the fit's default, Ts).
+double fastest_gm_tb_bound(const ModelParams& m) {
+  double tb_lo = 0.0;
+  for (std::size_t i = 0; i < m.n_gm; ++i) {
+    tb_lo = i == 0 ? 0.99 * m.gm[i].tb_s : std::min(tb_lo, 0.99 * m.gm[i].tb_s);
+  }
+  return tb_lo;
+}
+
 std::vector<AdevReading> short_tau_readings(const AfterContext& c, std::uint32_t terms,
                                                 const ModelParams& m, const NoiseParts& np) {
   std::vector<AdevReading> out;
-  const Points pts =
-      in_range(points_for_model(m.sin_a > 0.0 ? c.fit_set : c.clean, m), c.tau_max);
+  const Points pts = reading_points(c, m);
   // The GMs' correlation times held near the model's (the readings differ at the shortest taus)
-  double tb_lo = 0.0;
+  const double tb_lo = fastest_gm_tb_bound(m);
   double tb_hi = c.tb_max;
   for (std::size_t i = 0; i < m.n_gm; ++i) {
-    tb_lo = i == 0 ? 0.99 * m.gm[i].tb_s : std::min(tb_lo, 0.99 * m.gm[i].tb_s);
     tb_hi = i == 0 ? 1.01 * m.gm[i].tb_s : std::max(tb_hi, 1.01 * m.gm[i].tb_s);
   }
   // shape: m's, or another reading of its oscillation (its sampling)
@@ -2348,12 +2349,8 @@ std::vector<AdevReading> long_tau_readings(const AfterContext& c, std::uint32_t 
   if ((terms & kFitRrw) == 0U || !(m.k > 0.0) || !(c.tb_max > 0.0)) {
     return out;
   }
-  const Points pts =
-      in_range(points_for_model(m.sin_a > 0.0 ? c.fit_set : c.clean, m), c.tau_max);
-  double tb_lo = 0.0;  // 0: the fit's default (Ts)
-  for (std::size_t i = 0; i < m.n_gm; ++i) {
-    tb_lo = i == 0 ? 0.99 * m.gm[i].tb_s : std::min(tb_lo, 0.99 * m.gm[i].tb_s);
-  }
+  const Points pts = reading_points(c, m);
+  const double tb_lo = fastest_gm_tb_bound(m);
   const auto refit = [&](std::uint32_t t, double tb_hi, double k_fixed) {
     return fit_terms(pts, t, c.ts, c.tau_max, tb_hi, &m, m.n_filter_s, tb_lo, 0.0, k_fixed);
   };
