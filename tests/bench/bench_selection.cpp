@@ -133,6 +133,7 @@ struct Outcome {
   Fate fate[kKinds] = {kNothing, kNothing, kNothing};  // of each kind the record holds
   bool note_time[kKinds] = {};  // a note gives a time inside the kind's event
   bool any_time_range = false;  // an unexplained entry with a time range, anywhere
+  int step_time_in = -1;  // the step named at the event: its time's interval holds the truth
   double cpu_s = 0.0;
 };
 
@@ -432,9 +433,20 @@ void classify_kinds(const Record& rec, const ia::Report& r, Outcome& out) {
     double w1 = 0.0;
     event_window(rec, static_cast<Kind>(k), w0, w1);
     bool named = false;
+    double nearest_s = w1 - w0;
     for (const auto& e : r.effects) {
-      named = named || (kKindEffect[k] != nullptr && e.type == kKindEffect[k] && e.time_s >= w0 &&
-                        e.time_s <= w1);
+      const bool at_event = kKindEffect[k] != nullptr && e.type == kKindEffect[k] &&
+                            e.time_s >= w0 && e.time_s <= w1;
+      named = named || at_event;
+      const double t_true = 0.5 * (w0 + w1);
+      if (at_event && k == kStepKind && std::fabs(e.time_s - t_true) <= nearest_s) {
+        nearest_s = std::fabs(e.time_s - t_true);
+        for (const auto& iv : e.ci95) {
+          if (iv.name == "time_s") {
+            out.step_time_in = iv.lo <= t_true && t_true <= iv.hi ? 1 : 0;
+          }
+        }
+      }
     }
     bool timed = false;
     for (const auto& u : r.unexplained) {
@@ -759,6 +771,14 @@ void print_summary(const std::vector<Record>& recs, const std::vector<Outcome>& 
     }
   }
   std::printf("\nwhite noise N inside its 95 %% interval: %zu of %zu\n", n_in, n_cov);
+  std::size_t t_cov = 0;
+  std::size_t t_in = 0;
+  for (const Outcome& o : outs) {
+    t_cov += o.ok && o.step_time_in >= 0 ? 1U : 0U;
+    t_in += o.ok && o.step_time_in > 0 ? 1U : 0U;
+  }
+  std::printf("bias step time inside its 95 %% interval (the step named at the event): "
+              "%zu of %zu\n", t_in, t_cov);
   std::printf("\nreports naming a second GM (the truth has one GM): %zu of %zu\n", second_gm, ok);
   std::printf("reports with an output filter on the white noise (the truth has none): %zu of %zu\n",
               output_filter, ok);

@@ -903,6 +903,7 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
       // statistic: the size's |z| (its standard error is |size| / |z|)
       const double half = 1.96 * std::fabs(e.size) / e.statistic;
       c.push_back(ParamInterval{"size", e.size - half, e.size + half});
+      c.push_back(ParamInterval{"time_s", e.time_lo_s, e.time_hi_s});
     }
     for (const ParamInterval& iv : c) {
       const double lo = std::min(std::fabs(iv.lo), std::fabs(iv.hi));
@@ -3811,12 +3812,15 @@ class Analysis {
       if (!window_step_beats_decay(best.sample_index)) {
         break;
       }
-      const std::size_t k = refine_step(best.sample_index, best_window);
+      const RefinedStep rs = refine_step(best.sample_index, best_window);
+      const std::size_t k = rs.sample;
       const double size = window_step_size(k, best_window);
       step_at.push_back(k);
       Effect e;
       e.type = "bias_step";
       e.time_s = static_cast<double>(k) * ts;
+      e.time_lo_s = static_cast<double>(rs.first) * ts;
+      e.time_hi_s = static_cast<double>(rs.last) * ts;
       e.size = size;
       e.statistic = std::fabs(best.z);
       e.threshold = thr;
@@ -3839,14 +3843,21 @@ class Analysis {
   // the maximum-likelihood change point within one block either side, the levels on each side
   // taken from the detector's windows outside that zone (white noise within the zone; a
   // Gauss-Markov drift is a level over one block): argmax over k of sum_{i<k} (mL - mR)
-  // (2 y_i - mL - mR). The zone is read as measured: the before filter's "outliers" right
-  // after a large step are the step's first samples.
-  [[nodiscard]] std::size_t refine_step(std::uint64_t at_u, double window) const {
+  // (2 y_i - mL - mR), which is 2 sd^2 times the log-likelihood of k (sd: the white noise's std
+  // per sample). Its 95 % set: the k within kChangePointSet95 of the best in 2 ln LR, cut at the
+  // zone's ends. The zone is read as measured: the before filter's "outliers" right after a
+  // large step are the step's first samples.
+  struct RefinedStep {
+    std::size_t sample = 0;
+    std::size_t first = 0;  ///< the 95 % set of `sample`: from
+    std::size_t last = 0;   ///< to
+  };
+  [[nodiscard]] RefinedStep refine_step(std::uint64_t at_u, double window) const {
     const auto at = static_cast<std::size_t>(at_u);
     const auto w = static_cast<std::size_t>(window);
     const std::size_t blk = std::max<std::size_t>(1, w / 8);
     if (at < w || at + w > y.size() || w <= 2 * blk) {
-      return at;
+      return RefinedStep{at, at, at};
     }
     double m_l = 0.0;
     double m_r = 0.0;
@@ -3858,17 +3869,21 @@ class Analysis {
     }
     m_l /= static_cast<double>(w - blk);
     m_r /= static_cast<double>(w - blk);
-    std::size_t best = at - blk;
-    double sum = 0.0;
-    double best_sum = 0.0;
-    for (std::size_t i = at - blk; i < at + blk; ++i) {
-      sum += (m_l - m_r) * (2.0 * measured(i) - m_l - m_r);
-      if (sum > best_sum) {
-        best_sum = sum;
-        best = i + 1;
+    std::vector<double> sums(2 * blk + 1, 0.0);  // sums[j]: the step at at - blk + j
+    std::size_t best = 0;
+    for (std::size_t j = 1; j < sums.size(); ++j) {
+      sums[j] = sums[j - 1] + (m_l - m_r) * (2.0 * measured(at - blk + j - 1) - m_l - m_r);
+      best = sums[j] > sums[best] ? j : best;
+    }
+    const double white_var = out.model_before.n * out.model_before.n / ts;
+    RefinedStep r{at - blk + best, at - blk + best, at - blk + best};
+    for (std::size_t j = 0; j < sums.size(); ++j) {
+      if (!(white_var > 0.0) || sums[best] - sums[j] <= kChangePointSet95 * white_var) {
+        r.first = std::min(r.first, at - blk + j);
+        r.last = std::max(r.last, at - blk + j);
       }
     }
-    return best;
+    return r;
   }
 
   // The step's size at sample k: the difference of the means of the two windows either side,
@@ -4112,6 +4127,8 @@ class Analysis {
       Effect e;
       e.type = "bias_step";
       e.time_s = static_cast<double>(sl.sample) * ts;
+      e.time_lo_s = static_cast<double>(sl.first_sample) * ts;
+      e.time_hi_s = static_cast<double>(sl.last_sample) * ts;
       e.size = sl.size;
       e.statistic = std::sqrt(sl.lr);  // |z| of the GLS size, as the window detector's
       e.threshold = std::sqrt(thr);

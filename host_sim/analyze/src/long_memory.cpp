@@ -668,6 +668,7 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
     return out;
   }
   std::vector<double> u(nb, 0.0);
+  std::vector<double> lr_at(nb, -1.0);
   const std::size_t first = std::max<std::size_t>(margin_blocks, 1);
   for (std::size_t b = first; b + margin_blocks < nb; ++b) {
     if (only_block != kEveryBlock && b != only_block) {
@@ -679,11 +680,22 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
       continue;
     }
     ++out.positions;
+    lr_at[b] = lr;
     if (lr > out.lr || !out.ok) {
       out.lr = lr;
       out.size = size;
       out.sample = static_cast<std::uint64_t>(b) * test.per_block;
       out.ok = true;
+    }
+  }
+  out.first_sample = out.sample;
+  out.last_sample = out.sample;
+  for (std::size_t b = first; b + margin_blocks < nb; ++b) {
+    if (lr_at[b] >= out.lr - kChangePointSet95) {
+      // (a step inside block b - 1 also peaks at boundary b)
+      const auto at = static_cast<std::uint64_t>(b) * test.per_block;
+      out.first_sample = std::min(out.first_sample, at - test.per_block);
+      out.last_sample = std::max(out.last_sample, at);
     }
   }
   return out;

@@ -109,6 +109,8 @@ struct Effect {
   double bandwidth_hz = 0.0;  ///< oscillation: half-power width of its PSD peak (beta / pi)
   double tb_s = 0.0;       ///< gauss_markov: correlation time Tb [s] (amplitude: its sigma)
   double time_s = 0.0;     ///< bias step: time of the first sample after it
+  double time_lo_s = 0.0;  ///< bias step: 95 % interval of time_s: from
+  double time_hi_s = 0.0;  ///< to
   double size = 0.0;       ///< bias step [unit]
   std::uint64_t count = 0; ///< outliers
   std::vector<double> times_s;  ///< outliers: times of the first 100 [s]

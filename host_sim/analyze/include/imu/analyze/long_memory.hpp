@@ -93,13 +93,24 @@ struct RrwLikelihoodTest {
 /// H0 (the whitened innovations of the data and of the unit step at b, one Kalman pass each;
 /// H0's parameters fixed) and lr(b) = (sum a e)^2 / sum e^2 = 2 (l(b) - l0), chi-square(1) at a
 /// fixed b. The best b is returned; its lr is compared by the caller with a threshold over the
-/// number of positions and with the walk's lr. Cost: O(blocks^2 * states^2), ~0.1 s.
+/// number of positions and with the walk's lr. The step's time has a 95 % set from the
+/// profile: the boundaries whose lr lies within kChangePointSet95 of the best, from the block
+/// before its first boundary to its last. Cost: O(blocks^2 * states^2), ~0.1 s.
+/// The likelihood-ratio set of a change point's time (Siegmund, "Confidence sets in
+/// change-point problems", Int. Stat. Rev. 56, 1988): beside the true time the profile's
+/// 2 ln LR falls as 2 W(s) - |s| on either side (W a Brownian motion, s in units of the
+/// step's sd^2 / size^2), whose supremum on each side is exponential with mean 2; both stay
+/// below c with probability (1 - e^(-c/2))^2 = 0.95 at c = -2 ln(1 - sqrt(0.95)) = 7.35 (not
+/// chi-square(1)'s 3.84: the time is not a regular parameter). Coverage: tests/bench.
+inline constexpr double kChangePointSet95 = 7.35;
 struct StepLikelihood {
   bool ok = false;
   std::uint64_t sample = 0;  ///< first sample after the step
   double lr = 0.0;
   double size = 0.0;         ///< [unit]
   std::size_t positions = 0;  ///< boundaries profiled
+  std::uint64_t first_sample = 0;  ///< the 95 % set of `sample`: from
+  std::uint64_t last_sample = 0;   ///< to
 };
 /// 2 ln LR of a deterministic regressor u (one value per block of the test) against the test's
 /// H0, by GLS as for a step: e.g. a quadratic trend left after a line was removed. 0 if n/a.
