@@ -692,10 +692,10 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
   out.last_sample = out.sample;
   for (std::size_t b = first; b + margin_blocks < nb; ++b) {
     if (lr_at[b] >= out.lr - kChangePointSet95) {
-      // (a step inside block b - 1 also peaks at boundary b)
+      // (a step inside block b - 1 or b peaks at boundary b)
       const auto at = static_cast<std::uint64_t>(b) * test.per_block;
       out.first_sample = std::min(out.first_sample, at - test.per_block);
-      out.last_sample = std::max(out.last_sample, at);
+      out.last_sample = std::max(out.last_sample, at + test.per_block);
     }
   }
   return out;

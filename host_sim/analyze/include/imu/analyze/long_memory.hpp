@@ -95,7 +95,8 @@ struct RrwLikelihoodTest {
 /// fixed b. The best b is returned; its lr is compared by the caller with a threshold over the
 /// number of positions and with the walk's lr. The step's time has a 95 % set from the
 /// profile: the boundaries whose lr lies within kChangePointSet95 of the best, from the block
-/// before its first boundary to its last. Cost: O(blocks^2 * states^2), ~0.1 s.
+/// before its first boundary to the block after its last (a step between two boundaries peaks
+/// at either). Cost: O(blocks^2 * states^2), ~0.1 s.
 /// The likelihood-ratio set of a change point's time (Siegmund, "Confidence sets in
 /// change-point problems", Int. Stat. Rev. 56, 1988): beside the true time the profile's
 /// 2 ln LR falls as 2 W(s) - |s| on either side (W a Brownian motion, s in units of the
