@@ -88,6 +88,15 @@ struct RrwLikelihoodTest {
   std::vector<std::size_t> resets;   ///< level resets at the steps given
 };
 
+/// The likelihood-ratio set of a change point's time (Siegmund, "Confidence sets in
+/// change-point problems", Int. Stat. Rev. 56, 1988): beside the true time the profile's
+/// 2 ln LR falls as 2 W(s) - |s| on either side (W a Brownian motion, s in units of the
+/// step's sd^2 / size^2), whose supremum on each side is exponential with mean 2; both stay
+/// below c with probability (1 - e^(-c/2))^2 = 0.95 at c = -2 ln(1 - sqrt(0.95)) = 7.35 (not
+/// chi-square(1)'s 3.84: the time is not a regular parameter). Its coverage:
+/// tests/bench/bench_selection.
+inline constexpr double kChangePointSet95 = 7.35;
+
 /// A bias step against the test's H0, by the record's profile likelihood: for every block
 /// boundary b at least `margin_blocks` from either end, the GLS size of a level shift at b under
 /// H0 (the whitened innovations of the data and of the unit step at b, one Kalman pass each;
@@ -97,13 +106,6 @@ struct RrwLikelihoodTest {
 /// profile: the boundaries whose lr lies within kChangePointSet95 of the best, from the block
 /// before its first boundary to the block after its last (a step between two boundaries peaks
 /// at either). Cost: O(blocks^2 * states^2), ~0.1 s.
-/// The likelihood-ratio set of a change point's time (Siegmund, "Confidence sets in
-/// change-point problems", Int. Stat. Rev. 56, 1988): beside the true time the profile's
-/// 2 ln LR falls as 2 W(s) - |s| on either side (W a Brownian motion, s in units of the
-/// step's sd^2 / size^2), whose supremum on each side is exponential with mean 2; both stay
-/// below c with probability (1 - e^(-c/2))^2 = 0.95 at c = -2 ln(1 - sqrt(0.95)) = 7.35 (not
-/// chi-square(1)'s 3.84: the time is not a regular parameter). Coverage: tests/bench.
-inline constexpr double kChangePointSet95 = 7.35;
 struct StepLikelihood {
   bool ok = false;
   std::uint64_t sample = 0;  ///< first sample after the step
