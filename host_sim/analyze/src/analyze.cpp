@@ -3877,16 +3877,12 @@ class Analysis {
       best = sums[j] > sums[best] ? j : best;
     }
     const double white_var = out.model_before.n * out.model_before.n / ts;
-    RefinedStep r{at - blk + best, at - blk + best, at - blk + best};
-    for (std::size_t j = 0; j < sums.size(); ++j) {
-      if (!(white_var > 0.0) || sums[best] - sums[j] <= kChangePointSet95 * white_var) {
-        r.first = std::min(r.first, at - blk + j);
-        r.last = std::max(r.last, at - blk + j);
-      }
+    for (double& v : sums) {
+      v = white_var > 0.0 ? v / white_var : 0.0;  // 2 ln L (no white level: the whole zone)
     }
-    r.first -= r.first > 0 ? 1 : 0;
-    r.last += 1;
-    return r;
+    const PositionRange set = change_point_set(sums, best);
+    const std::size_t first = at - blk + set.first;
+    return RefinedStep{at - blk + best, first - (first > 0 ? 1 : 0), at - blk + set.last + 1};
   }
 
   // The step's size at sample k: the difference of the means of the two windows either side,

@@ -668,7 +668,8 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
     return out;
   }
   std::vector<double> u(nb, 0.0);
-  std::vector<double> lr_at(nb, -1.0);
+  std::vector<double> lr_at(nb, std::numeric_limits<double>::quiet_NaN());
+  std::size_t best_b = 0;
   const std::size_t first = std::max<std::size_t>(margin_blocks, 1);
   for (std::size_t b = first; b + margin_blocks < nb; ++b) {
     if (only_block != kEveryBlock && b != only_block) {
@@ -682,23 +683,31 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
     ++out.positions;
     lr_at[b] = lr;
     if (lr > out.lr || !out.ok) {
+      best_b = b;
       out.lr = lr;
       out.size = size;
       out.sample = static_cast<std::uint64_t>(b) * test.per_block;
       out.ok = true;
     }
   }
-  out.first_sample = out.sample;
-  out.last_sample = out.sample;
-  for (std::size_t b = first; b + margin_blocks < nb; ++b) {
-    if (lr_at[b] >= out.lr - kChangePointSet95) {
-      // (a step inside block b - 1 or b peaks at boundary b)
-      const auto at = static_cast<std::uint64_t>(b) * test.per_block;
-      out.first_sample = std::min(out.first_sample, at - test.per_block);
-      out.last_sample = std::max(out.last_sample, at + test.per_block);
-    }
+  if (out.ok) {
+    // (a step inside block b - 1 or b peaks at boundary b; boundaries start at 1)
+    const PositionRange r = change_point_set(lr_at, best_b);
+    out.first_sample = static_cast<std::uint64_t>(r.first - 1) * test.per_block;
+    out.last_sample = static_cast<std::uint64_t>(r.last + 1) * test.per_block;
   }
   return out;
+}
+
+PositionRange change_point_set(const std::vector<double>& two_ln_l, std::size_t best) {
+  PositionRange r{best, best};
+  for (std::size_t i = 0; i < two_ln_l.size(); ++i) {
+    if (two_ln_l[i] >= two_ln_l[best] - kChangePointSet95) {
+      r.first = std::min(r.first, i);
+      r.last = std::max(r.last, i);
+    }
+  }
+  return r;
 }
 
 double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u, double* size,

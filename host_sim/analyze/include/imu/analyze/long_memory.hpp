@@ -96,6 +96,16 @@ struct RrwLikelihoodTest {
 /// chi-square(1)'s 3.84: the time is not a regular parameter). Its coverage:
 /// tests/bench/bench_selection.
 inline constexpr double kChangePointSet95 = 7.35;
+/// The positions of that set: the first and last index i whose two_ln_l[i] (2 ln L of the
+/// change at position i; NaN where not profiled) lies within kChangePointSet95 of
+/// two_ln_l[best]. Callers widen it by one position either side (a step between two positions
+/// peaks at either).
+struct PositionRange {
+  std::size_t first = 0;
+  std::size_t last = 0;
+};
+[[nodiscard]] PositionRange change_point_set(const std::vector<double>& two_ln_l,
+                                             std::size_t best);
 
 /// A bias step against the test's H0, by the record's profile likelihood: for every block
 /// boundary b at least `margin_blocks` from either end, the GLS size of a level shift at b under
@@ -103,9 +113,8 @@ inline constexpr double kChangePointSet95 = 7.35;
 /// H0's parameters fixed) and lr(b) = (sum a e)^2 / sum e^2 = 2 (l(b) - l0), chi-square(1) at a
 /// fixed b. The best b is returned; its lr is compared by the caller with a threshold over the
 /// number of positions and with the walk's lr. The step's time has a 95 % set from the
-/// profile: the boundaries whose lr lies within kChangePointSet95 of the best, from the block
-/// before its first boundary to the block after its last (a step between two boundaries peaks
-/// at either). Cost: O(blocks^2 * states^2), ~0.1 s.
+/// profile (change_point_set over the boundaries), from the block before its first boundary to
+/// the block after its last. Cost: O(blocks^2 * states^2), ~0.1 s.
 struct StepLikelihood {
   bool ok = false;
   std::uint64_t sample = 0;  ///< first sample after the step
