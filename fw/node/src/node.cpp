@@ -577,7 +577,7 @@ void Node::send_status() {
     if (!active_[c]) {
       continue;
     }
-    const ResidualMonitors<4>& mc = mon_[c];
+    const NodeMonitors& mc = mon_[c];
     const float mean = mc.nis.blocks() > 0 ? mc.nis.last_block_mean() : mc.nis.running_mean();
     const float dev = std::fabs(mean - 1.0F);
     if (dev > nis_max_dev) {
@@ -627,7 +627,7 @@ void Node::send_channel_monitors() {
     if (!active_[c]) {
       continue;
     }
-    const ResidualMonitors<4>& mc = mon_[c];
+    const NodeMonitors& mc = mon_[c];
     hal::ChannelMonitorRecord r{};
     r.channel = static_cast<std::uint8_t>(c);
     r.n_states = static_cast<std::uint8_t>(pushed_[c] ? model_states_[c] : 1U);

@@ -2,7 +2,7 @@
 #include "imu/analyze/analyze.hpp"
 #include "effects.hpp"
 #include "imu/analyze/long_memory.hpp"
-#include "fft.hpp"
+#include "imu/analyze/fft.hpp"
 #include "data_faults.hpp"
 #include "noise_level.hpp"
 #include "radix_sort.hpp"

@@ -91,99 +91,6 @@ double sample_variance(const std::vector<double>& v) {
   return v.size() > 1 ? s / static_cast<double>(v.size() - 1) : 0.0;
 }
 
-// Nelder-Mead minimisation of f from x0 with initial steps `step` (one restart from the best).
-std::vector<double> nelder_mead(const std::function<double(const std::vector<double>&)>& f,
-                                std::vector<double> x0, double step, int max_iterations) {
-  const std::size_t n = x0.size();
-  for (int pass = 0; pass < 2; ++pass) {
-    std::vector<std::vector<double>> xs(n + 1, x0);
-    std::vector<double> fs(n + 1);
-    for (std::size_t i = 0; i < n; ++i) {
-      xs[i + 1][i] += step;
-    }
-    for (std::size_t i = 0; i <= n; ++i) {
-      fs[i] = f(xs[i]);
-    }
-    std::vector<std::size_t> idx(n + 1);
-    for (int it = 0; it < max_iterations; ++it) {
-      for (std::size_t i = 0; i <= n; ++i) {
-        idx[i] = i;
-      }
-      std::sort(idx.begin(), idx.end(),
-                [&](std::size_t a, std::size_t b) { return fs[a] < fs[b]; });
-      const std::size_t best = idx[0];
-      const std::size_t worst = idx[n];
-      const std::size_t second = idx[n - 1];
-      double size = 0.0;
-      for (std::size_t i = 0; i <= n; ++i) {
-        for (std::size_t j = 0; j < n; ++j) {
-          size = std::max(size, std::fabs(xs[i][j] - xs[best][j]));
-        }
-      }
-      // Converged: log-likelihoods within 1e-4 (the tests compare 2 ln LR against thresholds
-      // of a few units) and log parameters within 1e-3 (0.1 %, far inside their intervals).
-      if (fs[worst] - fs[best] < 1e-4 && size < 1e-3) {
-        break;
-      }
-      std::vector<double> c(n, 0.0);
-      for (std::size_t i = 0; i <= n; ++i) {
-        if (i != worst) {
-          for (std::size_t j = 0; j < n; ++j) {
-            c[j] += xs[i][j] / static_cast<double>(n);
-          }
-        }
-      }
-      const auto along = [&](double t) {
-        std::vector<double> p(n);
-        for (std::size_t j = 0; j < n; ++j) {
-          p[j] = c[j] + t * (xs[worst][j] - c[j]);
-        }
-        return p;
-      };
-      const std::vector<double> xr = along(-1.0);
-      const double fr = f(xr);
-      if (fr < fs[best]) {
-        const std::vector<double> xe = along(-2.0);
-        const double fe = f(xe);
-          if (fe < fr) {
-          xs[worst] = xe;
-          fs[worst] = fe;
-        } else {
-          xs[worst] = xr;
-          fs[worst] = fr;
-        }
-      } else if (fr < fs[second]) {
-        xs[worst] = xr;
-        fs[worst] = fr;
-      } else {
-        const bool outside = fr < fs[worst];
-        const std::vector<double> xc = along(outside ? -0.5 : 0.5);
-        const double fc = f(xc);
-          if (fc < (outside ? fr : fs[worst])) {
-          xs[worst] = xc;
-          fs[worst] = fc;
-        } else {  // shrink towards the best
-          for (std::size_t i = 0; i <= n; ++i) {
-            if (i != best) {
-              for (std::size_t j = 0; j < n; ++j) {
-                xs[i][j] = xs[best][j] + 0.5 * (xs[i][j] - xs[best][j]);
-              }
-              fs[i] = f(xs[i]);
-                    }
-          }
-        }
-      }
-    }
-    std::size_t b = 0;
-    for (std::size_t i = 1; i <= n; ++i) {
-      b = fs[i] < fs[b] ? i : b;
-    }
-    x0 = xs[b];
-    step *= 0.25;  // the restart explores a smaller simplex around the optimum
-  }
-  return x0;
-}
-
 // Log-parameter vector <-> model. tb is mapped into [tb_min, tb_max] by a logistic.
 struct Packing {
   std::size_t n_gm = 0;
@@ -251,6 +158,98 @@ std::vector<double> block_means(const std::vector<double>& y, std::size_t per_bl
     out[b] = s / static_cast<double>(per_block);
   }
   return out;
+}
+
+std::vector<double> nelder_mead(const std::function<double(const std::vector<double>&)>& f,
+                                std::vector<double> x0, double step, int max_iterations) {
+  const std::size_t n = x0.size();
+  for (int pass = 0; pass < 2; ++pass) {
+    std::vector<std::vector<double>> xs(n + 1, x0);
+    std::vector<double> fs(n + 1);
+    for (std::size_t i = 0; i < n; ++i) {
+      xs[i + 1][i] += step;
+    }
+    for (std::size_t i = 0; i <= n; ++i) {
+      fs[i] = f(xs[i]);
+    }
+    std::vector<std::size_t> idx(n + 1);
+    for (int it = 0; it < max_iterations; ++it) {
+      for (std::size_t i = 0; i <= n; ++i) {
+        idx[i] = i;
+      }
+      std::sort(idx.begin(), idx.end(),
+                [&](std::size_t a, std::size_t b) { return fs[a] < fs[b]; });
+      const std::size_t best = idx[0];
+      const std::size_t worst = idx[n];
+      const std::size_t second = idx[n - 1];
+      double size = 0.0;
+      for (std::size_t i = 0; i <= n; ++i) {
+        for (std::size_t j = 0; j < n; ++j) {
+          size = std::max(size, std::fabs(xs[i][j] - xs[best][j]));
+        }
+      }
+      // Converged: log-likelihoods within 1e-4 (the tests compare 2 ln LR against thresholds
+      // of a few units) and log parameters within 1e-3 (0.1 %, far inside their intervals).
+      if (fs[worst] - fs[best] < 1e-4 && size < 1e-3) {
+        break;
+      }
+      std::vector<double> c(n, 0.0);
+      for (std::size_t i = 0; i <= n; ++i) {
+        if (i != worst) {
+          for (std::size_t j = 0; j < n; ++j) {
+            c[j] += xs[i][j] / static_cast<double>(n);
+          }
+        }
+      }
+      const auto along = [&](double t) {
+        std::vector<double> p(n);
+        for (std::size_t j = 0; j < n; ++j) {
+          p[j] = c[j] + t * (xs[worst][j] - c[j]);
+        }
+        return p;
+      };
+      const std::vector<double> xr = along(-1.0);
+      const double fr = f(xr);
+      if (fr < fs[best]) {
+        const std::vector<double> xe = along(-2.0);
+        const double fe = f(xe);
+        if (fe < fr) {
+          xs[worst] = xe;
+          fs[worst] = fe;
+        } else {
+          xs[worst] = xr;
+          fs[worst] = fr;
+        }
+      } else if (fr < fs[second]) {
+        xs[worst] = xr;
+        fs[worst] = fr;
+      } else {
+        const bool outside = fr < fs[worst];
+        const std::vector<double> xc = along(outside ? -0.5 : 0.5);
+        const double fc = f(xc);
+        if (fc < (outside ? fr : fs[worst])) {
+          xs[worst] = xc;
+          fs[worst] = fc;
+        } else {  // shrink towards the best
+          for (std::size_t i = 0; i <= n; ++i) {
+            if (i != best) {
+              for (std::size_t j = 0; j < n; ++j) {
+                xs[i][j] = xs[best][j] + 0.5 * (xs[i][j] - xs[best][j]);
+              }
+              fs[i] = f(xs[i]);
+            }
+          }
+        }
+      }
+    }
+    std::size_t b = 0;
+    for (std::size_t i = 1; i <= n; ++i) {
+      b = fs[i] < fs[b] ? i : b;
+    }
+    x0 = xs[b];
+    step *= 0.25;  // the restart explores a smaller simplex around the optimum
+  }
+  return x0;
 }
 
 namespace {

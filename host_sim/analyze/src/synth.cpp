@@ -8,7 +8,7 @@
 
 #include "imu/error_model.hpp"
 #include "imu/noise_sim.hpp"
-#include "fft.hpp"
+#include "imu/analyze/fft.hpp"
 
 namespace imu::analyze {
 namespace {

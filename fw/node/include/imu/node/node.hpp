@@ -106,6 +106,9 @@ inline constexpr float kMaxPushedFilterS = 1e3F;
 inline constexpr float kMaxPushedOscF0Hz = 5e4F;
 inline constexpr float kMinPushedOscBetaPerS = 1e-6F;
 inline constexpr float kMaxPushedOscBetaPerS = 1e6F;
+/// Lags of each channel's whiteness monitor (ResidualMonitors: Box-Pierce over lags 1..4).
+inline constexpr std::size_t kMonitorLags = 4;
+using NodeMonitors = ResidualMonitors<kMonitorLags>;
 /// Missing samples beyond this are predicted as this many steps (the GM states have forgotten
 /// everything long before; RRW variance is capped by the filter): a 2^31 jump stays O(1).
 inline constexpr std::uint64_t kMaxGapSteps = 4096;
@@ -218,7 +221,7 @@ class Node {
   /// Channel c runs a pushed model whose filter has frozen its steady-state gain.
   [[nodiscard]] bool filter_steady(std::size_t c) const { return pushed_[c] && kfn_[c].steady(); }
   [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
-  [[nodiscard]] const ResidualMonitors<4>& monitors(std::size_t c) const { return mon_[c]; }
+  [[nodiscard]] const NodeMonitors& monitors(std::size_t c) const { return mon_[c]; }
   /// Level shifts the channel's CUSUM detected since the stream (re)started. At each one the
   /// node moves the channel's known signal by the step's size and re-arms the CUSUM, so one
   /// step is one detection and the filter goes on from the new level (a latched alarm would
@@ -275,7 +278,7 @@ class Node {
   bool pushed_[kChannels] = {};
   bool echo_v2_[kChannels] = {};  // the channel's last push was version 2: echo in version 2
   DiscreteModel<kNodeStates> scratch_dm_{};  // discretisation workspace (not on the stack)
-  ResidualMonitors<4> mon_[kChannels];
+  NodeMonitors mon_[kChannels];
   LevelShifts shifts_[kChannels] = {};
   float known_[kChannels] = {};
   bool active_[kChannels] = {};  // a non-zero count was seen since the stream started

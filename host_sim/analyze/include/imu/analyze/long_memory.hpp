@@ -27,6 +27,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "imu/error_model.hpp"
@@ -61,6 +62,14 @@ void remove_mean_and_line(std::vector<double>& v, bool detrend);
 [[nodiscard]] double block_loglik(const std::vector<double>& means, double block_s,
                                   const BlockModel& m, double w0_var = -1.0,
                                   const std::vector<std::size_t>& resets = {});
+
+/// Nelder-Mead minimisation of f from x0 with initial steps `step` in every coordinate, at
+/// most max_iterations per pass, then one restart from the best with a quarter of the steps.
+/// Converged: f within 1e-4 and the coordinates within 1e-3 over the simplex. Returns the best
+/// point. Cost: about max_iterations x (1 to dims + 2) calls of f per pass.
+[[nodiscard]] std::vector<double> nelder_mead(
+    const std::function<double(const std::vector<double>&)>& f, std::vector<double> x0,
+    double step, int max_iterations);
 
 struct LikelihoodFit {
   bool ok = false;
