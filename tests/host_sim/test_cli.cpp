@@ -325,9 +325,10 @@ TEST(SimCli, FirstOrderModelAlarmsAndPushedAnalysisModelIsQuietOnTheDemoData) {
   EXPECT_GE(states, 2.0) << node.substr(0, 1500);
 }
 
-/// `run --model` sends the white noise's output filter and the narrowband oscillation as filter
-/// states (a version 2 model record) and the node runs them: its echo in the run JSON carries
-/// them (float of the JSON's numbers), N unchanged, GM + filter + oscillation = 4 states.
+/// `run --model --model-as-is` sends the white noise's output filter and the narrowband
+/// oscillation as filter states (a version 2 model record) and the node runs them: its echo in
+/// the run JSON carries them (float of the JSON's numbers), N unchanged, GM + filter +
+/// oscillation = 4 states.
 TEST(SimCli, RunModelSendsTheOutputFilterAndTheOscillation) {
   SKIP_IF_EMULATED();
   simtest::TempDir dir;
@@ -341,10 +342,11 @@ TEST(SimCli, RunModelSendsTheOutputFilterAndTheOscillation) {
                       "\"sin2_f0_hz\": 0, \"bias_instability\": {\"b\": 0, \"tau_lo_s\": 0, "
                       "\"tau_hi_s\": 0}, \"oscillation\": {\"sigma\": 0.02, \"f0_hz\": 6, "
                       "\"beta_per_s\": 1.57}}}";
-  r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--sim-windows", "10", "--out",
-           dir.file("o")});
+  r = run({"run", mat, "--model", f, "--model-as-is", "--no-plots", "--quiet", "--sim-windows",
+           "10", "--out", dir.file("o")});
   ASSERT_EQ(r.status, 0) << r.err;
   const std::string report = simtest::read_text(dir.file("o") + "/report.txt");
+  EXPECT_EQ(report.find("tuned to the node's filter"), std::string::npos) << report;
   EXPECT_EQ(report.find("oscillation of model_after"), std::string::npos) << report;
   EXPECT_EQ(report.find("output filter of model_after"), std::string::npos) << report;
   const std::string json = simtest::read_text(dir.file("o") + "/report.json");
@@ -429,8 +431,8 @@ TEST(SimCli, RunModelFoldsAnOscillationTheNodeCannotHold) {
     const std::string f = dir.file("osc.json");
     std::ofstream(f) << "{\"channel\": \"acc_z\", \"fs_hz\": " << (head.empty() ? "100" : "25")
                      << ", " << model << head << "}";
-    r = run({"run", mat, "--model", f, "--no-plots", "--quiet", "--sim-windows", "10", "--out",
-             dir.file("o")});
+    r = run({"run", mat, "--model", f, "--model-as-is", "--no-plots", "--quiet",
+             "--sim-windows", "10", "--out", dir.file("o")});
     ASSERT_EQ(r.status, 0) << r.err;
     const std::string report = simtest::read_text(dir.file("o") + "/report.txt");
     EXPECT_NE(report.find("its variance is added to the white noise"), std::string::npos)

@@ -28,6 +28,7 @@
 
 #include "common.hpp"
 #include "data.hpp"
+#include "imu/analyze/node_tuning.hpp"
 #include "imu/cli/file_out.hpp"
 #include "imu/edf.hpp"
 #include "imu/hal/linux/can_socket.hpp"
@@ -331,6 +332,7 @@ struct RunOptions {
   hal::ModelRecord model[kNumChannels] = {};  ///< read from model_path, per channel slot
   bool pushed[kNumChannels] = {};             ///< model[c] is sent
   bool push_model = false;
+  bool model_as_is = false;  ///< --model-as-is: push model_after untuned
 };
 
 // Work limits of the covariance check: simulated windows, and samples simulated in all.
@@ -374,6 +376,10 @@ bool parse_run_names(const Args& a, RunOptions& o, std::string& err) {
   o.only_channel = a.has("--only-channel");
   o.model_path = a.get("--model", "");
   o.push_model = !o.model_path.empty();
+  o.model_as_is = a.has("--model-as-is");
+  if (err.empty() && o.model_as_is && !o.push_model) {
+    err = "--model-as-is needs --model";
+  }
   return err.empty();
 }
 
@@ -420,7 +426,7 @@ bool parse_run(int argc, char** argv, RunOptions& o, std::string& err) {
       {"--no-plots", false}, {"--quiet", false},  {"--T-avg", true},     {"--T-int", true},
       {"--sim-windows", true}, {"--seed", true},  {"--timeout", true},   {"--window", true},
       {"--lsb", true},     {"--fs", true},        {"--layout", true},    {"--only-channel", false},
-      {"--model", true},
+      {"--model", true},   {"--model-as-is", false},
   };
   if (!a.parse(argc, argv, 2, specs, 1, err)) {
     return false;
@@ -527,28 +533,34 @@ bool plan_send(const SensorData& sd, SendPlan& plan, std::string& err) {
 // The first samples of the report's channel, as many as the covariance check uses (at most
 // kMaxCovWindows windows: a bounded prefix whatever the record's length).
 constexpr std::size_t kMaxCovWindows = 400;
-bool read_cov_prefix(const RunOptions& o, const SensorData& sd, std::vector<double>& prefix,
-                     std::string& err) {
-  const double win = std::round(o.ro.t_avg_s * sd.fs_hz) + std::round(o.ro.t_int_s * sd.fs_hz);
-  const auto want = static_cast<std::size_t>(
-      std::min(static_cast<double>(sd.n_samples), win * static_cast<double>(kMaxCovWindows)));
-  auto cs = open_channel(sd, o.chan);
+// The first `want` samples of channel c in its unit (NaN where the file has gaps).
+bool read_channel_head(const SensorData& sd, std::size_t c, std::size_t want,
+                       std::vector<double>& out, std::string& err) {
+  auto cs = open_channel(sd, c);
   if (!cs.ok()) {
     err = cs.error().message;
     return false;
   }
-  prefix.resize(want);
+  out.resize(want);
   std::size_t got = 0;
   while (got < want) {
-    const auto r = cs.value().read(prefix.data() + got, want - got);
+    const auto r = cs.value().read(out.data() + got, want - got);
     if (!r.ok() || r.value() == 0U) {
       err = r.ok() ? sd.path + ": channel shorter than declared" : r.error().message;
       return false;
     }
     got += r.value();
   }
-  scale_counts(sd.ch[o.chan], prefix.data(), prefix.size());
+  scale_counts(sd.ch[c], out.data(), out.size());
   return true;
+}
+
+bool read_cov_prefix(const RunOptions& o, const SensorData& sd, std::vector<double>& prefix,
+                     std::string& err) {
+  const double win = std::round(o.ro.t_avg_s * sd.fs_hz) + std::round(o.ro.t_int_s * sd.fs_hz);
+  const auto want = static_cast<std::size_t>(
+      std::min(static_cast<double>(sd.n_samples), win * static_cast<double>(kMaxCovWindows)));
+  return read_channel_head(sd, o.chan, want, prefix, err);
 }
 
 // A sink that keeps nothing: stream_counts() for its checks alone.
@@ -1233,6 +1245,28 @@ bool load_models(const std::string& json, RunOptions& o, std::string& notes, std
   return true;
 }
 
+// Samples of a channel the pushed model is tuned on (imu::analyze::tune_node_record uses at
+// most 16 segments of 2^18).
+constexpr std::size_t kTuneSamples = std::size_t{1} << 22U;
+
+// Each pushed model tuned to the node's filter on the record the run sends (the fast terms by
+// the record's Whittle likelihood, node_tuning.hpp); what changed goes to `notes`.
+bool tune_models(RunOptions& o, const SensorData& sd, std::string& notes, std::string& err) {
+  std::vector<double> head;
+  for (std::size_t c = 0; c < kNumChannels; ++c) {
+    if (!o.pushed[c] || !sd.ch[c].present) {
+      continue;
+    }
+    if (!read_channel_head(sd, c, std::min(sd.n_samples, kTuneSamples), head, err)) {
+      return false;
+    }
+    const analyze::NodeTuning t =
+        analyze::tune_node_record(head.data(), head.size(), sd.fs_hz, o.model[c]);
+    notes.append(notes.empty() ? "" : "; ").append(slot_name(o, c)).append(": ").append(t.note);
+  }
+  return true;
+}
+
 // A whiteness or NIS test that flags a block with probability p_flag under a correct model,
 // run on `blocks` blocks: the most flagged blocks that are still consistent with a correct
 // model at the 1 % level (the smallest m with P(Bin(blocks, p_flag) > m) <= 0.01). O(blocks).
@@ -1536,6 +1570,9 @@ int cmd_run(int argc, char** argv) {
   const int load_status = load_run_data(o, sd, plan, err);
   if (load_status != kExitOk) {
     return fail(kCmd, err, load_status);
+  }
+  if (o.push_model && !o.model_as_is && !tune_models(o, sd, model_note, err)) {
+    return fail(kCmd, err);
   }
   std::vector<double> cov_prefix;  // the report's covariance check: a bounded prefix
   if (!read_cov_prefix(o, sd, cov_prefix, err)) {
