@@ -1,8 +1,8 @@
 // The node's model tuned by the record's Whittle likelihood (imu/analyze/node_tuning.hpp), on
 // records simulated from a known model as the node sees it (its averaging sampler): a model
 // given with wrong fast parameters comes back to the truth, an oscillation the model lacks is
-// added, none is added to a record without one, and a record without a long enough finite
-// stretch is left alone.
+// added (room made for it in a model that fills the node), none is added to a record without
+// one, and a record without a long enough finite stretch is left alone.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -95,6 +95,33 @@ TEST(NodeTuning, AnOscillationTheModelLacksIsAdded) {
   EXPECT_GT(tn.oscillation_two_ln_lr, tn.oscillation_level);
   EXPECT_LT(rel(r.osc_f0_hz, t.osc_f0_hz), 0.01);
   EXPECT_LT(rel(r.osc_sigma, t.osc_sigma), 0.1);
+}
+
+// A model that fills the node's 8 states (the two GMs, the output filter and a 5-member
+// bias-instability bank) makes room for the oscillation the record holds: the bank's short end
+// moves up (its members there lie where the white noise dominates) and the result still runs.
+TEST(NodeTuning, AModelThatFillsTheNodeMakesRoomForTheOscillation) {
+  const imu::hal::ModelRecord t = truth(true);
+  const std::vector<double> x = simulate(t, std::size_t{1} << 20U, 7303);
+  imu::hal::ModelRecord r = truth(false);
+  r.bi = 1e-5F;  // ADEV floor 6.6e-6, under the white noise's 3e-3 / sqrt(tau) up to 2e5 s
+  r.bi_tau_lo_s = 2.56F;
+  r.bi_tau_hi_s = 1000.0F;
+  imu::ModelParams p{};
+  ASSERT_TRUE(imu::node::model_record_valid(r, p));
+  imu::hal::ModelRecord with_osc = r;
+  with_osc.osc_sigma = 8e-3F;
+  with_osc.osc_f0_hz = 8.0F;
+  with_osc.osc_beta_per_s = 2.0F;
+  ASSERT_FALSE(imu::node::model_record_valid(with_osc, p)) << "the test needs a full node";
+  const imu::analyze::NodeTuning tn = imu::analyze::tune_node_record(x.data(), x.size(), kFsHz, r);
+  std::printf("%s\n", tn.note.c_str());
+  EXPECT_TRUE(tn.oscillation_added);
+  EXPECT_NE(tn.note.find("in place of the bias-instability bank below"), std::string::npos);
+  EXPECT_TRUE(imu::node::model_record_valid(r, p));
+  EXPECT_LT(rel(r.osc_f0_hz, t.osc_f0_hz), 0.01);
+  EXPECT_GT(r.bi_tau_lo_s, 2.56F);
+  EXPECT_EQ(r.bi_tau_hi_s, 1000.0F);
 }
 
 // A clean record (no oscillation) on several seeds: none is added, and the given (true) model

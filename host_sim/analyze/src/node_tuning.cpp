@@ -25,6 +25,11 @@ constexpr std::size_t kMaxBinShare = 1000;   // and at most rate / 1000
 constexpr double kHannInflation = 35.0 / 18.0;  // n sum w^4 / (sum w^2)^2 of the Hann taper
 constexpr double kOscillationAlpha = 0.01;   // the added oscillation's level over the bins
 constexpr std::size_t kOscillationCandidates = 3;  // excesses tried for it
+// The whiteness monitor's block (updates), and the least difference of colour (added to its
+// Box-Pierce statistic over a block) it tells apart: at the 95 % bound of chi-square(4), 0.05
+// moves a block's failure probability by about 0.3 %, a few blocks in a thousand.
+const double kMonitorBlock = static_cast<double>(node::NodeConfig{}.monitor_window);
+constexpr double kColourTie = 0.05;
 constexpr double kTwoPi = 6.283185307179586;
 
 // The periodogram's band, binned. Frequencies in cycles per sample; ordinates in the units of
@@ -386,39 +391,118 @@ double innovation_colour(const Band& b, double fs_hz, const hal::ModelRecord& re
   return sum;
 }
 
-// An oscillation added at each of the band's largest excesses over rec, each tuned with rec's
-// fast terms; of those whose 2 ln LR beside rec (cost_rec) passes `level`, the one that leaves
-// the node's innovations whitest at its monitor's lags (the node has one oscillation slot, and
-// its whiteness monitor is what the term is for). Returns its 2 ln LR (0: none passed).
+std::string num(double v) {
+  char t[32];
+  std::snprintf(t, sizeof t, "%.3g", v);
+  return t;
+}
+
+// Ways to make room for an oscillation's two states in a model that fills the node (a set of
+// them): the bias-instability bank's short end up a decade at a time (one state each) while a
+// decade is left, the fastest GM inside the band to the white noise at its low-frequency level
+// (2 Sb Tb^2 = 2 N^2), the output filter left out.
+constexpr unsigned kNarrowBank = 1U;
+constexpr unsigned kFoldFastGm = 2U;
+constexpr unsigned kDropFilter = 4U;
+constexpr unsigned kAllWays = 7U;
+
+// r with the ways applied; what went is said in `given_up`. False if a way does not apply or
+// the result does not run on the node.
+bool make_room(hal::ModelRecord& r, unsigned ways, double fast_tb_s, std::string& given_up) {
+  ModelParams p{};
+  const auto add = [&given_up](const std::string& t) {
+    given_up += (given_up.empty() ? "" : ", ") + t;
+  };
+  if ((ways & kNarrowBank) != 0U) {
+    const float bank_lo_s = r.bi_tau_lo_s;
+    while (!node::model_record_valid(r, p) && r.bi > 0.0F && r.bi_tau_lo_s > 0.0F &&
+           r.bi_tau_lo_s * 100.0F <= r.bi_tau_hi_s) {
+      r.bi_tau_lo_s *= 10.0F;
+    }
+    if (!(r.bi_tau_lo_s > bank_lo_s)) {
+      return false;
+    }
+    add("the bias-instability bank below " + num(static_cast<double>(r.bi_tau_lo_s)) +
+        " s (from " + num(static_cast<double>(bank_lo_s)) + " s)");
+  }
+  if ((ways & kFoldFastGm) != 0U) {
+    std::size_t g = 2;
+    for (std::size_t i = 0; i < 2; ++i) {
+      if (r.gm_sb[i] > 0.0F && r.gm_tb_s[i] > 0.0F &&
+          static_cast<double>(r.gm_tb_s[i]) < fast_tb_s &&
+          (g == 2 || r.gm_tb_s[i] < r.gm_tb_s[g])) {
+        g = i;
+      }
+    }
+    if (g == 2) {
+      return false;
+    }
+    const auto n = static_cast<double>(r.n);
+    const auto sb = static_cast<double>(r.gm_sb[g]);
+    const auto tb = static_cast<double>(r.gm_tb_s[g]);
+    r.n = static_cast<float>(std::sqrt(n * n + sb * tb * tb));
+    add("the GM of Tb " + num(tb) + " s (now white noise)");
+    r.gm_sb[g] = g == 0 ? r.gm_sb[1] : 0.0F;  // the GMs stay in slot order
+    r.gm_tb_s[g] = g == 0 ? r.gm_tb_s[1] : 0.0F;
+    r.gm_sb[1] = 0.0F;
+    r.gm_tb_s[1] = 0.0F;
+  }
+  if ((ways & kDropFilter) != 0U) {
+    if (!(r.n_filter_s > 0.0F)) {
+      return false;
+    }
+    r.n_filter_s = 0.0F;
+    add("the output filter");
+  }
+  return node::model_record_valid(r, p);
+}
+
+// An oscillation added at each of the band's largest excesses over rec (where rec fills the
+// node, with each way of making room for it), each tuned with rec's fast terms; of those whose
+// 2 ln LR beside rec (cost_rec) passes `level`, the one that leaves the node's innovations
+// whitest at its monitor's lags (the node has one oscillation slot, and its whiteness monitor
+// is what the term is for), the likelihood deciding between those the monitor cannot tell
+// apart. Returns its 2 ln LR (0: none passed); `given_up` says what made room for it.
 double best_oscillation(const Band& b, double fs_hz, double fast_tb_s,
                         const hal::ModelRecord& rec, double cost_rec, double level,
-                        hal::ModelRecord& best) {
+                        hal::ModelRecord& best, std::string& given_up) {
   const std::vector<double> s = spectrum_at(b, fs_hz, rec);
   if (s.empty()) {
     return 0.0;
   }
   double best_lr = 0.0;
   double best_colour = std::numeric_limits<double>::infinity();
+  ModelParams p{};
   for (const std::size_t peak : excess_peaks(b, s, kOscillationCandidates)) {
-    hal::ModelRecord cand = oscillation_at(b, fs_hz, s, peak, rec);
-    if (!(cand.osc_sigma > 0.0F) || !std::isfinite(whittle_cost(b, fs_hz, cand))) {
+    const hal::ModelRecord added = oscillation_at(b, fs_hz, s, peak, rec);
+    if (!(added.osc_sigma > 0.0F)) {
       continue;
     }
-    const double lr = 2.0 * (cost_rec - fit_knobs(b, fs_hz, cand, fast_knobs(cand, fast_tb_s)));
-    const double colour = innovation_colour(b, fs_hz, cand);
-    if (lr > level && colour < best_colour) {
-      best_colour = colour;
-      best_lr = lr;
-      best = cand;
+    // As it is if the node holds it, else every way of making room that gives a model it runs.
+    const bool fits = node::model_record_valid(added, p);
+    for (unsigned ways = 0; ways <= (fits ? 0U : kAllWays); ++ways) {
+      hal::ModelRecord cand = added;
+      std::string room;
+      if ((!fits && (ways == 0U || !make_room(cand, ways, fast_tb_s, room))) ||
+          !std::isfinite(whittle_cost(b, fs_hz, cand))) {
+        continue;
+      }
+      const double lr =
+          2.0 * (cost_rec - fit_knobs(b, fs_hz, cand, fast_knobs(cand, fast_tb_s)));
+      // What the colour adds to the whiteness monitor's Box-Pierce statistic over a block;
+      // within kColourTie of each other two candidates are the same to the monitor.
+      const double colour = kMonitorBlock * innovation_colour(b, fs_hz, cand);
+      const bool whiter = colour < best_colour - kColourTie;
+      const bool tied = !whiter && colour <= best_colour + kColourTie;
+      if (lr > level && (whiter || (tied && lr > best_lr))) {
+        best_colour = colour;
+        best_lr = lr;
+        best = cand;
+        given_up = room;
+      }
     }
   }
   return best_lr;
-}
-
-std::string num(double v) {
-  char t[32];
-  std::snprintf(t, sizeof t, "%.3g", v);
-  return t;
 }
 
 // "name a -> b" for every knob that moved.
@@ -465,12 +549,13 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
   const std::vector<Knob> knobs = fast_knobs(rec, fast_tb_s);
   double cost = fit_knobs(b, fs_hz, rec, knobs);
   std::string what = changes(given, rec, knobs);
+  std::string given_up;
   if (!(rec.osc_sigma > 0.0F)) {
     out.oscillation_level =
         chi2_quantile(1.0 - kOscillationAlpha / static_cast<double>(b.f.size()), 3.0);
     hal::ModelRecord with_osc = rec;
-    out.oscillation_two_ln_lr =
-        best_oscillation(b, fs_hz, fast_tb_s, rec, cost, out.oscillation_level, with_osc);
+    out.oscillation_two_ln_lr = best_oscillation(b, fs_hz, fast_tb_s, rec, cost,
+                                                 out.oscillation_level, with_osc, given_up);
     if (out.oscillation_two_ln_lr > 0.0) {
       out.oscillation_added = true;
       cost -= 0.5 * out.oscillation_two_ln_lr;
@@ -486,6 +571,10 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
   if (out.oscillation_added) {
     out.note += "; the oscillation added (2 ln LR " + num(out.oscillation_two_ln_lr) + " > " +
                 num(out.oscillation_level) + ")";
+    if (!given_up.empty()) {
+      out.note += " in place of " + given_up + ": the node holds " +
+                  std::to_string(node::kNodeProcessStates) + " states";
+    }
   }
   return out;
 }

@@ -1250,8 +1250,12 @@ bool load_models(const std::string& json, RunOptions& o, std::string& notes, std
 constexpr std::size_t kTuneSamples = std::size_t{1} << 22U;
 
 // Each pushed model tuned to the node's filter on the record the run sends (the fast terms by
-// the record's Whittle likelihood, node_tuning.hpp); what changed goes to `notes`.
+// the record's Whittle likelihood, node_tuning.hpp), unless --model-as-is; what changed goes to
+// `notes`.
 bool tune_models(RunOptions& o, const SensorData& sd, std::string& notes, std::string& err) {
+  if (!o.push_model || o.model_as_is) {
+    return true;
+  }
   std::vector<double> head;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
     if (!o.pushed[c] || !sd.ch[c].present) {
@@ -1568,11 +1572,8 @@ int cmd_run(int argc, char** argv) {
   SensorData sd;
   SendPlan plan;
   const int load_status = load_run_data(o, sd, plan, err);
-  if (load_status != kExitOk) {
-    return fail(kCmd, err, load_status);
-  }
-  if (o.push_model && !o.model_as_is && !tune_models(o, sd, model_note, err)) {
-    return fail(kCmd, err);
+  if (load_status != kExitOk || !tune_models(o, sd, model_note, err)) {
+    return fail(kCmd, err, load_status != kExitOk ? load_status : kExitRuntime);
   }
   std::vector<double> cov_prefix;  // the report's covariance check: a bounded prefix
   if (!read_cov_prefix(o, sd, cov_prefix, err)) {
