@@ -12,19 +12,25 @@
 // information in stationary time series", Ark. Mat. 2, 1953), which for a stationary Gaussian
 // record is the exact likelihood up to O(1) terms and is maximal where the filter's
 // innovations are white (D. R. Brillinger, "Time Series: Data Analysis and Theory", 1981,
-// ch. 5). A narrowband oscillation the model lacks is offered at the periodogram's strongest
-// excess over the model and kept when its likelihood ratio passes a Bonferroni level over the
-// frequencies searched.
+// ch. 5). A narrowband oscillation the model lacks is offered at the periodogram's three
+// largest excesses over the model (in a model that fills the node's states, with each way of
+// making room: the bias-instability bank's short end up a decade while a decade is left, the
+// fastest GM in the band to the white noise, the output filter left out); of those whose
+// likelihood ratio passes a Bonferroni level over the bins searched, the one whose innovations
+// are predicted whitest at the node's whiteness-monitor lags is kept (the node has one
+// oscillation slot), the likelihood deciding near-ties.
 //
-// The periodogram: the longest stretch of finite samples (a power of two, 2^12 .. 2^20), a
-// line removed, a Hann taper; its ordinates from 1/1024 of the rate up to Nyquist averaged in
+// The periodogram: the longest stretch of finite samples (at least 2^12) in Welch segments of
+// the largest power of two up to 2^18 (at most 16 of them), each with its line removed and a
+// Hann taper; its ordinates from 1/1024 of the rate up to Nyquist averaged in
 // bins 3 % wide (at most rate/1000 wide, so a resonance's peak is resolved), each weighted by
 // the ordinates it holds over the taper's variance inflation 35/18. Steps, ramps and slow
 // terms sit below the band. The model's spectrum: S(w) = h (zI - Phi)^-1 Qd (zI - Phi)^-H h^T
 // + R at z = e^(iw) (x_{k+1} = Phi x_k + w_k, z_k = h x_k + v_k).
 //
-// Cost: one FFT of the stretch, then a few hundred likelihoods of about a thousand bins, each a
-// complex solve of the model's states: about 0.2-1 s per channel. Host only (std::vector).
+// Cost: one FFT per segment, then a few hundred likelihoods of about a thousand bins, each a
+// complex solve of the model's states: about 0.2-1.5 s per channel, a few seconds where room
+// has to be made. Host only (std::vector).
 #ifndef IMU_ANALYZE_NODE_TUNING_HPP
 #define IMU_ANALYZE_NODE_TUNING_HPP
 
