@@ -142,7 +142,8 @@ TEST(NodeTuning, NoOscillationIsAddedToARecordWithoutOne) {
   EXPECT_EQ(added, 0);
 }
 
-// Fewer than 2^12 finite samples in a row: left as it is, said. A gap: the longest finite run.
+// Fewer than 2^12 finite samples in a row, or a constant record: left as it is, said. A gap:
+// the longest finite run.
 TEST(NodeTuning, ShortOrGappedRecords) {
   const imu::hal::ModelRecord t = truth(true);
   std::vector<double> x = simulate(t, 20000, 7321);
@@ -158,6 +159,13 @@ TEST(NodeTuning, ShortOrGappedRecords) {
   x[8000] = 0.0;  // two runs joined: 7999 finite samples in a row
   tn = imu::analyze::tune_node_record(x.data(), x.size(), kFsHz, r);
   EXPECT_EQ(tn.samples, 4096U) << tn.note;
+  // A constant channel (a sensor axis that reads one value): nothing to tune on.
+  const std::vector<double> flat(8192, 9.81);
+  imu::hal::ModelRecord flat_r = t;
+  tn = imu::analyze::tune_node_record(flat.data(), flat.size(), kFsHz, flat_r);
+  EXPECT_FALSE(tn.tuned);
+  EXPECT_NE(tn.note.find("does not vary"), std::string::npos) << tn.note;
+  EXPECT_EQ(flat_r.n, t.n);
   // A model the node would not run is not tuned.
   imu::hal::ModelRecord bad = t;
   bad.n = -1e-3F;

@@ -537,6 +537,12 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
                " finite samples in a row";
     return out;
   }
+  const double* const first = x + start;
+  const auto same = [first](double v) { return !(std::fabs(v - *first) > 0.0); };
+  if (std::all_of(first, first + run, same)) {
+    out.note = "not tuned: the record does not vary (a constant channel)";
+    return out;
+  }
   const Band b = band_of(x + start, run);
   out.samples = b.samples;
   const double fast_tb_s = 1.0 / (kTwoPi * b.f_lo * fs_hz);
