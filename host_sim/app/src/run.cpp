@@ -1250,23 +1250,34 @@ bool load_models(const std::string& json, RunOptions& o, std::string& notes, std
 constexpr std::size_t kTuneSamples = std::size_t{1} << 22U;
 
 // Each pushed model tuned to the node's filter on the record the run sends (the fast terms by
-// the record's Whittle likelihood, node_tuning.hpp), unless --model-as-is; what changed goes to
-// `notes`.
+// the record's Whittle likelihood, node_tuning.hpp), unless --model-as-is; the channels in
+// parallel (imu::cli::parallel_for), each with its own head of the record (at most
+// kTuneSamples doubles per thread). What changed goes to `notes`, in channel order.
 bool tune_models(RunOptions& o, const SensorData& sd, std::string& notes, std::string& err) {
   if (!o.push_model || o.model_as_is) {
     return true;
   }
-  std::vector<double> head;
+  std::vector<std::size_t> todo;
   for (std::size_t c = 0; c < kNumChannels; ++c) {
-    if (!o.pushed[c] || !sd.ch[c].present) {
-      continue;
+    if (o.pushed[c] && sd.ch[c].present) {
+      todo.push_back(c);
     }
-    if (!read_channel_head(sd, c, std::min(sd.n_samples, kTuneSamples), head, err)) {
+  }
+  std::array<std::string, kNumChannels> said{};
+  std::array<std::string, kNumChannels> errs{};
+  imu::cli::parallel_for(todo.size(), [&](std::size_t i) {
+    const std::size_t c = todo[i];
+    std::vector<double> head;
+    if (read_channel_head(sd, c, std::min(sd.n_samples, kTuneSamples), head, errs[c])) {
+      said[c] = analyze::tune_node_record(head.data(), head.size(), sd.fs_hz, o.model[c]).note;
+    }
+  });
+  for (const std::size_t c : todo) {
+    if (!errs[c].empty()) {
+      err = errs[c];
       return false;
     }
-    const analyze::NodeTuning t =
-        analyze::tune_node_record(head.data(), head.size(), sd.fs_hz, o.model[c]);
-    notes.append(notes.empty() ? "" : "; ").append(slot_name(o, c)).append(": ").append(t.note);
+    notes.append(notes.empty() ? "" : "; ").append(slot_name(o, c)).append(": ").append(said[c]);
   }
   return true;
 }
