@@ -473,18 +473,33 @@ double best_oscillation(const Band& b, double fs_hz, double fast_tb_s,
   double best_lr = 0.0;
   double best_colour = std::numeric_limits<double>::infinity();
   ModelParams p{};
+  std::vector<hal::ModelRecord> tried;
   for (const std::size_t peak : excess_peaks(b, s, kOscillationCandidates)) {
     const hal::ModelRecord added = oscillation_at(b, fs_hz, s, peak, rec);
-    if (!(added.osc_sigma > 0.0F)) {
+    // Two peaks of one band (within their half-power widths) start the same fit.
+    const auto same_band = [&added](const hal::ModelRecord& t) {
+      const double width_hz = static_cast<double>(added.osc_beta_per_s + t.osc_beta_per_s) /
+                              kTwoPi;
+      return std::fabs(static_cast<double>(added.osc_f0_hz - t.osc_f0_hz)) <= width_hz;
+    };
+    if (!(added.osc_sigma > 0.0F) || std::any_of(tried.begin(), tried.end(), same_band)) {
       continue;
     }
-    // As it is if the node holds it, else every way of making room that gives a model it runs.
+    tried.push_back(added);
+    // As it is if the node holds it, else every least way of making room that gives a model
+    // it runs (not one that holds another that does).
     const bool fits = node::model_record_valid(added, p);
+    std::vector<unsigned> valid;
     for (unsigned ways = 0; ways <= (fits ? 0U : kAllWays); ++ways) {
       hal::ModelRecord cand = added;
       std::string room;
-      if ((!fits && (ways == 0U || !make_room(cand, ways, fast_tb_s, room))) ||
-          !std::isfinite(whittle_cost(b, fs_hz, cand))) {
+      const auto holds = [ways](unsigned v) { return (ways & v) == v; };
+      if (!fits && (ways == 0U || std::any_of(valid.begin(), valid.end(), holds) ||
+                    !make_room(cand, ways, fast_tb_s, room))) {
+        continue;
+      }
+      valid.push_back(ways);
+      if (!std::isfinite(whittle_cost(b, fs_hz, cand))) {
         continue;
       }
       const double lr =
