@@ -142,8 +142,8 @@ TEST(NodeTuning, NoOscillationIsAddedToARecordWithoutOne) {
   EXPECT_EQ(added, 0);
 }
 
-// Fewer than 2^12 finite samples in a row, or a constant record: left as it is, said. A gap:
-// the longest finite run.
+// Fewer than 2^12 finite samples in a row, a constant record or an exact line: left as it is,
+// said. A gap: the longest finite run.
 TEST(NodeTuning, ShortOrGappedRecords) {
   const imu::hal::ModelRecord t = truth(true);
   std::vector<double> x = simulate(t, 20000, 7321);
@@ -166,6 +166,16 @@ TEST(NodeTuning, ShortOrGappedRecords) {
   EXPECT_FALSE(tn.tuned);
   EXPECT_NE(tn.note.find("does not vary"), std::string::npos) << tn.note;
   EXPECT_EQ(flat_r.n, t.n);
+  // An exact line: nothing but rounding once the line is removed.
+  std::vector<double> line(8192);
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    line[i] = 9.81 + 1e-3 * static_cast<double>(i);
+  }
+  imu::hal::ModelRecord line_r = t;
+  tn = imu::analyze::tune_node_record(line.data(), line.size(), kFsHz, line_r);
+  EXPECT_FALSE(tn.tuned);
+  EXPECT_NE(tn.note.find("rounding"), std::string::npos) << tn.note;
+  EXPECT_EQ(line_r.n, t.n);
   // A model the node would not run is not tuned.
   imu::hal::ModelRecord bad = t;
   bad.n = -1e-3F;

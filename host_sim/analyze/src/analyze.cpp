@@ -419,10 +419,6 @@ bool discretize_params(const ModelParams& p, double ts, Model& d) {
                          : discretize_averaged(c, ts, d) == ModelStatus::kOk;
 }
 
-// The range of the sensor's output filter the analysis searches (Analysis::output_filter_fit).
-constexpr double kMinOutputFilterPerTs = 1.0 / 16.0;
-constexpr double kMaxOutputFilterPerTs = 2.0;
-
 // The stochastic part of a model: the deterministic terms (ramp, sinusoids) have no process
 // noise, so a steady-state filter would never learn them; the analysis removes its own
 // least-squares estimates of them from the record before filtering instead.

@@ -8,6 +8,7 @@
 #include <limits>
 #include <vector>
 
+#include "imu/analyze/analyze.hpp"
 #include "imu/analyze/fft.hpp"
 #include "imu/analyze/long_memory.hpp"
 #include "imu/edf.hpp"
@@ -31,6 +32,7 @@ constexpr std::size_t kOscillationCandidates = 3;  // excesses tried for it
 const double kMonitorBlock = static_cast<double>(node::NodeConfig{}.monitor_window);
 constexpr double kColourTie = 0.05;
 constexpr double kTwoPi = 6.283185307179586;
+constexpr double kRoundingShare = 1e-20;  // see above_rounding
 
 // The periodogram's band, binned. Frequencies in cycles per sample; ordinates in the units of
 // the model's discrete spectrum (their mean is S at the bin).
@@ -270,9 +272,25 @@ std::vector<Knob> fast_knobs(const hal::ModelRecord& rec, double fast_tb_s) {
   return k;
 }
 
+// The knobs stay what they are: the output filter within the analysis's range of it, a fast
+// GM's Tb in the band (else it is another term).
+bool in_tuning_ranges(const hal::ModelRecord& r, const std::vector<Knob>& knobs, double fs_hz,
+                      double fast_tb_s) {
+  for (const Knob k : knobs) {
+    hal::ModelRecord m = r;
+    const auto v = static_cast<double>(knob(m, k));
+    if ((k == Knob::kFilter && (v * fs_hz < kMinOutputFilterPerTs ||
+                                v * fs_hz > kMaxOutputFilterPerTs)) ||
+        ((k == Knob::kGmTb0 || k == Knob::kGmTb1) && !(v < fast_tb_s))) {
+      return false;
+    }
+  }
+  return true;
+}
+
 // Maximise the likelihood over the knobs (log parameters) from rec; rec takes the optimum when
 // it is better. Returns the cost at rec afterwards.
-double fit_knobs(const Band& b, double fs_hz, hal::ModelRecord& rec,
+double fit_knobs(const Band& b, double fs_hz, double fast_tb_s, hal::ModelRecord& rec,
                  const std::vector<Knob>& knobs) {
   const auto with = [&](const std::vector<double>& v) {
     hal::ModelRecord r = rec;
@@ -287,7 +305,10 @@ double fit_knobs(const Band& b, double fs_hz, hal::ModelRecord& rec,
   }
   const double cost0 = whittle_cost(b, fs_hz, rec);
   const auto cost = [&](const std::vector<double>& v) {
-    return whittle_cost(b, fs_hz, with(v));
+    const hal::ModelRecord r = with(v);
+    return in_tuning_ranges(r, knobs, fs_hz, fast_tb_s)
+               ? whittle_cost(b, fs_hz, r)
+               : std::numeric_limits<double>::infinity();
   };
   const std::vector<double> best =
       nelder_mead(cost, start, 0.1, 60 * static_cast<int>(knobs.size()));
@@ -503,7 +524,7 @@ double best_oscillation(const Band& b, double fs_hz, double fast_tb_s,
         continue;
       }
       const double lr =
-          2.0 * (cost_rec - fit_knobs(b, fs_hz, cand, fast_knobs(cand, fast_tb_s)));
+          2.0 * (cost_rec - fit_knobs(b, fs_hz, fast_tb_s, cand, fast_knobs(cand, fast_tb_s)));
       // What the colour adds to the whiteness monitor's Box-Pierce statistic over a block;
       // within kColourTie of each other two candidates are the same to the monitor.
       const double colour = kMonitorBlock * innovation_colour(b, fs_hz, cand);
@@ -540,6 +561,24 @@ std::string changes(const hal::ModelRecord& from, const hal::ModelRecord& to,
   return t;
 }
 
+// The band holds more than the rounding of the values: its mean ordinate (the variance per
+// sample it holds) above 1e-20 of their mean square (doubles round at 1e-16 of a value; an
+// exact line or a constant leaves ~1e-32 after its line is removed, a sensor's noise 1e-10 of
+// its gravity offset or more).
+bool above_rounding(const Band& b, const double* x, std::size_t n) {
+  double level = 0.0;
+  double ordinates = 0.0;
+  for (std::size_t i = 0; i < b.f.size(); ++i) {
+    level += b.count[i] * b.mean[i];
+    ordinates += b.count[i];
+  }
+  double ms = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    ms += x[i] * x[i] / static_cast<double>(n);
+  }
+  return ordinates > 0.0 && level / ordinates > kRoundingShare * ms;
+}
+
 }  // namespace
 
 NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
@@ -559,6 +598,11 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
     return out;
   }
   const Band b = band_of(x + start, run);
+  if (!above_rounding(b, first, run)) {
+    out.note = "not tuned: the record holds nothing above its values' rounding (a line or a "
+               "constant)";
+    return out;
+  }
   out.samples = b.samples;
   const double fast_tb_s = 1.0 / (kTwoPi * b.f_lo * fs_hz);
   const hal::ModelRecord given = rec;
@@ -568,7 +612,7 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
     return out;
   }
   const std::vector<Knob> knobs = fast_knobs(rec, fast_tb_s);
-  double cost = fit_knobs(b, fs_hz, rec, knobs);
+  double cost = fit_knobs(b, fs_hz, fast_tb_s, rec, knobs);
   std::string what = changes(given, rec, knobs);
   std::string given_up;
   if (!(rec.osc_sigma > 0.0F)) {

@@ -48,6 +48,12 @@
 
 namespace imu::analyze {
 
+/// The range of the sensor's output filter on the white noise, in sample periods: the analysis
+/// searches it there (model_after.n_filter_s), and the node's tuning keeps it there
+/// (node_tuning.hpp).
+inline constexpr double kMinOutputFilterPerTs = 1.0 / 16.0;
+inline constexpr double kMaxOutputFilterPerTs = 2.0;
+
 struct Options {
   double fs_hz = 100.0;
   double lsb = 0.0;           ///< physical value of one count; <= 0: derived (see lsb_note)
