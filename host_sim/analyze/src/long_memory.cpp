@@ -91,75 +91,9 @@ double sample_variance(const std::vector<double>& v) {
   return v.size() > 1 ? s / static_cast<double>(v.size() - 1) : 0.0;
 }
 
-// Log-parameter vector <-> model. tb is mapped into [tb_min, tb_max] by a logistic.
-struct Packing {
-  std::size_t n_gm = 0;
-  bool fit_k = false;
-  bool fit_bi = false;
-  double k_fixed = 0.0;
-  double bi_lo_s = 0.0;
-  double bi_hi_s = 0.0;
-  double ln_tb_min = 0.0;
-  double ln_tb_span = 0.0;
-
-  [[nodiscard]] std::size_t size() const {
-    return 1 + 2 * n_gm + (fit_k ? 1 : 0) + (fit_bi ? 1 : 0);
-  }
-
-  [[nodiscard]] BlockModel unpack(const std::vector<double>& v) const {
-    BlockModel m;
-    m.white_var = std::exp(v[0]);
-    m.n_gm = n_gm;
-    for (std::size_t i = 0; i < n_gm; ++i) {
-      const double u = v[1 + 2 * i + 1];
-      m.gm[i].sb = std::exp(v[1 + 2 * i]);
-      m.gm[i].tb_s = std::exp(ln_tb_min + ln_tb_span / (1.0 + std::exp(-u)));
-    }
-    m.k = fit_k ? std::exp(v[1 + 2 * n_gm]) : k_fixed;
-    if (fit_bi) {
-      m.bi = std::exp(v[size() - 1]);
-      m.bi_tau_lo_s = bi_lo_s;
-      m.bi_tau_hi_s = bi_hi_s;
-    }
-    return m;
-  }
-
-  [[nodiscard]] std::vector<double> pack(const BlockModel& m) const {
-    // Built from a one-element list, so GCC (aarch64, -O3) sees v[0] exists (it warned of a
-    // null dereference for a vector sized by size()).
-    std::vector<double> v{std::log(m.white_var)};
-    v.resize(size());
-    for (std::size_t i = 0; i < n_gm; ++i) {
-      v[1 + 2 * i] = std::log(m.gm[i].sb);
-      double frac = ln_tb_span > 0.0 ? (std::log(m.gm[i].tb_s) - ln_tb_min) / ln_tb_span : 0.5;
-      frac = std::clamp(frac, 0.02, 0.98);
-      v[1 + 2 * i + 1] = std::log(frac / (1.0 - frac));
-    }
-    if (fit_k) {
-      v[1 + 2 * n_gm] = std::log(m.k);
-    }
-    if (fit_bi) {
-      v[size() - 1] = std::log(m.bi);
-    }
-    return v;
-  }
-};
-
 }  // namespace
 
-std::vector<double> block_means(const std::vector<double>& y, std::size_t per_block) {
-  const std::size_t nb = per_block > 0 ? y.size() / per_block : 0;
-  std::vector<double> out(nb);
-  for (std::size_t b = 0; b < nb; ++b) {
-    double s = 0.0;
-    for (std::size_t i = 0; i < per_block; ++i) {
-      s += y[b * per_block + i];
-    }
-    out[b] = s / static_cast<double>(per_block);
-  }
-  return out;
-}
-
+// Nelder-Mead: long_memory.hpp.
 std::vector<double> nelder_mead(const std::function<double(const std::vector<double>&)>& f,
                                 std::vector<double> x0, double step, int max_iterations) {
   const std::size_t n = x0.size();
@@ -250,6 +184,77 @@ std::vector<double> nelder_mead(const std::function<double(const std::vector<dou
     step *= 0.25;  // the restart explores a smaller simplex around the optimum
   }
   return x0;
+}
+
+namespace {
+
+// Log-parameter vector <-> model. tb is mapped into [tb_min, tb_max] by a logistic.
+struct Packing {
+  std::size_t n_gm = 0;
+  bool fit_k = false;
+  bool fit_bi = false;
+  double k_fixed = 0.0;
+  double bi_lo_s = 0.0;
+  double bi_hi_s = 0.0;
+  double ln_tb_min = 0.0;
+  double ln_tb_span = 0.0;
+
+  [[nodiscard]] std::size_t size() const {
+    return 1 + 2 * n_gm + (fit_k ? 1 : 0) + (fit_bi ? 1 : 0);
+  }
+
+  [[nodiscard]] BlockModel unpack(const std::vector<double>& v) const {
+    BlockModel m;
+    m.white_var = std::exp(v[0]);
+    m.n_gm = n_gm;
+    for (std::size_t i = 0; i < n_gm; ++i) {
+      const double u = v[1 + 2 * i + 1];
+      m.gm[i].sb = std::exp(v[1 + 2 * i]);
+      m.gm[i].tb_s = std::exp(ln_tb_min + ln_tb_span / (1.0 + std::exp(-u)));
+    }
+    m.k = fit_k ? std::exp(v[1 + 2 * n_gm]) : k_fixed;
+    if (fit_bi) {
+      m.bi = std::exp(v[size() - 1]);
+      m.bi_tau_lo_s = bi_lo_s;
+      m.bi_tau_hi_s = bi_hi_s;
+    }
+    return m;
+  }
+
+  [[nodiscard]] std::vector<double> pack(const BlockModel& m) const {
+    // Built from a one-element list, so GCC (aarch64, -O3) sees v[0] exists (it warned of a
+    // null dereference for a vector sized by size()).
+    std::vector<double> v{std::log(m.white_var)};
+    v.resize(size());
+    for (std::size_t i = 0; i < n_gm; ++i) {
+      v[1 + 2 * i] = std::log(m.gm[i].sb);
+      double frac = ln_tb_span > 0.0 ? (std::log(m.gm[i].tb_s) - ln_tb_min) / ln_tb_span : 0.5;
+      frac = std::clamp(frac, 0.02, 0.98);
+      v[1 + 2 * i + 1] = std::log(frac / (1.0 - frac));
+    }
+    if (fit_k) {
+      v[1 + 2 * n_gm] = std::log(m.k);
+    }
+    if (fit_bi) {
+      v[size() - 1] = std::log(m.bi);
+    }
+    return v;
+  }
+};
+
+}  // namespace
+
+std::vector<double> block_means(const std::vector<double>& y, std::size_t per_block) {
+  const std::size_t nb = per_block > 0 ? y.size() / per_block : 0;
+  std::vector<double> out(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    double s = 0.0;
+    for (std::size_t i = 0; i < per_block; ++i) {
+      s += y[b * per_block + i];
+    }
+    out[b] = s / static_cast<double>(per_block);
+  }
+  return out;
 }
 
 namespace {
