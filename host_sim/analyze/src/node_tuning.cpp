@@ -11,11 +11,14 @@
 #include "imu/analyze/analyze.hpp"
 #include "imu/analyze/fft.hpp"
 #include "imu/analyze/long_memory.hpp"
+#include "imu/cli/json.hpp"
 #include "imu/edf.hpp"
 #include "imu/node/node.hpp"
 
 namespace imu::analyze {
 namespace {
+
+using imu::cli::num_text;
 
 constexpr std::size_t kMinStretch = std::size_t{1} << 12U;
 constexpr std::size_t kSegment = std::size_t{1} << 18U;  // Welch segments of at most this
@@ -215,7 +218,9 @@ class NodeSpectrum {
 // The record's parameters the tuning may move.
 enum class Knob { kN, kFilter, kGmSb0, kGmTb0, kGmSb1, kGmTb1, kOscSigma, kOscF0, kOscBeta };
 
-float& knob(hal::ModelRecord& r, Knob k) {
+// The field of knob k in r (const or not).
+template <typename Record>
+auto& knob(Record& r, Knob k) {
   switch (k) {
     case Knob::kN: return r.n;
     case Knob::kFilter: return r.n_filter_s;
@@ -230,6 +235,19 @@ float& knob(hal::ModelRecord& r, Knob k) {
   return r.osc_beta_per_s;
 }
 
+// The spectrum of rec at the band's bins (empty if not available).
+std::vector<double> spectrum_at(const Band& b, double fs_hz, const hal::ModelRecord& rec) {
+  NodeSpectrum sp;
+  std::vector<double> s;
+  if (sp.set(rec, fs_hz)) {
+    s.resize(b.f.size());
+    for (std::size_t i = 0; i < b.f.size(); ++i) {
+      s[i] = sp.at(b.f[i]);
+    }
+  }
+  return s;
+}
+
 // -ln L (Whittle, per the taper's inflation) of rec on the band; +inf if the node would not
 // run rec or its spectrum is not positive.
 double whittle_cost(const Band& b, double fs_hz, const hal::ModelRecord& rec) {
@@ -237,17 +255,13 @@ double whittle_cost(const Band& b, double fs_hz, const hal::ModelRecord& rec) {
   if (rec.osc_sigma > 0.0F && !(static_cast<double>(rec.osc_f0_hz) < 0.5 * fs_hz)) {
     return kInf;  // an oscillation above Nyquist is an alias of one below
   }
-  NodeSpectrum sp;
-  if (!sp.set(rec, fs_hz)) {
-    return kInf;
-  }
-  double cost = 0.0;
-  for (std::size_t i = 0; i < b.f.size(); ++i) {
-    const double s = sp.at(b.f[i]);
-    if (!(s > 0.0) || !std::isfinite(s)) {
+  const std::vector<double> s = spectrum_at(b, fs_hz, rec);
+  double cost = s.empty() ? kInf : 0.0;
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (!(s[i] > 0.0) || !std::isfinite(s[i])) {
       return kInf;
     }
-    cost += b.count[i] * (std::log(s) + b.mean[i] / s);
+    cost += b.count[i] * (std::log(s[i]) + b.mean[i] / s[i]);
   }
   return cost / kHannInflation;
 }
@@ -277,8 +291,7 @@ std::vector<Knob> fast_knobs(const hal::ModelRecord& rec, double fast_tb_s) {
 bool in_tuning_ranges(const hal::ModelRecord& r, const std::vector<Knob>& knobs, double fs_hz,
                       double fast_tb_s) {
   for (const Knob k : knobs) {
-    hal::ModelRecord m = r;
-    const auto v = static_cast<double>(knob(m, k));
+    const auto v = static_cast<double>(knob(r, k));
     if ((k == Knob::kFilter && (v * fs_hz < kMinOutputFilterPerTs ||
                                 v * fs_hz > kMaxOutputFilterPerTs)) ||
         ((k == Knob::kGmTb0 || k == Knob::kGmTb1) && !(v < fast_tb_s))) {
@@ -369,19 +382,6 @@ hal::ModelRecord oscillation_at(const Band& b, double fs_hz, const std::vector<d
   return rec;
 }
 
-// The spectrum of rec at the band's bins (empty if not available).
-std::vector<double> spectrum_at(const Band& b, double fs_hz, const hal::ModelRecord& rec) {
-  NodeSpectrum sp;
-  std::vector<double> s;
-  if (sp.set(rec, fs_hz)) {
-    s.resize(b.f.size());
-    for (std::size_t i = 0; i < b.f.size(); ++i) {
-      s[i] = sp.at(b.f[i]);
-    }
-  }
-  return s;
-}
-
 // The node filter's innovations on the record, normalised by their predicted variance, have
 // the spectrum S_data / S_model (the steady-state filter whitens the model's spectrum): their
 // autocorrelation at lags 1..kMonitorLags from the band (the ordinates below it counted as
@@ -412,12 +412,6 @@ double innovation_colour(const Band& b, double fs_hz, const hal::ModelRecord& re
   return sum;
 }
 
-std::string num(double v) {
-  char t[32];
-  std::snprintf(t, sizeof t, "%.3g", v);
-  return t;
-}
-
 // Ways to make room for an oscillation's two states in a model that fills the node (a set of
 // them): the bias-instability bank's short end up a decade at a time (one state each) while a
 // decade is left, the fastest GM inside the band to the white noise at its low-frequency level
@@ -436,15 +430,11 @@ bool make_room(hal::ModelRecord& r, unsigned ways, double fast_tb_s, std::string
   };
   if ((ways & kNarrowBank) != 0U) {
     const float bank_lo_s = r.bi_tau_lo_s;
-    while (!node::model_record_valid(r, p) && r.bi > 0.0F && r.bi_tau_lo_s > 0.0F &&
-           r.bi_tau_lo_s * 100.0F <= r.bi_tau_hi_s) {
-      r.bi_tau_lo_s *= 10.0F;
-    }
-    if (!(r.bi_tau_lo_s > bank_lo_s)) {
+    if (!narrow_flicker_bank(r, 10.0F)) {  // a decade left
       return false;
     }
-    add("the bias-instability bank below " + num(static_cast<double>(r.bi_tau_lo_s)) +
-        " s (from " + num(static_cast<double>(bank_lo_s)) + " s)");
+    add("the bias-instability bank below " + num_text(static_cast<double>(r.bi_tau_lo_s)) +
+        " s (from " + num_text(static_cast<double>(bank_lo_s)) + " s)");
   }
   if ((ways & kFoldFastGm) != 0U) {
     std::size_t g = 2;
@@ -462,7 +452,7 @@ bool make_room(hal::ModelRecord& r, unsigned ways, double fast_tb_s, std::string
     const auto sb = static_cast<double>(r.gm_sb[g]);
     const auto tb = static_cast<double>(r.gm_tb_s[g]);
     r.n = static_cast<float>(std::sqrt(n * n + sb * tb * tb));
-    add("the GM of Tb " + num(tb) + " s (now white noise)");
+    add("the GM of Tb " + num_text(tb) + " s (now white noise)");
     r.gm_sb[g] = g == 0 ? r.gm_sb[1] : 0.0F;  // the GMs stay in slot order
     r.gm_tb_s[g] = g == 0 ? r.gm_tb_s[1] : 0.0F;
     r.gm_sb[1] = 0.0F;
@@ -549,13 +539,11 @@ std::string changes(const hal::ModelRecord& from, const hal::ModelRecord& to,
                                            "osc. sigma", "osc. f0 Hz",      "osc. beta /s"};
   std::string t;
   for (const Knob k : knobs) {
-    hal::ModelRecord a = from;
-    hal::ModelRecord b = to;
-    const auto va = static_cast<double>(knob(a, k));
-    const auto vb = static_cast<double>(knob(b, k));
+    const auto va = static_cast<double>(knob(from, k));
+    const auto vb = static_cast<double>(knob(to, k));
     if (std::fabs(va - vb) > 0.0) {
-      t += (t.empty() ? "" : ", ") + std::string(kNames[static_cast<int>(k)]) + " " + num(va) +
-           " -> " + num(vb);
+      t += (t.empty() ? "" : ", ") + std::string(kNames[static_cast<int>(k)]) + " " + num_text(va) +
+           " -> " + num_text(vb);
     }
   }
   return t;
@@ -580,6 +568,16 @@ bool above_rounding(const Band& b, const double* x, std::size_t n) {
 }
 
 }  // namespace
+
+bool narrow_flicker_bank(hal::ModelRecord& rec, float min_span) {
+  ModelParams p{};
+  const float lo_s = rec.bi_tau_lo_s;
+  while (!node::model_record_valid(rec, p) && rec.bi > 0.0F && rec.bi_tau_lo_s > 0.0F &&
+         std::isfinite(rec.bi_tau_hi_s) && rec.bi_tau_lo_s * 10.0F * min_span <= rec.bi_tau_hi_s) {
+    rec.bi_tau_lo_s *= 10.0F;
+  }
+  return rec.bi_tau_lo_s > lo_s;
+}
 
 NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
                             hal::ModelRecord& rec) {
@@ -631,11 +629,11 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
   out.two_ln_lr = 2.0 * (cost_given - cost);
   out.tuned = !what.empty();
   out.note = "tuned to the node's filter by the Whittle likelihood of " +
-             std::to_string(b.samples) + " samples (2 ln LR " + num(out.two_ln_lr) +
+             std::to_string(b.samples) + " samples (2 ln LR " + num_text(out.two_ln_lr) +
              "): " + (what.empty() ? "unchanged" : what);
   if (out.oscillation_added) {
-    out.note += "; the oscillation added (2 ln LR " + num(out.oscillation_two_ln_lr) + " > " +
-                num(out.oscillation_level) + ")";
+    out.note += "; the oscillation added (2 ln LR " + num_text(out.oscillation_two_ln_lr) + " > " +
+                num_text(out.oscillation_level) + ")";
     if (!given_up.empty()) {
       out.note += " in place of " + given_up + ": the node holds " +
                   std::to_string(node::kNodeProcessStates) + " states";

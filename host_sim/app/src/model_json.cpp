@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <limits>
 
+#include "imu/analyze/node_tuning.hpp"
 #include "imu/node/node.hpp"
 
 namespace imu::sim {
@@ -157,12 +158,9 @@ bool fit_to_node(const std::string& json, std::size_t root, double n, hal::Model
     dropped += (dropped.empty() ? "" : "; ") + t;
   };
   // A bank the node refuses at every width (a zero or non-finite end, a B out of range) ends
-  // the narrowing where the float's range does: at most 83 decades.
-  const auto narrowed = [&runs](hal::ModelRecord m) {
-    while (!runs(m) && m.bi > 0.0F && m.bi_tau_lo_s > 0.0F && std::isfinite(m.bi_tau_hi_s) &&
-           m.bi_tau_lo_s * 1000.0F <= m.bi_tau_hi_s) {
-      m.bi_tau_lo_s *= 10.0F;
-    }
+  // the narrowing where the float's range does: at most 83 decades. Two decades stay.
+  const auto narrowed = [](hal::ModelRecord m) {
+    (void)analyze::narrow_flicker_bank(m, 100.0F);
     return m;
   };
   const auto runs_narrowed = [&](const hal::ModelRecord& m) { return runs(narrowed(m)); };

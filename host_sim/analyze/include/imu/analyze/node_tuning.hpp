@@ -58,6 +58,12 @@ struct NodeTuning {
 [[nodiscard]] NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
                                           hal::ModelRecord& rec);
 
+/// Move rec's bias-instability bank's short end up a decade at a time (one state less each)
+/// while the node would not run rec and the bank keeps a span of at least min_span (its upper
+/// end over its lower) after the move; the node then realises B from there up. Returns
+/// whether the bank moved. O(moves), each a model_record_valid.
+bool narrow_flicker_bank(hal::ModelRecord& rec, float min_span);
+
 }  // namespace imu::analyze
 
 #endif  // IMU_ANALYZE_NODE_TUNING_HPP
