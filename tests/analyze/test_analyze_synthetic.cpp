@@ -573,8 +573,9 @@ TEST(AnalyzeSynthetic, StepOfThreeGmSigmasLateInALongRecordIsAStep) {
 }
 
 // A step's size interval is its GLS standard error times 1.96 (|size| / |z|, z the statistic
-// in either detector's units; seeds 421..430): the true size lies inside it on at least 8 of
-// 10 (a 95 % interval misses more than 2 of 10 with probability 1 %).
+// in either detector's units; seeds 421..430): the true size lies inside it on all but at most
+// 2 of those named (a 95 % interval misses more than 2 of 8 to 10 with probability under 1 %).
+// A step that does not stand beside a walk the record needs is a time range, not named.
 TEST(AnalyzeSynthetic, StepSizeIntervalHoldsTheTrueSize) {
   int named = 0;
   int inside = 0;
@@ -595,7 +596,7 @@ TEST(AnalyzeSynthetic, StepSizeIntervalHoldsTheTrueSize) {
   std::printf("3-sigma step: the true size inside the 95 %% interval on %d of %d named\n", inside,
               named);
   EXPECT_GE(named, 8);
-  EXPECT_GE(inside, 8);
+  EXPECT_GE(inside, named - 2);
 }
 
 // A step of 20 white-noise sds between block boundaries (at 6000.37 s: sample 600037) beside a

@@ -3,9 +3,9 @@
 // its decades, a deterministic ramp, and a level shift part way through the record. The walk is
 // named only where the record needs it beside them (the line, the step) and where it holds on
 // both halves of the record. The first-order model of synth_cases.hpp, 10^6 samples at 100 Hz,
-// plus one effect; seeds 911..928 and 941..952 (no other test uses them); a quantized record
-// with a fast GM and a step (seeds 961..976). And K's interval where a GM beside the walk is
-// slow for the record (seeds 4401..4415).
+// plus one effect; seeds 911..928, 941..952 and 5101..5112 (no other test uses them); a
+// quantized record with a fast GM and a step (seeds 961..976). And K's interval where a GM
+// beside the walk is slow for the record (seeds 4401..4415).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -30,6 +30,22 @@ ia::Report analyse(const ia::SynthSpec& spec, const std::string& name) {
 }
 
 using tc::named;
+
+// A bias step named within half_window_s of t_s, or an unexplained time range reaching there.
+bool step_or_range_at(const ia::Report& r, double t_s, double half_window_s) {
+  for (const ia::Effect& e : r.effects) {
+    if (e.type == "bias_step" && std::fabs(e.time_s - t_s) <= half_window_s) {
+      return true;
+    }
+  }
+  for (const ia::UnexplainedRun& u : r.unexplained) {
+    if (u.t_max_s > u.t_min_s && u.t_max_s >= t_s - half_window_s &&
+        u.t_min_s <= t_s + half_window_s) {
+      return true;
+    }
+  }
+  return false;
+}
 
 void show(const ia::Report& r, const char* what, std::uint64_t seed) {
   std::printf("%s seed %llu:\n%s", what, static_cast<unsigned long long>(seed),
@@ -58,24 +74,29 @@ TEST(AnalyzeWalk, ARampInFlickerIsNotAWalk) {
 }
 
 // A level shift of 2 GM sigmas at 60 % of the record: a step, or a time range, never a walk.
+// (A walk the record's likelihood needs on its own, 2 ln LR 9 to 15 here, explains it as well
+// on most seeds: a step or a walk's wander, an unexplained time range.)
 TEST(AnalyzeWalk, AStepIsNotAWalk) {
   int walks = 0;
   int steps = 0;
+  int at_it = 0;
   for (int i = 0; i < kSeeds; ++i) {
     ia::SynthSpec spec = tc::make_case("control", 921 + static_cast<std::uint64_t>(i));
-    spec.step_time_s = 0.6 * static_cast<double>(spec.samples) / spec.fs_hz;
+    const double t_rec_s = static_cast<double>(spec.samples) / spec.fs_hz;
+    spec.step_time_s = 0.6 * t_rec_s;
     spec.step_size = 3.0 * spec.b;
     const ia::Report r = analyse(spec, "step");
     steps += named(r, "bias_step") ? 1 : 0;
+    at_it += step_or_range_at(r, spec.step_time_s, 0.05 * t_rec_s) ? 1 : 0;
     if (named(r, "rate_random_walk")) {
       ++walks;
       show(r, "step named a walk", spec.seed);
     }
   }
-  std::printf("step records (seeds 921..928): walk named %d, step named %d of %d\n", walks, steps,
-              kSeeds);
+  std::printf("step records (seeds 921..928): walk named %d, step named %d, a step or a time "
+              "range at it %d of %d\n", walks, steps, at_it, kSeeds);
   EXPECT_EQ(walks, 0);
-  EXPECT_GE(steps, kSeeds - 1);
+  EXPECT_GE(at_it, kSeeds - 1);
 }
 
 // A level shift of 2.5 B (1.5 GM sigmas) at 35 % of the record, near the least the record's
@@ -129,12 +150,15 @@ TEST(AnalyzeWalk, ASmallStepsTimeIntervalHoldsItsTime) {
 
 // A quantized record at 975 Hz with a fast GM (Tp 2.4 s) and a level shift of 1.7e-4 (2 GM
 // peak ADEVs) at 57 % of its 4300 s: beside such a short GM the shift raises the long taus as a
-// walk would, and a walk explains the record about as well as the step. Where the record shows
-// no sign of a walk once the step is in the model, it is a step (13 of 16; 11 when the walk's
-// rivalry alone decided, a walk named on neither of the other two).
+// walk would, and a walk explains the record about as well as the step (2 ln LR 11 to 20
+// against 17 to 22 for the step; beside the walk the step 10 to 14, below its threshold 15.9).
+// The GM + walk records below give the same figures with no step in them: a step or a walk's
+// wander, which the record does not tell apart, an unexplained time range (a step named on 13
+// of 16 before, which named a step on 10 of those 30 walk records).
 TEST(AnalyzeWalk, AStepAWalkExplainsOnlyWithoutItIsAStep) {
   constexpr int kRecords = 16;
   int steps = 0;
+  int at_it = 0;
   int walks = 0;
   for (int i = 0; i < kRecords; ++i) {
     ia::SynthSpec spec;
@@ -158,11 +182,16 @@ TEST(AnalyzeWalk, AStepAWalkExplainsOnlyWithoutItIsAStep) {
                    ? 1
                    : 0;
     }
-    walks += named(r, "rate_random_walk") ? 1 : 0;
+    at_it += step_or_range_at(r, spec.step_time_s, 0.05 * t_rec_s) ? 1 : 0;
+    if (named(r, "rate_random_walk")) {
+      ++walks;
+      show(r, "step named a walk", spec.seed);
+    }
   }
-  std::printf("quantized step records (seeds 961..976): step named at it %d, walk named %d of "
-              "%d\n", steps, walks, kRecords);
-  EXPECT_GE(steps, 12);
+  std::printf("quantized step records (seeds 961..976): step named at it %d, a step or a time "
+              "range at it %d, walk named %d of %d\n", steps, at_it, walks, kRecords);
+  EXPECT_GE(at_it, 12);
+  EXPECT_LE(walks, 1);  // seed 964: no step significant over the positions, a walk's 10.3
 }
 
 // The example's first-order model with synth's walk K = 1.4e-4 (imu-sim synth's defaults) over
@@ -170,13 +199,12 @@ TEST(AnalyzeWalk, AStepAWalkExplainsOnlyWithoutItIsAStep) {
 // dominates from ~40 s on. Where the fit places the GM elsewhere (at Tb < 3 s, or not at all),
 // the walk takes its power: K came out 1.3 to 1.7 x the truth, and its interval, which knew only
 // the chosen model's scatter, held the truth on 8 of the 13 records that name the walk. The
-// cost's profile over K with a GM free beside it holds it on at least 90 %. (A walk's wander
-// gathered at one place is also named a step here on 10 of the 30 records: the step's time is
-// priced by AIC's 2, and on 1 h seed 4402 the record shows no sign of the walk beside the step
-// (2 ln LR 2.6) and the step at its place beside the walk is significant (6.8): 9 without
-// that rule. Priced by its search's threshold, 3; but then 4 of the 8 steps of 3 GM sigmas
-// above went unnamed, and 4 steps on three of the shared gyroscope channels, one of which then
-// missed the ADEV target. Printed, not asserted.)
+// cost's profile over K with a GM free beside it holds it on at least 90 %. A walk's wander
+// gathered at one place was also named a step on 10 of the 30 records (the step beat the walk by
+// AIC's 2 for its time, or showed no walk beside it); a step must now stand beside a walk the
+// record needs on its own, and where it does not the shift is an unexplained time range: a
+// step on 2 of 30 (1 h seed 4405 at 351 s and 2 h seed 4410, where the walk's 2 ln LR is 3.2
+// and 5.4, below its level).
 TEST(AnalyzeWalk, KsIntervalHoldsTheWalkBesideASlowGm) {
   int steps = 0;
   int walks = 0;
@@ -207,6 +235,39 @@ TEST(AnalyzeWalk, KsIntervalHoldsTheWalkBesideASlowGm) {
               walks, records, k_in, steps);
   EXPECT_GE(walks, 10);
   EXPECT_GE(10 * k_in, 9 * walks);
+  EXPECT_LE(steps, 3);
+}
+
+// A step of 3.8 GM sigmas at 30 % of a 1.5 h record beside a sinusoid of 75 s period and 4 GM
+// sigmas (seeds 5101..5112): the step search runs before the sinusoid is in the model, and
+// against white + GM alone the sinusoid raises the walk's 2 ln LR and the noise the step is
+// measured against, so the shift may not stand beside that walk. With the model complete the
+// shift is tried again (settle_unnamed_shifts): named on 6 of 12 (3 without that second try,
+// the rest time ranges then).
+TEST(AnalyzeWalk, AStepBesideASlowSinusoidIsTriedAgainWithTheWholeModel) {
+  constexpr int kRecords = 12;
+  int steps = 0;
+  int at_it = 0;
+  for (int i = 0; i < kRecords; ++i) {
+    ia::SynthSpec spec = tc::make_case("control", 5101 + static_cast<std::uint64_t>(i));
+    const double t_rec_s = 1.5 * 3600.0;
+    spec.samples = static_cast<std::size_t>(t_rec_s * spec.fs_hz);
+    spec.sin_a = 6e-3;
+    spec.sin_f_hz = 0.0133;
+    spec.step_time_s = 0.3 * t_rec_s;
+    spec.step_size = 5.5e-3;
+    const ia::Report r = analyse(spec, "step_beside_sinusoid");
+    for (const ia::Effect& e : r.effects) {
+      steps += e.type == "bias_step" && std::fabs(e.time_s - spec.step_time_s) <= 0.05 * t_rec_s
+                   ? 1
+                   : 0;
+    }
+    at_it += step_or_range_at(r, spec.step_time_s, 0.05 * t_rec_s) ? 1 : 0;
+  }
+  std::printf("step beside a slow sinusoid (seeds 5101..5112): step named at it %d, a step or a "
+              "time range at it %d of %d\n", steps, at_it, kRecords);
+  EXPECT_GE(steps, 5);
+  EXPECT_GE(at_it, 8);
 }
 
 }  // namespace

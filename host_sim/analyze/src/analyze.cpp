@@ -13,6 +13,7 @@
 #include <cmath>
 #include <complex>
 #include <ctime>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <memory>
@@ -3226,6 +3227,7 @@ class Analysis {
       return false;
     }
     warmup_transient_check(rrw_by_likelihood());
+    settle_unnamed_shifts();
     after_model();
     return true;
   }
@@ -3955,6 +3957,15 @@ class Analysis {
   // stands out at the level over all positions) at the same place, within kSameStepFraction of
   // the record (elsewhere it is another event, e.g. a transient the walk's model leaves at the
   // start); the walk is then tested beside the step.
+  // A walk the record's likelihood needs on its own (2 ln LR above the walk test's level) is
+  // the rival a step must stand beside, whatever their likelihoods against H0: a walk's wander
+  // gathered at one place raises the step's profile as much as a step does (GM + walk records
+  // of 1 and 2 h: 2 ln LR 17 to 32 against H0 for the step, 8 to 25 for the walk, 8 to 14 for
+  // the step beside the walk; steps of 2 to 3 GM sigmas in 1 to 3 h: 17 to 26, 4 to 20 and 8 to
+  // 16). A shift that does not stand beside such a walk is a step or the walk's wander, which
+  // the record does not tell apart: it is taken out of the record as a step is (the model is
+  // fitted without it; the walk is then tested beside it) but not named: `unnamed`, reported as
+  // an unexplained time range (find_steps_by_likelihood).
   // sl: the step taken (its time and size beside the walk in that case); why: what it beat.
   static constexpr double kSameStepFraction = 0.05;
 
@@ -3975,12 +3986,16 @@ class Analysis {
            fmt("%.1f", static_cast<double>(sb.sample) * ts) + " s)";
   }
   bool step_beats_alternatives(const RrwLikelihoodTest& lt, const ModelParams& b0, double thr,
-                               std::size_t margin, StepLikelihood& sl, std::string& why) {
+                               std::size_t margin, StepLikelihood& sl, std::string& why,
+                               bool& unnamed) {
     const double lr_bi = bias_instability_lr(y, ts, b0, tb_max, step_at, adev_y, lt);
     constexpr double kAicPenalty = 2.0;
     const double lr_alt = std::max(lt.lr, lr_bi) + kAicPenalty;
+    const double lr_level = chi2_quantile(1.0 - o.alpha, 1.0);
+    const bool walk_needed = lt.h1.ok && lt.lr > lr_level && lt.lr >= lr_bi;
     if (sl.lr > lr_alt) {
       why = "> a walk's or bias instability's " + fmt("%.1f", lr_alt);
+      unnamed = walk_needed && !step_beside_a_needed_walk(lt, thr, margin, sl, why);
       return true;
     }
     const std::string at = "a level shift at t = " +
@@ -4015,7 +4030,6 @@ class Analysis {
     const double lr_at_place =
         lt.h1.ok ? profile_step(beside, 1, static_cast<std::size_t>(sl.sample / lt.per_block)).lr
                  : 0.0;
-    const double lr_level = chi2_quantile(1.0 - o.alpha, 1.0);
     if (ls.ok && lr_rival_beside <= no_sign && lr_at_place > lr_level) {
       out.notes.push_back(at + "a walk or bias instability explains the record as well (" +
                           fmt("%.1f", std::max(lt.lr, lr_bi)) + ") only without the step: "
@@ -4024,12 +4038,32 @@ class Analysis {
                           "), and at its place beside the walk the step is significant (" +
                           fmt("%.1f", lr_at_place) + " > " + fmt("%.2f", lr_level) + ")");
       why = "neither a walk nor bias instability beside it, above";
+      if (walk_needed) {  // it does not stand beside the walk (above)
+        unnamed = true;
+        why = "a walk " + fmt("%.1f", lt.lr) + " beside which it is not significant";
+      }
       return true;
     }
     out.notes.push_back(at + (lt.lr >= lr_bi ? "a walk" : "bias instability") +
                         " explains the record nearly as well (" +
                         fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 2 for the step's time):"
                         " not named a step");
+    return false;
+  }
+
+  // A step sl that beats a walk the record needs on its own (lt.lr above its level): true when
+  // it stands beside the walk (why says so; sl, its estimate against H0, is kept).
+  bool step_beside_a_needed_walk(const RrwLikelihoodTest& lt, double thr, std::size_t margin,
+                                 const StepLikelihood& sl, std::string& why) {
+    RrwLikelihoodTest beside = lt;
+    beside.h0 = lt.h1;
+    const StepLikelihood sw = profile_step(beside, margin);
+    if (step_stands_beside(sw, sl, thr)) {
+      why += "; " + still_significant("walk", sw, thr);
+      return true;
+    }
+    why = "a walk " + fmt("%.1f", lt.lr) + "; beside it the step " +
+          fmt("%.1f", sw.ok ? sw.lr : 0.0) + " <= " + fmt("%.1f", thr);
     return false;
   }
 
@@ -4143,28 +4177,106 @@ class Analysis {
         break;
       }
       std::string why;
-      if (!step_beats_alternatives(lt, b0.params, thr, margin, sl, why) ||
+      bool unnamed = false;
+      if (!step_beats_alternatives(lt, b0.params, thr, margin, sl, why, unnamed) ||
           !step_beats_decay(lt, thr, margin, sl)) {
         break;
       }
       step_at.push_back(sl.sample);
-      Effect e;
-      e.type = "bias_step";
-      e.time_s = static_cast<double>(sl.sample) * ts;
-      e.time_lo_s = static_cast<double>(sl.first_sample) * ts;
-      e.time_hi_s = static_cast<double>(sl.last_sample) * ts;
-      e.size = sl.size;
-      e.statistic = std::sqrt(sl.lr);  // |z| of the GLS size, as the window detector's
-      e.threshold = std::sqrt(thr);
-      out.effects.push_back(e);
-      out.notes.push_back("bias step at t = " + fmt("%.1f", e.time_s) +
+      if (unnamed) {
+        unnamed_shifts.push_back(UnnamedShift{sl, thr, time_ranges.size()});
+        time_ranges.push_back(walk_or_step_range(sl, lt.block_s, why));
+        out.notes.push_back("not named: " + time_ranges.back().what);
+        shift_level(sl.sample, -sl.size);
+        refresh_adev();
+        continue;
+      }
+      out.effects.push_back(step_effect(sl, thr));
+      out.notes.push_back("bias step at t = " + fmt("%.1f", out.effects.back().time_s) +
                           " s from the record's profile likelihood (2 ln LR = " +
                           fmt("%.1f", sl.lr) + " > " + fmt("%.1f", thr) + " over " +
                           fmt("%.0f", eff_positions) + " independent positions, and " +
                           why + ")");
-      shift_level(sl.sample, -e.size);
+      shift_level(sl.sample, -sl.size);
       refresh_adev();
     }
+  }
+
+  // The bias step of a profile's best shift sl that passed the threshold thr.
+  [[nodiscard]] Effect step_effect(const StepLikelihood& sl, double thr) const {
+    Effect e;
+    e.type = "bias_step";
+    e.time_s = static_cast<double>(sl.sample) * ts;
+    e.time_lo_s = static_cast<double>(sl.first_sample) * ts;
+    e.time_hi_s = static_cast<double>(sl.last_sample) * ts;
+    e.size = sl.size;
+    e.statistic = std::sqrt(sl.lr);  // |z| of the GLS size, as the window detector's
+    e.threshold = std::sqrt(thr);
+    return e;
+  }
+
+  // The walk that made a shift unnamed was tested against H0 = white + GMs before the model's
+  // other terms were found (a sinusoid or ramp the search takes later raises both the walk's
+  // 2 ln LR and the noise the step is measured against). With the model as it ends (without a
+  // walk), on the record with the shift put back: when it needs no walk (2 ln LR <= the walk
+  // test's level), or the shift stands beside the walk (as in step_beats_alternatives, with the
+  // final model's terms in both hypotheses), it is a step and is named; its time range leaves
+  // `unexplained`. (A model that holds a walk keeps the range.)
+  void settle_unnamed_shifts() {
+    if ((terms & kFitRrw) != 0U) {
+      return;
+    }
+    for (auto it = unnamed_shifts.rbegin(); it != unnamed_shifts.rend(); ++it) {
+      const StepLikelihood& sl = it->sl;
+      std::vector<double> with_shift = fit_record();
+      for (std::size_t i = sl.sample; i < with_shift.size(); ++i) {
+        with_shift[i] += sl.size;
+      }
+      std::vector<std::uint64_t> others;
+      std::copy_if(step_at.begin(), step_at.end(), std::back_inserter(others),
+                   [&sl](std::uint64_t at) { return at != sl.sample; });
+      RrwLikelihoodTest lt = test_rrw(with_shift, ts, cur_p, tb_max, (terms & kFitRamp) != 0U,
+                                      others, kAuxBlocks);
+      if (!lt.ok) {
+        continue;
+      }
+      std::string why;
+      if (!(lt.lr > lr_thr)) {
+        why = "the record with it needs no walk (2 ln LR = " + fmt("%.1f", lt.lr) + " <= " +
+              fmt("%.2f", lr_thr) + ")";
+      } else {
+        lt.h0 = lt.h1;
+        const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
+        const StepLikelihood sw = profile_step(lt, margin);
+        const double thr =
+            chi2_quantile(1.0 - o.cost_alpha / independent_positions(lt, sw.positions), 1.0);
+        if (!step_stands_beside(sw, sl, thr)) {
+          continue;
+        }
+        why = still_significant("walk", sw, thr);
+      }
+      out.effects.push_back(step_effect(sl, it->thr));
+      time_ranges.erase(time_ranges.begin() + static_cast<std::ptrdiff_t>(it->range));
+      out.notes.push_back("bias step at t = " + fmt("%.1f", out.effects.back().time_s) +
+                          " s after all: with the model's terms " + why);
+    }
+  }
+
+  // A level shift no walk rules in or out (step_beats_alternatives' `unnamed`): an unexplained
+  // time range over its 95 % set, from the likelihood test's block up to T/10.
+  [[nodiscard]] UnexplainedRun walk_or_step_range(const StepLikelihood& sl, double block_s,
+                                                  const std::string& why) const {
+    UnexplainedRun u;
+    u.t_min_s = static_cast<double>(sl.first_sample) * ts;
+    u.t_max_s = static_cast<double>(sl.last_sample) * ts;
+    u.tau_min_s = block_s;
+    u.tau_max_s = tau_max;
+    u.max_abs_z = std::sqrt(sl.lr);
+    u.what = "a level shift of " + fmt("%.3g", sl.size) + " at t = " +
+             fmt("%.1f", static_cast<double>(sl.sample) * ts) + " s (2 ln LR = " +
+             fmt("%.1f", sl.lr) + ", " + why + "): a bias step or a rate random walk's " +
+             "wander, which the record does not tell apart; the model is fitted without it";
+    return u;
   }
 
   // The greedy ADEV term search over [Ts, T/10] of the cleaned record.
@@ -5524,6 +5636,14 @@ class Analysis {
   NoiseLevelChange noise_change;             // of the white noise's level (find_noise_level_change)
   std::vector<UnexplainedRun> time_ranges;   // transients found by the step search
   bool shifts_repeat = false;                // repeated_shifts: no step is searched
+  // Shifts taken out of the record but not named (step_beats_alternatives' `unnamed`): the
+  // profile's shift, its threshold, and the index of its range in time_ranges.
+  struct UnnamedShift {
+    StepLikelihood sl;
+    double thr = 0.0;
+    std::size_t range = 0;
+  };
+  std::vector<UnnamedShift> unnamed_shifts;
   std::size_t frozen_samples = 0;            // marked missing by mark_frozen_runs
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
   // Terms the record's likelihood could not tell from a look-alike (ramp_or_walk,
