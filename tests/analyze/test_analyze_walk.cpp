@@ -52,6 +52,26 @@ void show(const ia::Report& r, const char* what, std::uint64_t seed) {
               ia::to_text(r).c_str());
 }
 
+// Step records tallied: a step named within half_window_s of the true time, a step or a time
+// range there, a walk named (its report printed).
+struct StepTally {
+  int steps = 0;
+  int at_it = 0;
+  int walks = 0;
+  void add(const ia::Report& r, const ia::SynthSpec& spec, double half_window_s) {
+    for (const ia::Effect& e : r.effects) {
+      steps += e.type == "bias_step" && std::fabs(e.time_s - spec.step_time_s) <= half_window_s
+                   ? 1
+                   : 0;
+    }
+    at_it += step_or_range_at(r, spec.step_time_s, half_window_s) ? 1 : 0;
+    if (named(r, "rate_random_walk")) {
+      ++walks;
+      show(r, "step named a walk", spec.seed);
+    }
+  }
+};
+
 // A ramp of 2e-6 /s (ADEV R tau / sqrt(2) = 1.4e-3 at T/10, above the rest) in flicker of B =
 // 3e-4: the ramp, or an unexplained rise, never a walk.
 TEST(AnalyzeWalk, ARampInFlickerIsNotAWalk) {
@@ -77,26 +97,18 @@ TEST(AnalyzeWalk, ARampInFlickerIsNotAWalk) {
 // (A walk the record's likelihood needs on its own, 2 ln LR 9 to 15 here, explains it as well
 // on most seeds: a step or a walk's wander, an unexplained time range.)
 TEST(AnalyzeWalk, AStepIsNotAWalk) {
-  int walks = 0;
-  int steps = 0;
-  int at_it = 0;
+  StepTally t;
   for (int i = 0; i < kSeeds; ++i) {
     ia::SynthSpec spec = tc::make_case("control", 921 + static_cast<std::uint64_t>(i));
     const double t_rec_s = static_cast<double>(spec.samples) / spec.fs_hz;
     spec.step_time_s = 0.6 * t_rec_s;
     spec.step_size = 3.0 * spec.b;
-    const ia::Report r = analyse(spec, "step");
-    steps += named(r, "bias_step") ? 1 : 0;
-    at_it += step_or_range_at(r, spec.step_time_s, 0.05 * t_rec_s) ? 1 : 0;
-    if (named(r, "rate_random_walk")) {
-      ++walks;
-      show(r, "step named a walk", spec.seed);
-    }
+    t.add(analyse(spec, "step"), spec, 0.05 * t_rec_s);
   }
-  std::printf("step records (seeds 921..928): walk named %d, step named %d, a step or a time "
-              "range at it %d of %d\n", walks, steps, at_it, kSeeds);
-  EXPECT_EQ(walks, 0);
-  EXPECT_GE(at_it, kSeeds - 1);
+  std::printf("step records (seeds 921..928): walk named %d, step named at it %d, a step or a "
+              "time range at it %d of %d\n", t.walks, t.steps, t.at_it, kSeeds);
+  EXPECT_EQ(t.walks, 0);
+  EXPECT_GE(t.at_it, kSeeds - 1);
 }
 
 // A level shift of 2.5 B (1.5 GM sigmas) at 35 % of the record, near the least the record's
@@ -157,9 +169,7 @@ TEST(AnalyzeWalk, ASmallStepsTimeIntervalHoldsItsTime) {
 // of 16 before, which named a step on 10 of those 30 walk records).
 TEST(AnalyzeWalk, AStepAWalkExplainsOnlyWithoutItIsAStep) {
   constexpr int kRecords = 16;
-  int steps = 0;
-  int at_it = 0;
-  int walks = 0;
+  StepTally t;
   for (int i = 0; i < kRecords; ++i) {
     ia::SynthSpec spec;
     spec.seed = 961 + static_cast<std::uint64_t>(i);
@@ -177,21 +187,12 @@ TEST(AnalyzeWalk, AStepAWalkExplainsOnlyWithoutItIsAStep) {
     ia::Report r;
     std::string err;
     ASSERT_TRUE(ia::analyze(ia::synthesize(spec), "quantized_step", o, r, err)) << err;
-    for (const ia::Effect& e : r.effects) {
-      steps += e.type == "bias_step" && std::fabs(e.time_s - spec.step_time_s) <= 0.05 * t_rec_s
-                   ? 1
-                   : 0;
-    }
-    at_it += step_or_range_at(r, spec.step_time_s, 0.05 * t_rec_s) ? 1 : 0;
-    if (named(r, "rate_random_walk")) {
-      ++walks;
-      show(r, "step named a walk", spec.seed);
-    }
+    t.add(r, spec, 0.05 * t_rec_s);
   }
   std::printf("quantized step records (seeds 961..976): step named at it %d, a step or a time "
-              "range at it %d, walk named %d of %d\n", steps, at_it, walks, kRecords);
-  EXPECT_GE(at_it, 12);
-  EXPECT_LE(walks, 1);  // seed 964: no step significant over the positions, a walk's 10.3
+              "range at it %d, walk named %d of %d\n", t.steps, t.at_it, t.walks, kRecords);
+  EXPECT_GE(t.at_it, 12);
+  EXPECT_LE(t.walks, 1);  // seed 964: no step significant over the positions, a walk's 10.3
 }
 
 // The example's first-order model with synth's walk K = 1.4e-4 (imu-sim synth's defaults) over
@@ -243,11 +244,11 @@ TEST(AnalyzeWalk, KsIntervalHoldsTheWalkBesideASlowGm) {
 // against white + GM alone the sinusoid raises the walk's 2 ln LR and the noise the step is
 // measured against, so the shift may not stand beside that walk. With the model complete the
 // shift is tried again (settle_unnamed_shifts): named on 6 of 12 (3 without that second try,
-// the rest time ranges then).
+// the rest time ranges then). Seed 5110 names a walk beside the range (2 ln LR 7.7 with the
+// shift out): a wrong name this rule does not remove.
 TEST(AnalyzeWalk, AStepBesideASlowSinusoidIsTriedAgainWithTheWholeModel) {
   constexpr int kRecords = 12;
-  int steps = 0;
-  int at_it = 0;
+  StepTally t;
   for (int i = 0; i < kRecords; ++i) {
     ia::SynthSpec spec = tc::make_case("control", 5101 + static_cast<std::uint64_t>(i));
     const double t_rec_s = 1.5 * 3600.0;
@@ -256,18 +257,14 @@ TEST(AnalyzeWalk, AStepBesideASlowSinusoidIsTriedAgainWithTheWholeModel) {
     spec.sin_f_hz = 0.0133;
     spec.step_time_s = 0.3 * t_rec_s;
     spec.step_size = 5.5e-3;
-    const ia::Report r = analyse(spec, "step_beside_sinusoid");
-    for (const ia::Effect& e : r.effects) {
-      steps += e.type == "bias_step" && std::fabs(e.time_s - spec.step_time_s) <= 0.05 * t_rec_s
-                   ? 1
-                   : 0;
-    }
-    at_it += step_or_range_at(r, spec.step_time_s, 0.05 * t_rec_s) ? 1 : 0;
+    t.add(analyse(spec, "step_beside_sinusoid"), spec, 0.05 * t_rec_s);
   }
   std::printf("step beside a slow sinusoid (seeds 5101..5112): step named at it %d, a step or a "
-              "time range at it %d of %d\n", steps, at_it, kRecords);
-  EXPECT_GE(steps, 5);
-  EXPECT_GE(at_it, 8);
+              "time range at it %d, walk named %d of %d\n", t.steps, t.at_it, t.walks,
+              kRecords);
+  EXPECT_GE(t.steps, 5);
+  EXPECT_GE(t.at_it, 8);
+  EXPECT_LE(t.walks, 1);
 }
 
 }  // namespace
