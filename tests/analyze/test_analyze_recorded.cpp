@@ -111,8 +111,14 @@ TEST(AnalyzeRecorded, AllTwelveChannels) {
       std::string runs = r.unexplained.empty() ? "none" : std::to_string(r.unexplained.size()) +
                                                              " run(s): ";
       for (std::size_t i = 0; i < r.unexplained.size(); ++i) {
-        std::snprintf(buf, sizeof buf, "%s%.3g-%.4g s", i > 0 ? ", " : "",
-                      r.unexplained[i].tau_min_s, r.unexplained[i].tau_max_s);
+        const imu::analyze::UnexplainedRun& u = r.unexplained[i];
+        if (u.t_max_s > u.t_min_s) {  // a time range: where in the record
+          std::snprintf(buf, sizeof buf, "%st %.0f-%.0f s", i > 0 ? ", " : "", u.t_min_s,
+                        u.t_max_s);
+        } else {
+          std::snprintf(buf, sizeof buf, "%s%.3g-%.4g s", i > 0 ? ", " : "", u.tau_min_s,
+                        u.tau_max_s);
+        }
         runs += buf;
       }
       const auto& b = r.error_before;
