@@ -4055,7 +4055,7 @@ class Analysis {
   // it stands beside the walk (why says so; sl, its estimate against H0, is kept).
   bool step_beside_a_needed_walk(const RrwLikelihoodTest& lt, double thr, std::size_t margin,
                                  const StepLikelihood& sl, std::string& why) {
-    RrwLikelihoodTest beside = lt;
+    RrwLikelihoodTest beside = lt;  // the walk in H0
     beside.h0 = lt.h1;
     const StepLikelihood sw = profile_step(beside, margin);
     if (step_stands_beside(sw, sl, thr)) {
@@ -4107,6 +4107,16 @@ class Analysis {
     return false;
   }
 
+  // The blocks a step profile leaves at either end of the test's means.
+  [[nodiscard]] static std::size_t step_margin(const RrwLikelihoodTest& lt) {
+    return std::max<std::size_t>(2, lt.means.size() / 100);
+  }
+
+  // A step's threshold: chi-square(1) at cost_alpha over the effectively independent positions.
+  [[nodiscard]] double step_threshold(const RrwLikelihoodTest& lt, std::size_t positions) const {
+    return chi2_quantile(1.0 - o.cost_alpha / independent_positions(lt, positions), 1.0);
+  }
+
   // The step profile's positions counted four per slowest correlation time of H0 (see
   // find_steps_by_likelihood).
   [[nodiscard]] static double independent_positions(const RrwLikelihoodTest& lt,
@@ -4130,15 +4140,13 @@ class Analysis {
     if (!lt.ok || lt.per_block == 0) {
       return true;
     }
-    const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
+    const std::size_t margin = step_margin(lt);
     // (at its own boundary, also one inside the profile's margin: the windows place it there)
     StepLikelihood sl = profile_step(lt, 1, static_cast<std::size_t>(sample / lt.per_block));
     if (!sl.ok || lt.means.size() <= 2 * margin) {
       return true;
     }
-    const double eff_positions = independent_positions(lt, lt.means.size() - 2 * margin);
-    return step_beats_decay(lt, chi2_quantile(1.0 - o.cost_alpha / eff_positions, 1.0), margin,
-                            sl);
+    return step_beats_decay(lt, step_threshold(lt, lt.means.size() - 2 * margin), margin, sl);
   }
 
   void find_steps_by_likelihood() {
@@ -4152,7 +4160,7 @@ class Analysis {
         break;
       }
       const RrwLikelihoodTest lt = test_rrw(y, ts, b0.params, tb_max, false, step_at, kAuxBlocks);
-      const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
+      const std::size_t margin = step_margin(lt);
       StepLikelihood sl = profile_step(lt, margin);
       if (!sl.ok || sl.positions == 0) {
         break;
@@ -4172,7 +4180,7 @@ class Analysis {
       // same (counting every block boundary made the test blind to a 3-sigma step; one per
       // correlation time gave false steps on 2 of 20 controls); level: the ADEV tests' 1 %.
       const double eff_positions = independent_positions(lt, sl.positions);
-      const double thr = chi2_quantile(1.0 - o.cost_alpha / eff_positions, 1.0);
+      const double thr = step_threshold(lt, sl.positions);
       if (sl.lr <= thr) {
         break;
       }
@@ -4246,10 +4254,9 @@ class Analysis {
               fmt("%.2f", lr_thr) + ")";
       } else {
         lt.h0 = lt.h1;
-        const std::size_t margin = std::max<std::size_t>(2, lt.means.size() / 100);
+        const std::size_t margin = step_margin(lt);
         const StepLikelihood sw = profile_step(lt, margin);
-        const double thr =
-            chi2_quantile(1.0 - o.cost_alpha / independent_positions(lt, sw.positions), 1.0);
+        const double thr = step_threshold(lt, sw.positions);
         if (!step_stands_beside(sw, sl, thr)) {
           continue;
         }
