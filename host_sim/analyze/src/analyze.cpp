@@ -1404,7 +1404,8 @@ SineCoherence sine_coherence(const std::vector<double>& y, double ts, double f_h
 struct SpectrumCache {
   std::size_t dec = 0;
   std::vector<double> x;                // Hann-windowed block means
-  std::vector<std::complex<double>> a;  // their DFT (zero-padded to a power of two)
+  std::vector<double> power;  // |DFT|^2 of x zero-padded to nfft, bins 0 .. nfft / 2
+  std::size_t nfft = 0;
 };
 
 // Frequency near f_c (from the ADEV bump): periodogram of the Hann-windowed record in
@@ -1435,15 +1436,12 @@ SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c,
     while (n2 < nd) {
       n2 <<= 1;
     }
-    cache.a.assign(n2, std::complex<double>(0.0, 0.0));
-    for (std::size_t j = 0; j < nd; ++j) {
-      cache.a[j] = x[j];
-    }
-    fft(cache.a);
+    cache.nfft = n2;
+    cache.power = real_fft_power(x, n2);
   }
   const std::vector<double>& x = cache.x;
-  const std::vector<std::complex<double>>& a = cache.a;
-  const std::size_t nfft = a.size();
+  const std::vector<double>& power = cache.power;
+  const std::size_t nfft = cache.nfft;
   const double fsd = fs / static_cast<double>(dec);  // decimated rate
   const double df = fsd / static_cast<double>(nfft);
   const auto k_lo = static_cast<std::size_t>(std::max(1.0, std::floor(0.5 * f_c / df)));
@@ -1455,7 +1453,7 @@ SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c,
   std::size_t kbest = k_lo;
   double pbest = -1.0;
   for (std::size_t k = k_lo; k <= k_hi; ++k) {
-    const double p = std::norm(a[k]);
+    const double p = power[k];
     if (p > pbest) {
       pbest = p;
       kbest = k;
@@ -1465,9 +1463,9 @@ SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c,
   // then golden section of the DTFT power on +-0.3 bin around it (unimodal there).
   double centre = static_cast<double>(kbest);
   if (kbest > k_lo && kbest < k_hi) {
-    const double l0 = std::log(std::norm(a[kbest - 1]) + 1e-300);
-    const double l1 = std::log(std::norm(a[kbest]) + 1e-300);
-    const double l2 = std::log(std::norm(a[kbest + 1]) + 1e-300);
+    const double l0 = std::log(power[kbest - 1] + 1e-300);
+    const double l1 = std::log(power[kbest] + 1e-300);
+    const double l2 = std::log(power[kbest + 1] + 1e-300);
     const double den = l0 - 2.0 * l1 + l2;
     if (den < 0.0) {
       centre += std::clamp(0.5 * (l0 - l2) / den, -0.5, 0.5);

@@ -55,6 +55,40 @@ inline void fft(std::vector<std::complex<double>>& a) {
   }
 }
 
+
+/// |X[k]|^2 for k = 0 .. n/2 of the DFT of the real sequence x zero-padded to n (a power of two,
+/// at least 2 and x.size()): one complex FFT of n/2 points over the even and odd samples, then
+/// X[k] = E[k] + e^{-2 pi i k / n} O[k]. Half the memory of the complex FFT of n points (the
+/// sinusoid search's full-rate spectrum is the analysis's largest buffer), the same values to
+/// rounding.
+inline std::vector<double> real_fft_power(const std::vector<double>& x, std::size_t n) {
+  const std::size_t m = n / 2;
+  std::vector<std::complex<double>> z(m, std::complex<double>(0.0, 0.0));
+  for (std::size_t j = 0; j < m; ++j) {
+    const double re = 2 * j < x.size() ? x[2 * j] : 0.0;
+    const double im = 2 * j + 1 < x.size() ? x[2 * j + 1] : 0.0;
+    z[j] = std::complex<double>(re, im);
+  }
+  fft(z);
+  std::vector<double> p(m + 1);
+  for (std::size_t k = 0; k <= m; ++k) {
+    const std::complex<double> zk = z[k % m];
+    const std::complex<double> zc = std::conj(z[(m - k) % m]);
+    const double er = 0.5 * (zk.real() + zc.real());  // E[k] = (Z[k] + conj Z[m-k]) / 2
+    const double ei = 0.5 * (zk.imag() + zc.imag());
+    const double dr = 0.5 * (zk.imag() - zc.imag());  // O[k] = (Z[k] - conj Z[m-k]) / 2i
+    const double di = -0.5 * (zk.real() - zc.real());
+    const double ang = -2.0 * 3.14159265358979323846 * static_cast<double>(k) /
+                       static_cast<double>(n);
+    const double c = std::cos(ang);
+    const double s = std::sin(ang);
+    const double xr = er + (dr * c - di * s);
+    const double xi = ei + (dr * s + di * c);
+    p[k] = xr * xr + xi * xi;
+  }
+  return p;
+}
+
 }  // namespace imu::analyze
 
 #endif  // IMU_ANALYZE_FFT_HPP
