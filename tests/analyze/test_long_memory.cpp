@@ -76,6 +76,44 @@ double gaussian_loglik(std::vector<std::vector<double>> c, const std::vector<dou
   return -0.5 * (logdet + q);
 }
 
+// remove_polynomial against the normal equations solved by hand: a cubic in the index with an
+// offset far above its curvature leaves rounding only, and of any sequence it leaves a residual
+// orthogonal to 1, t, t^2 and t^3 (the least-squares conditions); degree 1 is remove_mean_and_line.
+TEST(LongMemory, RemovePolynomialLeavesTheLeastSquaresResidual) {
+  const std::size_t n = 2048;
+  std::vector<double> v(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = static_cast<double>(k);
+    v[k] = 9.81 + 2e-3 * t - 4e-6 * t * t + 1.5e-9 * t * t * t;
+  }
+  ia::remove_polynomial(v, 3);
+  for (const double x : v) {
+    ASSERT_LT(std::abs(x), 1e-9);
+  }
+  std::vector<double> w(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    w[k] = std::sin(0.37 * static_cast<double>(k)) + 1e-3 * static_cast<double>(k % 17);
+  }
+  std::vector<double> line = w;
+  ia::remove_polynomial(w, 3);
+  for (int d = 0; d <= 3; ++d) {
+    double dot = 0.0;
+    double scale = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const double t = (static_cast<double>(k) - 1023.5) / 1023.5;
+      dot += w[k] * std::pow(t, d);
+      scale += std::abs(std::pow(t, d));
+    }
+    EXPECT_LT(std::abs(dot), 1e-10 * scale) << "degree " << d;
+  }
+  std::vector<double> ref = line;
+  ia::remove_polynomial(line, 1);
+  ia::remove_mean_and_line(ref, true);
+  for (std::size_t k = 0; k < n; ++k) {
+    ASSERT_NEAR(line[k], ref[k], 1e-12) << k;
+  }
+}
+
 TEST(LongMemory, BlockLikelihoodEqualsGaussianDensity) {
   ia::BlockModel m;
   m.white_var = 0.7;

@@ -535,10 +535,56 @@ void remove_mean_and_line(std::vector<double>& v, bool detrend) {
   }
 }
 
+void remove_polynomial(std::vector<double>& v, std::size_t degree) {
+  const std::size_t n = v.size();
+  if (n == 0) {
+    return;
+  }
+  const double half = 0.5 * static_cast<double>(n - 1);
+  std::vector<std::vector<double>> basis;
+  for (std::size_t d = 0; d <= degree && d < n; ++d) {
+    std::vector<double> b(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const double t = half > 0.0 ? (static_cast<double>(k) - half) / half : 0.0;
+      b[k] = std::pow(t, static_cast<double>(d));
+    }
+    for (int pass = 0; pass < 2; ++pass) {
+      for (const std::vector<double>& q : basis) {
+        double dot = 0.0;
+        for (std::size_t k = 0; k < n; ++k) {
+          dot += q[k] * b[k];
+        }
+        for (std::size_t k = 0; k < n; ++k) {
+          b[k] -= dot * q[k];
+        }
+      }
+    }
+    double norm = 0.0;
+    for (const double x : b) {
+      norm += x * x;
+    }
+    if (!(norm > 0.0)) {
+      break;
+    }
+    const double inv = 1.0 / std::sqrt(norm);
+    for (double& x : b) {
+      x *= inv;
+    }
+    double dot = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      dot += b[k] * v[k];
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      v[k] -= dot * b[k];
+    }
+    basis.push_back(std::move(b));
+  }
+}
+
 RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const ModelParams& start,
                            double tb_max_s, bool detrend,
                            const std::vector<std::uint64_t>& step_samples,
-                           std::size_t target_blocks, bool with_walk) {
+                           std::size_t target_blocks, bool with_walk, std::size_t trend_degree) {
   RrwLikelihoodTest out;
   if (!(ts_s > 0.0) || target_blocks < 64 || y.size() < 64) {
     return out;
@@ -546,7 +592,11 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
   const std::size_t per_block = std::max<std::size_t>(1, y.size() / target_blocks);
   std::vector<double> m = block_means(y, per_block);
   const double h = static_cast<double>(per_block) * ts_s;
-  remove_mean_and_line(m, detrend);
+  if (detrend && trend_degree > 1) {
+    remove_polynomial(m, trend_degree);
+  } else {
+    remove_mean_and_line(m, detrend);
+  }
   const double nb = static_cast<double>(m.size());
   // A step inside block b mixes two levels there: the level is reset before b and b + 1.
   std::vector<std::size_t> resets;

@@ -53,6 +53,11 @@ struct BlockModel {
 /// test_rrw prepares the block means, and a regressor tested against them must be prepared).
 void remove_mean_and_line(std::vector<double>& v, bool detrend);
 
+/// Remove v's least-squares polynomial of the given degree in the points' index (degree 0: the
+/// mean; 1: as remove_mean_and_line with detrend). Gram-Schmidt over the powers of the index
+/// scaled to [-1, 1], each basis vector orthogonalised twice (conditioned at any length).
+void remove_polynomial(std::vector<double>& v, std::size_t degree);
+
 /// Log-likelihood (without the 2 pi constant) of the block means under m, block length block_s.
 /// w0_var < 0: the walk starts diffuse and the first block is conditioned on (its term left
 /// out); w0_var >= 0: w(0) ~ N(0, w0_var) and every block counts (tests). resets: sorted block
@@ -157,11 +162,13 @@ inline constexpr std::size_t kRrwTestBlocks = 2048;
 /// that happens to run one way over the record is then largely removed with it).
 /// step_samples: sample indices of bias steps found and removed (the level is reset there).
 /// with_walk = false: H0 alone (h1 = h0, lr = 0), for callers that need only its likelihood.
+/// trend_degree: with detrend, the degree of the least-squares polynomial removed (1: the line;
+/// 3: a smooth drift that bends, which a walk must explain better than to be a walk).
 [[nodiscard]] RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s,
                                          const ModelParams& start, double tb_max_s, bool detrend,
                                          const std::vector<std::uint64_t>& step_samples = {},
                                          std::size_t target_blocks = kRrwTestBlocks,
-                                         bool with_walk = true);
+                                         bool with_walk = true, std::size_t trend_degree = 1);
 
 }  // namespace imu::analyze
 
