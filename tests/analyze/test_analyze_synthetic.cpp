@@ -967,7 +967,8 @@ TEST(AnalyzeSynthetic, MillionSamplesUnderTenSeconds) {
 }
 
 // The consistency check itself: a model term without its effect, an effect without its term,
-// and a second GM left unnamed are each caught (the check can fail).
+// a second GM left unnamed and an effect whose stated statistic does not pass its threshold are
+// each caught (the check can fail).
 TEST(ReportConsistency, EveryDisagreementIsCaught) {
   ia::Report r;
   r.model_after.n = 1e-3;
@@ -981,6 +982,8 @@ TEST(ReportConsistency, EveryDisagreementIsCaught) {
   ia::Effect e;
   e.type = "rate_random_walk";
   e.k = 3e-5;  // named, with another value than the model's
+  e.statistic = 33.7;
+  e.threshold = 6.63;
   r.effects.push_back(e);
   EXPECT_FALSE(ia::report_consistent(r, why));
   r.effects[0].k = 2e-5;
@@ -992,11 +995,17 @@ TEST(ReportConsistency, EveryDisagreementIsCaught) {
   g.type = "gauss_markov";
   g.amplitude = std::sqrt(4e-6 * 0.1 / 2.0);
   g.tb_s = 0.1;
-  r.effects.push_back(g);
+  r.effects.push_back(g);  // named, its evidence unset: "statistic 0 > threshold 0"
+  EXPECT_FALSE(ia::report_consistent(r, why));
+  EXPECT_NE(why.find("statistic"), std::string::npos) << why;
+  r.effects.back().statistic = 140.0;
+  r.effects.back().threshold = 26.5;
   EXPECT_TRUE(ia::report_consistent(r, why)) << why;
   ia::Effect ramp;  // named, not in the model
   ramp.type = "ramp";
   ramp.r = 1e-6;
+  ramp.statistic = 275.0;
+  ramp.threshold = 26.5;
   r.effects.push_back(ramp);
   EXPECT_FALSE(ia::report_consistent(r, why));
   EXPECT_NE(why.find("ramp"), std::string::npos) << why;
@@ -1005,6 +1014,8 @@ TEST(ReportConsistency, EveryDisagreementIsCaught) {
   step.type = "bias_step";
   step.size = 0.01;
   step.time_s = 100.0;
+  step.statistic = 9.0;
+  step.threshold = 5.7;
   r.effects.push_back(step);
   EXPECT_TRUE(ia::report_consistent(r, why)) << why;
 }

@@ -5176,6 +5176,16 @@ class Analysis {
                             " more in sum z^2)");
       return;
     }
+    // The test it passed is its evidence (a GM that came in with bias instability carried that
+    // effect's, or none once bias instability left: "statistic 0 > threshold 0").
+    for (std::vector<Effect>* list : {&trial.effects, &out.effects}) {
+      for (Effect& e : *list) {
+        if (e.type == "gauss_markov") {
+          e.statistic = rise;
+          e.threshold = cost_thr;
+        }
+      }
+    }
     drop_immaterial_gm(ac, choice, trial);
   }
 

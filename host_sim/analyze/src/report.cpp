@@ -287,6 +287,14 @@ bool report_consistent(const Report& r, std::string& why) {
           " is not a term of model_after";
     return false;
   }
+  // Each effect's line says "(statistic S > threshold T)": its evidence must pass its own test.
+  for (const auto& e : r.effects) {
+    if (!(e.statistic > e.threshold)) {
+      why = "effect " + e.type + " states statistic " + num(e.statistic) + " > threshold " +
+            num(e.threshold) + ", which does not hold";
+      return false;
+    }
+  }
   // The text: one "effect " line per effect; "effects: none (...)" only without effects.
   const std::string text = to_text(r);
   std::size_t lines = 0;

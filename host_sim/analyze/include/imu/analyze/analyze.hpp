@@ -240,7 +240,8 @@ void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, co
 /// a named effect of that type carrying the model's parameter (a second GM is gauss_markov, with
 /// sigma = sqrt(Sb Tb / 2) and Tb), every named model effect is a term of model_after, and the
 /// text lists exactly the effects (bias_step and outliers are cleaning of the record, not model
-/// terms). False with the first disagreement in `why`. analyze() removes from the model a term
+/// terms), and every effect's statistic passes the threshold its line states. False with the
+/// first disagreement in `why`. analyze() removes from the model a term
 /// it does not name, so this holds for every report it writes; tests check it.
 [[nodiscard]] bool report_consistent(const Report& r, std::string& why);
 
