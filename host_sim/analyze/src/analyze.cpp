@@ -2148,6 +2148,108 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
   return best;
 }
 
+// A model after that misses the ADEV by more than this RMS of |model / data - 1| over [Ts, T/10]
+// (on average a factor of two) describes none of the record: robust_after refits it.
+constexpr double kGrossMisfitRms = 1.0;
+
+// White noise and one GM refitted to the lower envelope of the ADEV. A disturbance no term of the
+// analysis is (a line whose amplitude or frequency wanders: a motor's vibration, a chirp) can
+// hold the shortest taus, where the EDF are ~1e5; the least-squares fit then bends the GM onto
+// that bump, and its tail lies 5 to 15 times above the data at every longer tau, the bias and
+// the white noise lost with it. An effect the model lacks only adds variance: the data may lie
+// above the model, never below it. So, as a consensus fit in the manner of RANSAC (Fischler and
+// Bolles 1981): from each start (the first two taus, where the white noise is read, with every
+// tau from one of the ADEV's octaves on), fit, leave out the taus where the data lie above the
+// model by more than 25 % beyond their 68 % interval, refit on the rest, until the set holds
+// (at most 8 rounds; EDF capped at 10 for the start, every tau one vote, then at 100 as the
+// after-model's second weighting does, so that the shortest taus hold the white noise while
+// the leakage of a disturbance at the middle taus does not). A model that lies above the data by
+// as much anywhere is refused; of the rest, the one that agrees with the most taus wins (then
+// the lower cost). At least a third of the taus, and 8, must agree. The taus left out are the
+// report's unexplained runs, and `agreed` holds the others (the intervals are read there).
+AfterChoice robust_after(const AfterContext& c, const AfterChoice& chosen, Points& agreed) {
+  AfterChoice best;
+  std::size_t best_kept = 0;
+  const bool sines = chosen.p.sin_a > 0.0;
+  const Points all = in_range(points_for_model(sines ? c.fit_set : c.clean, chosen.p), c.tau_max);
+  const std::size_t min_kept = std::max<std::size_t>(8, all.size() / 3);
+  const double margin = std::log(1.25);
+  constexpr double kConsensusEdfCap = 10.0;  // the start: every tau one vote
+  constexpr double kRefineEdfCap = 100.0;    // then the shortest taus (the white noise) weigh more
+  // ln(model ADEV / data ADEV) beyond the data's 68 % interval on either side (0 inside it)
+  const auto excess = [](const ModelParams& q, const AdevPoint& pt) {
+    const double m = std::sqrt(std::max(model_avar(q, pt.tau_s), 0.0));
+    if (!(m > 0.0) || !(pt.ci_lo > 0.0) || !(pt.ci_hi > 0.0)) {
+      return -1e300;
+    }
+    return m > pt.ci_hi ? std::log(m / pt.ci_hi) : m < pt.ci_lo ? std::log(m / pt.ci_lo) : 0.0;
+  };
+  const auto fit_on = [&](const Points& pts, ModelParams& q, double edf_cap) {
+    FitOptions fo;
+    fo.edf_cap = edf_cap;
+    fo.terms = kFitWhite | kFitGm1;
+    fo.tau_min_s = c.ts;
+    fo.tau_max_s = c.tau_max;
+    fo.tb_max_s = c.tb_max;
+    fo.white_filter_s = c.white_filter_s;
+    const FitResult f = fit(pts.data(), pts.size(), fo);
+    if (f.status != FitStatus::kOk) {
+      return false;
+    }
+    q = sines ? with_sines(f.params, chosen.p) : f.params;
+    return true;
+  };
+  std::vector<Points> starts;
+  for (std::size_t i = 2; i + min_kept <= all.size(); ++i) {
+    if (all[i].tau_s >= 2.0 * all[i - 1].tau_s * (1.0 - 1e-9) || (i % 8) == 0) {
+      Points st(all.begin(), all.begin() + 2);
+      st.insert(st.end(), all.begin() + static_cast<std::ptrdiff_t>(i), all.end());
+      starts.push_back(std::move(st));
+    }
+  }
+  for (Points kept : starts) {
+    ModelParams q{};
+    bool ok = false;
+    for (int round = 0; round < 8; ++round) {
+      ok = fit_on(kept, q, round == 0 ? kConsensusEdfCap : kRefineEdfCap);
+      if (!ok) {
+        break;
+      }
+      Points next;
+      for (const AdevPoint& pt : all) {
+        if (excess(q, pt) >= -margin) {
+          next.push_back(pt);
+        }
+      }
+      const bool same = next.size() == kept.size() &&
+                        std::equal(next.begin(), next.end(), kept.begin(),
+                                   [](const AdevPoint& x, const AdevPoint& y) { return x.af == y.af; });
+      ok = next.size() >= min_kept;
+      if (!ok || same) {
+        break;
+      }
+      kept = std::move(next);
+    }
+    for (const AdevPoint& pt : all) {
+      ok = ok && !(excess(q, pt) > margin);
+    }
+    if (!ok) {
+      continue;
+    }
+    AfterChoice ch;
+    ch.terms = kFitWhite | kFitGm1;
+    ch.p = q;
+    fill_errors(points_for_model(c.clean, q), q, c.o, c.ts, c.tau_max, ch.e);
+    ch.ok = true;
+    if (kept.size() > best_kept || (kept.size() == best_kept && ch.e.cost < best.e.cost)) {
+      best = ch;
+      best_kept = kept.size();
+      agreed = kept;
+    }
+  }
+  return best;
+}
+
 // The white noise N and bias instability B of model_after are read off the shortest taus, where
 // the record may hold more than the model says: quantization the search did not keep (its AVAR
 // 3 Q^2 / tau^2 and N's trade there), flicker below the bank's lower end (flicker_tau_lo: the
@@ -5578,13 +5680,33 @@ class Analysis {
     settle_terms_and_filter(ac0, choice, withdrawn);
     const AfterContext ac{o,        ts,       tau_max, tb_max, clean, fit_set, out.error_before,
                           cost_thr, white_filter_s, required, walk_lr, bi_lr};
+    Points agreed;  // the taus a consensus refit describes (empty: every tau)
+    if (choice.e.adev_rms_rel > kGrossMisfitRms) {
+      const AfterChoice rb = robust_after(ac, choice, agreed);
+      if (rb.ok && rb.e.adev_rms_rel < choice.e.adev_rms_rel &&
+          rb.e.adev_max_rel < choice.e.adev_max_rel) {
+        out.notes.push_back(
+            "the model after missed the ADEV by RMS " + fmt("%.3f", choice.e.adev_rms_rel) +
+            " / max " + fmt("%.3f", choice.e.adev_max_rel) + " over [Ts, T/10] (its GM bent onto "
+            "what no term of the analysis is): white noise and one GM refitted to the ADEV's "
+            "lower envelope, the " + std::to_string(agreed.size()) + " taus where the data do "
+            "not lie above the model (RMS " + fmt("%.3f", rb.e.adev_rms_rel) + " / max " +
+            fmt("%.3f", rb.e.adev_max_rel) + "); the others are unexplained and their intervals "
+            "read on those taus");
+        choice = rb;
+        drop_unmodelled_effects(choice.p, out);
+      } else {
+        agreed.clear();
+      }
+    }
     cur_p = choice.p;
     out.model_after = cur_p;
     out.error_after = choice.e;
     out.unexplained = unexplained_runs(ac, cur_p);
     add_time_ranges();
     std::vector<TermPart> parts = check_terms_on_halves();
-    attach_intervals(points_for_model(clean, cur_p), o, ts, tau_max, out);
+    attach_intervals(agreed.empty() ? points_for_model(clean, cur_p) : agreed, o, ts, tau_max,
+                     out);
     std::vector<AdevReading> readings =
         short_tau_readings(ac, choice.terms, cur_p, noise_parts(y, gap, noise_change));
     for (AdevReading& rd : long_tau_readings(ac, choice.terms, cur_p)) {
