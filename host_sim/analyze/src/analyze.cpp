@@ -368,10 +368,10 @@ const char* fit_status_text(FitStatus s) {
 // tb_max_s > 0 bounds the GM correlation time (0: model_fit's default, 10 tau_max), tb_min_s
 // from below. shape: the oscillation's f0 and beta when terms hold kFitOscillation.
 // flicker_lo_s: the bias-instability bank's lower end (0: flicker_tau_lo's rule).
-FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
-                    double tb_max_s = 0.0, const ModelParams* shape = nullptr,
-                    double white_filter_s = 0.0, double tb_min_s = 0.0,
-                    double flicker_lo_s = 0.0, double k_fixed = 0.0) {
+FitOptions fit_options(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
+                       double tb_max_s = 0.0, const ModelParams* shape = nullptr,
+                       double white_filter_s = 0.0, double tb_min_s = 0.0,
+                       double flicker_lo_s = 0.0, double k_fixed = 0.0) {
   FitOptions fo;
   fo.k_fixed = k_fixed;
   fo.white_filter_s = white_filter_s;
@@ -387,6 +387,16 @@ FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, doub
   fo.tb_max_s = tb_max_s;
   fo.flicker_tau_hi_s = tau_max;
   fo.flicker_tau_lo_s = flicker_lo_s > 0.0 ? flicker_lo_s : flicker_tau_lo(tau_min, tau_max, pts);
+  return fo;
+}
+
+// The fit of fit_options(...) to pts.
+FitResult fit_terms(const Points& pts, std::uint32_t terms, double tau_min, double tau_max,
+                    double tb_max_s = 0.0, const ModelParams* shape = nullptr,
+                    double white_filter_s = 0.0, double tb_min_s = 0.0,
+                    double flicker_lo_s = 0.0, double k_fixed = 0.0) {
+  const FitOptions fo = fit_options(pts, terms, tau_min, tau_max, tb_max_s, shape,
+                                    white_filter_s, tb_min_s, flicker_lo_s, k_fixed);
   return fit(pts.data(), pts.size(), fo);
 }
 
@@ -1404,8 +1414,7 @@ SineCoherence sine_coherence(const std::vector<double>& y, double ts, double f_h
 struct SpectrumCache {
   std::size_t dec = 0;
   std::vector<double> x;                // Hann-windowed block means
-  std::vector<double> power;  // |DFT|^2 of x zero-padded to nfft, bins 0 .. nfft / 2
-  std::size_t nfft = 0;
+  std::vector<double> power;  // |DFT|^2 of x zero-padded to a power of two n, bins 0 .. n / 2
 };
 
 // Frequency near f_c (from the ADEV bump): periodogram of the Hann-windowed record in
@@ -1436,12 +1445,11 @@ SineFit estimate_sinusoid(const std::vector<double>& y, double ts, double f_c,
     while (n2 < nd) {
       n2 <<= 1;
     }
-    cache.nfft = n2;
     cache.power = real_fft_power(x, n2);
   }
   const std::vector<double>& x = cache.x;
   const std::vector<double>& power = cache.power;
-  const std::size_t nfft = cache.nfft;
+  const std::size_t nfft = 2 * (power.size() - 1);
   const double fsd = fs / static_cast<double>(dec);  // decimated rate
   const double df = fsd / static_cast<double>(nfft);
   const auto k_lo = static_cast<std::size_t>(std::max(1.0, std::floor(0.5 * f_c / df)));
@@ -2166,10 +2174,14 @@ constexpr double kGrossMisfitRms = 1.0;
 // the leakage of a disturbance at the middle taus does not). A model that lies above the data by
 // as much anywhere is refused; of the rest, the one that agrees with the most taus wins (then
 // the lower cost). At least a third of the taus, and 8, must agree. The taus left out are the
-// report's unexplained runs, and `agreed` holds the others (the intervals are read there).
-AfterChoice robust_after(const AfterContext& c, const AfterChoice& chosen, Points& agreed) {
-  AfterChoice best;
-  std::size_t best_kept = 0;
+// report's unexplained runs; the others are returned in `agreed` (the intervals are read there).
+struct EnvelopeFit {
+  AfterChoice choice;  // ok = false: no start gave a model that stays under the data
+  Points agreed;       // the taus it describes
+};
+
+EnvelopeFit robust_after(const AfterContext& c, const AfterChoice& chosen) {
+  EnvelopeFit best;
   const bool sines = chosen.p.sin_a > 0.0;
   const Points all = in_range(points_for_model(sines ? c.fit_set : c.clean, chosen.p), c.tau_max);
   const std::size_t min_kept = std::max<std::size_t>(8, all.size() / 3);
@@ -2185,13 +2197,9 @@ AfterChoice robust_after(const AfterContext& c, const AfterChoice& chosen, Point
     return m > pt.ci_hi ? std::log(m / pt.ci_hi) : m < pt.ci_lo ? std::log(m / pt.ci_lo) : 0.0;
   };
   const auto fit_on = [&](const Points& pts, ModelParams& q, double edf_cap) {
-    FitOptions fo;
+    FitOptions fo = fit_options(pts, kFitWhite | kFitGm1, c.ts, c.tau_max, c.tb_max, nullptr,
+                                c.white_filter_s);
     fo.edf_cap = edf_cap;
-    fo.terms = kFitWhite | kFitGm1;
-    fo.tau_min_s = c.ts;
-    fo.tau_max_s = c.tau_max;
-    fo.tb_max_s = c.tb_max;
-    fo.white_filter_s = c.white_filter_s;
     const FitResult f = fit(pts.data(), pts.size(), fo);
     if (f.status != FitStatus::kOk) {
       return false;
@@ -2200,8 +2208,10 @@ AfterChoice robust_after(const AfterContext& c, const AfterChoice& chosen, Point
     return true;
   };
   std::vector<Points> starts;
+  double octave_s = 0.0;  // the first tau of the last start
   for (std::size_t i = 2; i + min_kept <= all.size(); ++i) {
-    if (all[i].tau_s >= 2.0 * all[i - 1].tau_s * (1.0 - 1e-9) || (i % 8) == 0) {
+    if (all[i].tau_s >= 2.0 * octave_s * (1.0 - 1e-9)) {
+      octave_s = all[i].tau_s;
       Points st(all.begin(), all.begin() + 2);
       st.insert(st.end(), all.begin() + static_cast<std::ptrdiff_t>(i), all.end());
       starts.push_back(std::move(st));
@@ -2241,10 +2251,9 @@ AfterChoice robust_after(const AfterContext& c, const AfterChoice& chosen, Point
     ch.p = q;
     fill_errors(points_for_model(c.clean, q), q, c.o, c.ts, c.tau_max, ch.e);
     ch.ok = true;
-    if (kept.size() > best_kept || (kept.size() == best_kept && ch.e.cost < best.e.cost)) {
-      best = ch;
-      best_kept = kept.size();
-      agreed = kept;
+    if (kept.size() > best.agreed.size() ||
+        (kept.size() == best.agreed.size() && ch.e.cost < best.choice.e.cost)) {
+      best = EnvelopeFit{ch, std::move(kept)};
     }
   }
   return best;
@@ -5007,6 +5016,8 @@ class Analysis {
           }
         } else if (walk_is_a_line(lt)) {
           return {};
+        } else {
+          note_walk_beside_a_cubic(lt);
         }
       }
     } else if (walk_ruled_out) {
@@ -5026,6 +5037,7 @@ class Analysis {
         const FitResult f =
             fit_terms(fit_pts, terms | kFitRrw, ts, tau_max, tb_max, &cur_p, white_filter_s);
         if (f.status == FitStatus::kOk && f.params.k > 0.0) {
+          note_walk_beside_a_cubic(lt);
           Effect e;
           e.type = "rate_random_walk";
           e.statistic = lt.lr;
@@ -5071,48 +5083,9 @@ class Analysis {
   // walk's increments have no mean; flicker's long excursions look like a line against a model
   // without either), the ramp is taken in its place. True when the walk is out of the model.
   bool walk_is_a_line(const RrwLikelihoodTest& lt) {
-    // lt is already the walk beside the line when the model holds a ramp
-    if ((terms & kFitRamp) == 0U && walk_is_a_straight_line(lt)) {
-      return true;
+    if ((terms & kFitRamp) != 0U) {
+      return false;  // lt is already the walk beside the line
     }
-    note_walk_beside_a_cubic(lt);
-    return false;
-  }
-
-  // A walk the record needs beside a line may still hold nothing a smooth drift that bends
-  // would not: a cubic in time, fitted by least squares to the block means (long_memory's
-  // remove_polynomial). A walk's path holds most of its power in the record's lowest few scales
-  // (Brownian motion: 95 % of its variance in the first four terms of its Karhunen-Loeve
-  // expansion), and over a few hours of an IMU's record that is often all the record shows of
-  // it. The walk stays (it is the filter's model for a slow drift, stochastic or not) but the
-  // report says so when its 2 ln LR beside the cubic is under AIC's 2. Measured on `imu-sim
-  // synth` records of the first-order model and K = 1.4e-4 (1 to 2.8 h, 65 seeds): beside a
-  // cubic the walk's 2 ln LR is 0.0 on more than half of those whose likelihood requires it,
-  // and the cubic alone scores up to 18 above the walk alone in 2 ln L less twice the
-  // parameters; on quadratic drifts in a GM 23 to 64. Neither criterion tells the two apart on
-  // such records, so neither decides the name.
-  void note_walk_beside_a_cubic(const RrwLikelihoodTest& lt) {
-    constexpr double kAicOneParameter = 2.0;
-    constexpr std::size_t kCubic = 3;
-    if (!lt.ok || !(lt.lr > lr_thr)) {
-      return;
-    }
-    const RrwLikelihoodTest cub = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at,
-                                           kRrwTestBlocks, true, kCubic);
-    if (!cub.ok || cub.lr > kAicOneParameter) {
-      return;
-    }
-    out.notes.push_back(
-        "rate_random_walk: beside a cubic drift in time its 2 ln LR is " + fmt("%.1f", cub.lr) +
-        " <= 2 (against the model without it " + fmt("%.1f", lt.lr) + "): the record shows the "
-        "walk only on its longest scales, where a smooth deterministic drift (a temperature "
-        "curve) reads the same; a walk is the filter's model for either");
-  }
-
-  // The line's part of walk_is_a_line: a walk needed against the model must be needed beside a
-  // least-squares line, else the line (a ramp, when the record needs it beside the walk) takes
-  // its place.
-  bool walk_is_a_straight_line(const RrwLikelihoodTest& lt) {
     // Beside the line the walk must pay for its one parameter (AIC: 2 ln LR > 2); a line that
     // holds the whole rise leaves it near 0. (A walk over a few of its time scales is also
     // partly a line: the test's level alpha would lose walks the record does hold.)
@@ -5150,6 +5123,36 @@ class Analysis {
     out.notes.push_back("ramp from the record's likelihood, in place of a walk: the line beside "
                         "the walk 2 ln LR = " + fmt("%.1f", lr_line) + " > " + fmt("%.2f", lr_thr));
     return true;
+  }
+
+  // A walk the record needs beside a line (lt: the walk against the model without it) may still
+  // hold nothing a smooth drift that bends would not: a cubic in time, fitted by least squares to the block means (long_memory's
+  // remove_polynomial). A walk's path holds most of its power in the record's lowest few scales
+  // (Brownian motion: 95 % of its variance in the first four terms of its Karhunen-Loeve
+  // expansion), and over a few hours of an IMU's record that is often all the record shows of
+  // it. The walk stays (it is the filter's model for a slow drift, stochastic or not) but the
+  // report says so when its 2 ln LR beside the cubic is under AIC's 2. Measured on `imu-sim
+  // synth` records of the first-order model and K = 1.4e-4 (1 to 2.8 h, 65 seeds): beside a
+  // cubic the walk's 2 ln LR is 0.0 on more than half of those whose likelihood requires it,
+  // and the cubic alone scores up to 18 above the walk alone in 2 ln L less twice the
+  // parameters; on quadratic drifts in a GM 23 to 64. Neither criterion tells the two apart on
+  // such records, so neither decides the name.
+  void note_walk_beside_a_cubic(const RrwLikelihoodTest& lt) {
+    constexpr double kAicOneParameter = 2.0;
+    constexpr std::size_t kCubic = 3;
+    if (!lt.ok || !(lt.lr > lr_thr)) {
+      return;
+    }
+    const RrwLikelihoodTest cub = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at,
+                                           kRrwTestBlocks, true, kCubic);
+    if (!cub.ok || cub.lr > kAicOneParameter) {
+      return;
+    }
+    out.notes.push_back(
+        "rate_random_walk: beside a cubic drift in time its 2 ln LR is " + fmt("%.1f", cub.lr) +
+        " <= 2 (against the model without it " + fmt("%.1f", lt.lr) + "): the record shows the "
+        "walk only on its longest scales, where a smooth deterministic drift (a temperature "
+        "curve) reads the same; a walk is the filter's model for either");
   }
 
   // One story: a term the report does not name leaves the model (a wrong name is worse than
@@ -5280,12 +5283,10 @@ class Analysis {
     }
     // The test it passed is its evidence (a GM that came in with bias instability carried that
     // effect's, or none once bias instability left: "statistic 0 > threshold 0").
-    for (std::vector<Effect>* list : {&trial.effects, &out.effects}) {
-      for (Effect& e : *list) {
-        if (e.type == "gauss_markov") {
-          e.statistic = rise;
-          e.threshold = cost_thr;
-        }
+    for (Effect& e : trial.effects) {
+      if (e.type == "gauss_markov") {
+        e.statistic = rise;
+        e.threshold = cost_thr;
       }
     }
     drop_immaterial_gm(ac, choice, trial);
@@ -5655,6 +5656,31 @@ class Analysis {
     finish_after();
   }
 
+  // A model after that misses the ADEV by RMS > kGrossMisfitRms is replaced by robust_after's
+  // refit when that is better on both errors (its effects follow it, said). Returns the taus
+  // the refit describes, empty when the choice stands (every tau then).
+  Points refit_gross_misfit(const AfterContext& ac, AfterChoice& choice) {
+    if (!(choice.e.adev_rms_rel > kGrossMisfitRms)) {
+      return {};
+    }
+    EnvelopeFit rb = robust_after(ac, choice);
+    if (!rb.choice.ok || !(rb.choice.e.adev_rms_rel < choice.e.adev_rms_rel) ||
+        !(rb.choice.e.adev_max_rel < choice.e.adev_max_rel)) {
+      return {};
+    }
+    out.notes.push_back(
+        "the model after missed the ADEV by RMS " + fmt("%.3f", choice.e.adev_rms_rel) +
+        " / max " + fmt("%.3f", choice.e.adev_max_rel) + " over [Ts, T/10] (its GM bent onto "
+        "what no term of the analysis is): white noise and one GM refitted to the ADEV's lower "
+        "envelope, the " + std::to_string(rb.agreed.size()) + " taus where the data do not lie "
+        "above the model (RMS " + fmt("%.3f", rb.choice.e.adev_rms_rel) + " / max " +
+        fmt("%.3f", rb.choice.e.adev_max_rel) + "); the others are unexplained and their "
+        "intervals read on those taus");
+    choice = rb.choice;
+    drop_unmodelled_effects(choice.p, out);
+    return std::move(rb.agreed);
+  }
+
   // after_model's choice; returns the stationarity check's runs.
   std::vector<TermPart> settle_after() {
     // ---- after: never worse than before, every named effect real, the remainder said.
@@ -5680,25 +5706,7 @@ class Analysis {
     settle_terms_and_filter(ac0, choice, withdrawn);
     const AfterContext ac{o,        ts,       tau_max, tb_max, clean, fit_set, out.error_before,
                           cost_thr, white_filter_s, required, walk_lr, bi_lr};
-    Points agreed;  // the taus a consensus refit describes (empty: every tau)
-    if (choice.e.adev_rms_rel > kGrossMisfitRms) {
-      const AfterChoice rb = robust_after(ac, choice, agreed);
-      if (rb.ok && rb.e.adev_rms_rel < choice.e.adev_rms_rel &&
-          rb.e.adev_max_rel < choice.e.adev_max_rel) {
-        out.notes.push_back(
-            "the model after missed the ADEV by RMS " + fmt("%.3f", choice.e.adev_rms_rel) +
-            " / max " + fmt("%.3f", choice.e.adev_max_rel) + " over [Ts, T/10] (its GM bent onto "
-            "what no term of the analysis is): white noise and one GM refitted to the ADEV's "
-            "lower envelope, the " + std::to_string(agreed.size()) + " taus where the data do "
-            "not lie above the model (RMS " + fmt("%.3f", rb.e.adev_rms_rel) + " / max " +
-            fmt("%.3f", rb.e.adev_max_rel) + "); the others are unexplained and their intervals "
-            "read on those taus");
-        choice = rb;
-        drop_unmodelled_effects(choice.p, out);
-      } else {
-        agreed.clear();
-      }
-    }
+    const Points agreed = refit_gross_misfit(ac, choice);
     cur_p = choice.p;
     out.model_after = cur_p;
     out.error_after = choice.e;

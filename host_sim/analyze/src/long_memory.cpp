@@ -536,6 +536,10 @@ void remove_mean_and_line(std::vector<double>& v, bool detrend) {
 }
 
 void remove_polynomial(std::vector<double>& v, std::size_t degree) {
+  if (degree <= 1) {
+    remove_mean_and_line(v, degree == 1);  // the closed form
+    return;
+  }
   const std::size_t n = v.size();
   if (n == 0) {
     return;
@@ -592,11 +596,7 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
   const std::size_t per_block = std::max<std::size_t>(1, y.size() / target_blocks);
   std::vector<double> m = block_means(y, per_block);
   const double h = static_cast<double>(per_block) * ts_s;
-  if (detrend && trend_degree > 1) {
-    remove_polynomial(m, trend_degree);
-  } else {
-    remove_mean_and_line(m, detrend);
-  }
+  remove_polynomial(m, detrend ? trend_degree : 0);
   const double nb = static_cast<double>(m.size());
   // A step inside block b mixes two levels there: the level is reset before b and b + 1.
   std::vector<std::size_t> resets;

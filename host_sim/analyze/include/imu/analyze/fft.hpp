@@ -55,7 +55,6 @@ inline void fft(std::vector<std::complex<double>>& a) {
   }
 }
 
-
 /// |X[k]|^2 for k = 0 .. n/2 of the DFT of the real sequence x zero-padded to n (a power of two,
 /// at least 2 and x.size()): one complex FFT of n/2 points over the even and odd samples, then
 /// X[k] = E[k] + e^{-2 pi i k / n} O[k]. Half the memory of the complex FFT of n points (the

@@ -53,9 +53,9 @@ struct BlockModel {
 /// test_rrw prepares the block means, and a regressor tested against them must be prepared).
 void remove_mean_and_line(std::vector<double>& v, bool detrend);
 
-/// Remove v's least-squares polynomial of the given degree in the points' index (degree 0: the
-/// mean; 1: as remove_mean_and_line with detrend). Gram-Schmidt over the powers of the index
-/// scaled to [-1, 1], each basis vector orthogonalised twice (conditioned at any length).
+/// Remove v's least-squares polynomial of the given degree in the points' index (degree 0 and 1:
+/// remove_mean_and_line; higher: Gram-Schmidt over the powers of the index scaled to [-1, 1],
+/// each basis vector orthogonalised twice, conditioned at any length).
 void remove_polynomial(std::vector<double>& v, std::size_t degree);
 
 /// Log-likelihood (without the 2 pi constant) of the block means under m, block length block_s.
