@@ -2824,9 +2824,10 @@ WalkOnly walk_only_k(const AfterContext& c, const std::vector<double>& y_fit, bo
   return WalkOnly{f.model.k, slow_tb};
 }
 
-// Effects whose term left the model (dropped above, said in the notes) are not reported; the
-// rest take their parameters from the final model.
-void drop_unmodelled_effects(const ModelParams& p, Report& out) {
+// Effects whose term left the model are not reported; the rest take their parameters from the
+// final model. A term a refit put at 0 is said in a note (say = false: a trial report whose
+// notes join out's, which says it).
+void drop_unmodelled_effects(const ModelParams& p, Report& out, bool say = true) {
   std::vector<Effect> kept;
   std::size_t sines = 0;
   for (const Effect& found : out.effects) {
@@ -2845,6 +2846,9 @@ void drop_unmodelled_effects(const ModelParams& p, Report& out) {
     }
     if (v > 0.0) {
       kept.push_back(e);
+    } else if (say) {
+      out.notes.push_back("not named: " + e.type +
+                          " (accepted by the search; the refitted model after holds it at 0)");
     }
   }
   out.effects = kept;
@@ -5339,7 +5343,7 @@ class Analysis {
         fmt("%.3f", ch.e.adev_max_rel) + ", with it " + fmt("%.3f", choice.e.adev_rms_rel) +
         " / " + fmt("%.3f", choice.e.adev_max_rel) + ")");
     choice = ch;
-    drop_unmodelled_effects(choice.p, trial);  // the effects take the refit's parameters
+    drop_unmodelled_effects(choice.p, trial, false);  // the effects take the refit's parameters
     drop_unmodelled_effects(choice.p, out);
   }
 
