@@ -2157,8 +2157,20 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
 }
 
 // A model after that misses the ADEV by more than this RMS of |model / data - 1| over [Ts, T/10]
-// (on average a factor of two) describes none of the record: robust_after refits it.
+// (on average a factor of two) describes none of the record: robust_after refits it. So does one
+// that lies above the data by more than kGrossAboveFactor beyond their 68 % interval at any of
+// those taus: what a model lacks only adds variance, so a model that far above the data holds
+// what the record does not (a GM bent onto a wandering line, white noise traded to 0 for it).
 constexpr double kGrossMisfitRms = 1.0;
+constexpr double kGrossAboveFactor = 2.0;
+
+bool lies_far_above(const AfterContext& c, const ModelParams& p) {
+  const Points pts = in_range(points_for_model(c.clean, p), c.tau_max);
+  return std::any_of(pts.begin(), pts.end(), [&](const AdevPoint& pt) {
+    return pt.ci_hi > 0.0 && std::sqrt(std::max(model_avar(p, pt.tau_s), 0.0)) >
+                                 kGrossAboveFactor * pt.ci_hi;
+  });
+}
 
 // White noise and one GM refitted to the lower envelope of the ADEV. A disturbance no term of the
 // analysis is (a line whose amplitude or frequency wanders: a motor's vibration, a chirp) can
@@ -2239,6 +2251,20 @@ EnvelopeFit robust_after(const AfterContext& c, const AfterChoice& chosen) {
         break;
       }
       kept = std::move(next);
+    }
+    // The lower envelope: while the model lies above the data anywhere, the datum highest above
+    // the model leaves the set (inside the margin it still pulls the fit up: a line's leakage
+    // next to the shortest taus, where the white noise is read) and the rest are refitted.
+    const auto above_somewhere = [&](const ModelParams& m) {
+      return std::any_of(all.begin(), all.end(),
+                         [&](const AdevPoint& pt) { return excess(m, pt) > margin; });
+    };
+    while (ok && kept.size() > min_kept && above_somewhere(q)) {
+      kept.erase(std::min_element(kept.begin(), kept.end(),
+                                  [&](const AdevPoint& x, const AdevPoint& y) {
+                                    return excess(q, x) < excess(q, y);
+                                  }));
+      ok = fit_on(kept, q, kRefineEdfCap);
     }
     for (const AdevPoint& pt : all) {
       ok = ok && !(excess(q, pt) > margin);
@@ -5660,11 +5686,12 @@ class Analysis {
     finish_after();
   }
 
-  // A model after that misses the ADEV by RMS > kGrossMisfitRms is replaced by robust_after's
-  // refit when that is better on both errors (its effects follow it, said). Returns the taus
-  // the refit describes, empty when the choice stands (every tau then).
+  // A model after that misses the ADEV by RMS > kGrossMisfitRms, or lies far above it
+  // (lies_far_above), is replaced by robust_after's refit when that is better on both errors
+  // (its effects follow it, said). Returns the taus the refit describes, empty when the choice
+  // stands (every tau then).
   Points refit_gross_misfit(const AfterContext& ac, AfterChoice& choice) {
-    if (!(choice.e.adev_rms_rel > kGrossMisfitRms)) {
+    if (!(choice.e.adev_rms_rel > kGrossMisfitRms) && !lies_far_above(ac, choice.p)) {
       return {};
     }
     EnvelopeFit rb = robust_after(ac, choice);
