@@ -56,6 +56,12 @@ ia::Report run(const std::string& name, std::uint64_t seed) {
 
 std::string describe(const ia::Report& r) { return ia::to_text(r); }
 
+// The peak ADEV of m's first GM, and in tp_s the tau of that peak (0 without a GM).
+double gm_peak(const imu::ModelParams& m, double& tp_s) {
+  tp_s = m.n_gm > 0 ? imu::kGmPeakTauFactor * m.gm[0].tb_s : 0.0;
+  return m.n_gm > 0 ? imu::kGmPeakAdevFactor * std::sqrt(m.gm[0].sb * m.gm[0].tb_s) : 0.0;
+}
+
 // Prints r's text under "<what> seed <seed>:" (a record a test's count missed).
 void print_report(const std::string& what, std::uint64_t seed, const ia::Report& r) {
   std::printf("%s seed %llu:\n%s", what.c_str(), static_cast<unsigned long long>(seed),
@@ -976,10 +982,6 @@ TEST(AnalyzeSynthetic, MillionSamplesUnderTenSeconds) {
 // within 40 % (the line's leakage at the middle taus raises it), the error after under 1,
 // nothing named for the line.
 TEST(AnalyzeSynthetic, ALineWhoseAmplitudeWandersLeavesTheBiasModel) {
-  const auto gm_peak = [](const imu::ModelParams& m, double& tp_s) {
-    tp_s = m.n_gm > 0 ? imu::kGmPeakTauFactor * m.gm[0].tb_s : 0.0;
-    return m.n_gm > 0 ? imu::kGmPeakAdevFactor * std::sqrt(m.gm[0].sb * m.gm[0].tb_s) : 0.0;
-  };
   int right = 0;
   for (std::uint64_t seed = 730101; seed <= 730103; ++seed) {
     const ia::SynthSpec spec = tc::make_case("control", seed);
@@ -1028,10 +1030,6 @@ TEST(AnalyzeSynthetic, ALineWhoseAmplitudeWandersLeavesTheBiasModel) {
 // printed, not checked: on 5 of the 6 its peak is within 10 % of the analysis without the chirp,
 // on 730202 it stays on the chirp's bump (peak at the shortest taus, the bias's GM lost).
 TEST(AnalyzeSynthetic, AChirpLeavesTheWhiteNoiseAndNamesNothing) {
-  const auto gm_peak = [](const imu::ModelParams& m, double& tp_s) {
-    tp_s = m.n_gm > 0 ? imu::kGmPeakTauFactor * m.gm[0].tb_s : 0.0;
-    return m.n_gm > 0 ? imu::kGmPeakAdevFactor * std::sqrt(m.gm[0].sb * m.gm[0].tb_s) : 0.0;
-  };
   int right = 0;
   for (std::uint64_t seed = 730201; seed <= 730206; ++seed) {
     const ia::SynthSpec spec = tc::make_case("control", seed);
