@@ -2164,12 +2164,70 @@ AfterChoice fit_after(const AfterContext& c, std::uint32_t terms, const ModelPar
 constexpr double kGrossMisfitRms = 1.0;
 constexpr double kGrossAboveFactor = 2.0;
 
+// ln(model ADEV / data ADEV) beyond the data's 68 % interval on either side (0 inside it; -1e300
+// where the model or the interval is empty).
+double ci_excess(const ModelParams& q, const AdevPoint& pt) {
+  const double m = std::sqrt(std::max(model_avar(q, pt.tau_s), 0.0));
+  if (!(m > 0.0) || !(pt.ci_lo > 0.0) || !(pt.ci_hi > 0.0)) {
+    return -1e300;
+  }
+  return m > pt.ci_hi ? std::log(m / pt.ci_hi) : m < pt.ci_lo ? std::log(m / pt.ci_lo) : 0.0;
+}
+
+// True where q lies above the data by more than exp(log_margin) beyond their 68 % interval at
+// some point of pts.
+bool lies_above(const Points& pts, const ModelParams& q, double log_margin) {
+  return std::any_of(pts.begin(), pts.end(),
+                     [&](const AdevPoint& pt) { return ci_excess(q, pt) > log_margin; });
+}
+
 bool lies_far_above(const AfterContext& c, const ModelParams& p) {
-  const Points pts = in_range(points_for_model(c.clean, p), c.tau_max);
-  return std::any_of(pts.begin(), pts.end(), [&](const AdevPoint& pt) {
-    return pt.ci_hi > 0.0 && std::sqrt(std::max(model_avar(p, pt.tau_s), 0.0)) >
-                                 kGrossAboveFactor * pt.ci_hi;
-  });
+  return lies_above(in_range(points_for_model(c.clean, p), c.tau_max), p,
+                    std::log(kGrossAboveFactor));
+}
+
+// One start of robust_after's consensus: fit kept, keep the taus the model does not lie more
+// than exp(margin) below (at most 8 rounds; EDF capped at 10 for the first, then at 100), then,
+// while the model lies that far above the data anywhere in `all`, drop the datum highest above
+// it and refit. False when a fit fails or fewer than min_kept taus agree; q and kept are the
+// start's model and taus.
+template <class FitOn>
+bool envelope_from_start(const Points& all, std::size_t min_kept, double margin,
+                         const FitOn& fit_on, Points& kept, ModelParams& q) {
+  constexpr double kConsensusEdfCap = 10.0;  // the start: every tau one vote
+  constexpr double kRefineEdfCap = 100.0;    // then the shortest taus (the white noise) weigh more
+  bool ok = false;
+  for (int round = 0; round < 8; ++round) {
+    ok = fit_on(kept, q, round == 0 ? kConsensusEdfCap : kRefineEdfCap);
+    if (!ok) {
+      break;
+    }
+    Points next;
+    for (const AdevPoint& pt : all) {
+      if (ci_excess(q, pt) >= -margin) {
+        next.push_back(pt);
+      }
+    }
+    const bool same = next.size() == kept.size() &&
+                      std::equal(next.begin(), next.end(), kept.begin(),
+                                 [](const AdevPoint& x, const AdevPoint& y) { return x.af == y.af; });
+    ok = next.size() >= min_kept;
+    if (!ok || same) {
+      break;
+    }
+    kept = std::move(next);
+  }
+  // The lower envelope: while the model lies above the data anywhere, the datum highest above
+  // the model leaves the set (inside the margin it still pulls the fit up: a line's leakage
+  // next to the shortest taus, where the white noise is read) and the rest are refitted.
+  while (ok && kept.size() > min_kept && lies_above(all, q, margin)) {
+    kept.erase(std::min_element(kept.begin(), kept.end(),
+                                [&](const AdevPoint& x, const AdevPoint& y) {
+                                  return ci_excess(q, x) < ci_excess(q, y);
+                                }));
+    ok = fit_on(kept, q, kRefineEdfCap);
+  }
+  return ok && !lies_above(all, q, margin);
 }
 
 // White noise and one GM refitted to the lower envelope of the ADEV. A disturbance no term of the
@@ -2198,16 +2256,6 @@ EnvelopeFit robust_after(const AfterContext& c, const AfterChoice& chosen) {
   const Points all = in_range(points_for_model(sines ? c.fit_set : c.clean, chosen.p), c.tau_max);
   const std::size_t min_kept = std::max<std::size_t>(8, all.size() / 3);
   const double margin = std::log(1.25);
-  constexpr double kConsensusEdfCap = 10.0;  // the start: every tau one vote
-  constexpr double kRefineEdfCap = 100.0;    // then the shortest taus (the white noise) weigh more
-  // ln(model ADEV / data ADEV) beyond the data's 68 % interval on either side (0 inside it)
-  const auto excess = [](const ModelParams& q, const AdevPoint& pt) {
-    const double m = std::sqrt(std::max(model_avar(q, pt.tau_s), 0.0));
-    if (!(m > 0.0) || !(pt.ci_lo > 0.0) || !(pt.ci_hi > 0.0)) {
-      return -1e300;
-    }
-    return m > pt.ci_hi ? std::log(m / pt.ci_hi) : m < pt.ci_lo ? std::log(m / pt.ci_lo) : 0.0;
-  };
   const auto fit_on = [&](const Points& pts, ModelParams& q, double edf_cap) {
     FitOptions fo = fit_options(pts, kFitWhite | kFitGm1, c.ts, c.tau_max, c.tb_max, nullptr,
                                 c.white_filter_s);
@@ -2231,45 +2279,7 @@ EnvelopeFit robust_after(const AfterContext& c, const AfterChoice& chosen) {
   }
   for (Points kept : starts) {
     ModelParams q{};
-    bool ok = false;
-    for (int round = 0; round < 8; ++round) {
-      ok = fit_on(kept, q, round == 0 ? kConsensusEdfCap : kRefineEdfCap);
-      if (!ok) {
-        break;
-      }
-      Points next;
-      for (const AdevPoint& pt : all) {
-        if (excess(q, pt) >= -margin) {
-          next.push_back(pt);
-        }
-      }
-      const bool same = next.size() == kept.size() &&
-                        std::equal(next.begin(), next.end(), kept.begin(),
-                                   [](const AdevPoint& x, const AdevPoint& y) { return x.af == y.af; });
-      ok = next.size() >= min_kept;
-      if (!ok || same) {
-        break;
-      }
-      kept = std::move(next);
-    }
-    // The lower envelope: while the model lies above the data anywhere, the datum highest above
-    // the model leaves the set (inside the margin it still pulls the fit up: a line's leakage
-    // next to the shortest taus, where the white noise is read) and the rest are refitted.
-    const auto above_somewhere = [&](const ModelParams& m) {
-      return std::any_of(all.begin(), all.end(),
-                         [&](const AdevPoint& pt) { return excess(m, pt) > margin; });
-    };
-    while (ok && kept.size() > min_kept && above_somewhere(q)) {
-      kept.erase(std::min_element(kept.begin(), kept.end(),
-                                  [&](const AdevPoint& x, const AdevPoint& y) {
-                                    return excess(q, x) < excess(q, y);
-                                  }));
-      ok = fit_on(kept, q, kRefineEdfCap);
-    }
-    for (const AdevPoint& pt : all) {
-      ok = ok && !(excess(q, pt) > margin);
-    }
-    if (!ok) {
+    if (!envelope_from_start(all, min_kept, margin, fit_on, kept, q)) {
       continue;
     }
     AfterChoice ch;
