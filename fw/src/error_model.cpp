@@ -328,19 +328,21 @@ ModelStatus ContinuousModel<kMaxStates>::add_rrw(double k, double prior_var) {
 }
 
 template <std::size_t kMaxStates>
-ModelStatus ContinuousModel<kMaxStates>::add_ramp(double r) {
+ModelStatus ContinuousModel<kMaxStates>::add_ramp(double r, double slope_drive) {
   if constexpr (kMaxStates < 2) {  // a 2-state term never fits (also silences -Warray-bounds)
     return ModelStatus::kCapacity;
   }
-  if (!positive_finite(r)) {
+  const double r_abs = std::fabs(r);
+  if (!positive_finite(r_abs) || !nonneg_finite(slope_drive)) {
     return ModelStatus::kBadParameter;
   }
-  if (n_states + 2 > kMaxStates || params.r > 0.0) {
+  if (n_states + 2 > kMaxStates || params.r > 0.0 || params.r < 0.0) {
     return ModelStatus::kCapacity;
   }
   const std::size_t i = n_states;
   f(i, i + 1) = 1.0;  // d' = s
-  p0(i + 1, i + 1) = r * r;
+  qc(i + 1, i + 1) = slope_drive;
+  p0(i + 1, i + 1) = r_abs * r_abs;
   h(0, i) = 1.0;
   params.r = r;
   n_states += 2;
@@ -348,11 +350,12 @@ ModelStatus ContinuousModel<kMaxStates>::add_ramp(double r) {
 }
 
 template <std::size_t kMaxStates>
-ModelStatus ContinuousModel<kMaxStates>::add_sinusoid(double a, double f0_hz) {
+ModelStatus ContinuousModel<kMaxStates>::add_sinusoid(double a, double f0_hz,
+                                                       double beta_per_s) {
   if constexpr (kMaxStates < 2) {  // a 2-state term never fits (also silences -Warray-bounds)
     return ModelStatus::kCapacity;
   }
-  if (!positive_finite(a) || !positive_finite(f0_hz)) {
+  if (!positive_finite(a) || !positive_finite(f0_hz) || !nonneg_finite(beta_per_s)) {
     return ModelStatus::kBadParameter;
   }
   if (n_states + 2 > kMaxStates || params.sin2_a > 0.0) {
@@ -360,10 +363,15 @@ ModelStatus ContinuousModel<kMaxStates>::add_sinusoid(double a, double f0_hz) {
   }
   const std::size_t i = n_states;
   const double w = 2.0 * kPi * f0_hz;
+  const double var = a * a / 2.0;
   f(i, i + 1) = w;
   f(i + 1, i) = -w;
-  p0(i, i) = a * a / 2.0;
-  p0(i + 1, i + 1) = a * a / 2.0;
+  f(i, i) = -beta_per_s;
+  f(i + 1, i + 1) = -beta_per_s;
+  qc(i, i) = 2.0 * beta_per_s * var;  // stationary variance var per state (add_oscillation)
+  qc(i + 1, i + 1) = 2.0 * beta_per_s * var;
+  p0(i, i) = var;
+  p0(i + 1, i + 1) = var;
   h(0, i) = 1.0;
   if (params.sin_a > 0.0) {
     params.sin2_a = a;
@@ -430,15 +438,22 @@ ModelStatus build_model(const ModelParams& p, ContinuousModel<kMaxStates>& out) 
   if (st == ModelStatus::kOk && p.k > 0.0) {
     st = m.add_rrw(p.k);
   }
-  if (st == ModelStatus::kOk && p.r > 0.0) {
-    st = m.add_ramp(p.r);
+  // The deterministic terms as the filter realises them (ModelParams::signal_memory_s).
+  const bool memory = p.signal_memory_s > 0.0;
+  if (memory && !positive_finite(p.signal_memory_s)) {
+    st = ModelStatus::kBadParameter;
+  }
+  const double beta = memory ? 1.0 / p.signal_memory_s : 0.0;
+  if (st == ModelStatus::kOk && (p.r > 0.0 || p.r < 0.0)) {
+    st = m.add_ramp(p.r, p.r * p.r * beta);
   }
   if (st == ModelStatus::kOk && p.sin_a > 0.0) {
-    st = m.add_sinusoid(p.sin_a, p.sin_f0_hz);
+    st = m.add_sinusoid(p.sin_a, p.sin_f0_hz, beta);
   }
   if (st == ModelStatus::kOk && p.sin2_a > 0.0) {
-    st = m.add_sinusoid(p.sin2_a, p.sin2_f0_hz);
+    st = m.add_sinusoid(p.sin2_a, p.sin2_f0_hz, beta);
   }
+  m.params.signal_memory_s = p.signal_memory_s;
   if (st == ModelStatus::kOk && p.osc_sigma > 0.0) {
     st = m.add_oscillation(p.osc_sigma, p.osc_f0_hz, p.osc_beta_per_s);
   }

@@ -144,6 +144,7 @@ template class ModelSimulator<2>;
 template class ModelSimulator<4>;
 template class ModelSimulator<6>;
 template class ModelSimulator<8>;  // synth --model: the node's largest filter
+template class ModelSimulator<16>;  // the largest model the host tools build (kModelMaxStates)
 template SimAdevResult simulate_adev<1, 8, 22>(const DiscreteModel<1>&, std::uint64_t,
                                               std::uint64_t, double, OnlineAdev<8, 22>&);
 template SimAdevResult simulate_adev<6, 8, 22>(const DiscreteModel<6>&, std::uint64_t,

@@ -140,6 +140,15 @@ struct ModelParams {
   /// The sampling period of the record the oscillation was fitted on [s]: its AVAR is that of
   /// sample means (avar_oscillation_sampled). 0: continuous averages. Not a filter parameter.
   double osc_ts_s = 0.0;
+  /// How long the deterministic terms (ramp, sinusoids) are known to hold [s] (0: for ever).
+  /// The record they were measured on establishes them over its own length only, so a filter
+  /// that runs for longer lets them wander over this time: the ramp's slope a random walk of
+  /// drive PSD R^2 / memory (its slope changes by about R over that time) and each sinusoid a
+  /// damped oscillator of rate 1 / memory and variance A^2 / 2 per state (a line over the
+  /// record, the narrowband oscillation's limit). Driven, their gain settles (KalmanFilter's and
+  /// AveragedKf's steady state); undriven, it decays for ever. The AVAR formulas are the
+  /// constant terms'. Not a fit parameter.
+  double signal_memory_s = 0.0;
 };
 
 /// The flicker bank for B over [tau_lo_s, tau_hi_s] (see kMaxFlickerGm). Returns the number of
@@ -215,9 +224,12 @@ struct ContinuousModel {
   [[nodiscard]] ModelStatus add_gauss_markov(double sb, double tb_s);
   /// prior_var: variance of the random-walk state at t = 0 (0: starts at zero).
   [[nodiscard]] ModelStatus add_rrw(double k, double prior_var = 0.0);
-  [[nodiscard]] ModelStatus add_ramp(double r);
-  /// A sinusoid (at most two per model).
-  [[nodiscard]] ModelStatus add_sinusoid(double a, double f0_hz);
+  /// A ramp of slope r (|r| is used: its sign is the realisation's, not the model's). slope_drive:
+  /// PSD of a random walk on the slope [unit^2/s^3] (0: a constant slope).
+  [[nodiscard]] ModelStatus add_ramp(double r, double slope_drive = 0.0);
+  /// A sinusoid (at most two per model). beta_per_s > 0: damped at that rate and driven so that
+  /// each state keeps the variance a^2 / 2 (ModelParams::signal_memory_s); 0: undamped.
+  [[nodiscard]] ModelStatus add_sinusoid(double a, double f0_hz, double beta_per_s = 0.0);
   /// Bias instability B realised by flicker_bank over [tau_lo_s, tau_hi_s].
   [[nodiscard]] ModelStatus add_flicker(double b, double tau_lo_s, double tau_hi_s);
   /// A narrowband oscillation (at most one per model).
