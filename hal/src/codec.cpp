@@ -195,6 +195,8 @@ std::size_t record_len(RecordKind k) {
     case RecordKind::kChannelMonitor: return kChannelMonitorLen;
     case RecordKind::kModel2:
     case RecordKind::kModelEcho2: return kModel2Len;
+    case RecordKind::kModelSignals:
+    case RecordKind::kModelSignalsEcho: return kModelSignalsLen;
   }
   return 0;
 }
@@ -213,6 +215,8 @@ std::uint32_t fd_id(RecordKind k) {
     case RecordKind::kChannelMonitor: return kIdChannelMonitorFd;
     case RecordKind::kModel2: return kIdModel2Fd;
     case RecordKind::kModelEcho2: return kIdModelEcho2Fd;
+    case RecordKind::kModelSignals: return kIdModelSignalsFd;
+    case RecordKind::kModelSignalsEcho: return kIdModelSignalsEchoFd;
   }
   return 0;
 }
@@ -230,7 +234,9 @@ std::uint8_t model_version(RecordKind k) {
     case RecordKind::kMonitor:
     case RecordKind::kStats:
     case RecordKind::kRejects:
-    case RecordKind::kChannelMonitor: return 0;
+    case RecordKind::kChannelMonitor:
+    case RecordKind::kModelSignals:
+    case RecordKind::kModelSignalsEcho: return 0;
   }
   return 0;
 }
@@ -243,7 +249,8 @@ bool kind_of_id(std::uint32_t can_id, RecordKind& kind, Layout& layout) {
                                  RecordKind::kBias,   RecordKind::kMonitor, RecordKind::kStats,
                                  RecordKind::kRejects, RecordKind::kModel,
                                  RecordKind::kModelEcho, RecordKind::kChannelMonitor,
-                                 RecordKind::kModel2,  RecordKind::kModelEcho2};
+                                 RecordKind::kModel2,  RecordKind::kModelEcho2,
+                                 RecordKind::kModelSignals, RecordKind::kModelSignalsEcho};
   for (const RecordKind k : kAll) {
     const std::uint32_t id = fd_id(k);
     if (can_id == id || can_id == id + 1) {
@@ -398,6 +405,20 @@ void serialize(const ChannelMonitorRecord& r, std::uint8_t* buf) {
   w.crc();
 }
 
+void serialize(const ModelSignalsRecord& r, std::uint8_t* buf) {
+  Writer w(buf);
+  w.u8(r.channel);
+  w.u8(r.flags);
+  w.u16(0);
+  w.f32(r.ramp_r);
+  w.f32(r.sin_a[0]);
+  w.f32(r.sin_a[1]);
+  w.f32(r.sin_f0_hz[0]);
+  w.f32(r.sin_f0_hz[1]);
+  w.f32(r.memory_s);
+  w.crc();
+}
+
 // ---- parse -----------------------------------------------------------------------------------
 
 void parse(const std::uint8_t* buf, ConfigRecord& r) {
@@ -528,6 +549,19 @@ void parse(const std::uint8_t* buf, ChannelMonitorRecord& r) {
   r.cusum_step_update = rd.u32();
 }
 
+void parse(const std::uint8_t* buf, ModelSignalsRecord& r) {
+  Reader rd(buf);
+  r.channel = rd.u8();
+  r.flags = rd.u8();
+  rd.skip(2);  // reserved
+  r.ramp_r = rd.f32();
+  r.sin_a[0] = rd.f32();
+  r.sin_a[1] = rd.f32();
+  r.sin_f0_hz[0] = rd.f32();
+  r.sin_f0_hz[1] = rd.f32();
+  r.memory_s = rd.f32();
+}
+
 // ---- encode ----------------------------------------------------------------------------------
 
 void encode(const ConfigRecord& r, Layout layout, std::uint8_t transfer_id, EncodedFrames& out) {
@@ -590,6 +624,14 @@ void encode(const ChannelMonitorRecord& r, Layout layout, std::uint8_t transfer_
   std::uint8_t buf[kChannelMonitorLen];
   serialize(r, buf);
   frame_record(buf, kChannelMonitorLen, RecordKind::kChannelMonitor, layout, transfer_id, out);
+}
+
+void encode(const ModelSignalsRecord& r, bool echo, Layout layout, std::uint8_t transfer_id,
+            EncodedFrames& out) {
+  const RecordKind kind = echo ? RecordKind::kModelSignalsEcho : RecordKind::kModelSignals;
+  std::uint8_t buf[kModelSignalsLen];
+  serialize(r, buf);
+  frame_record(buf, kModelSignalsLen, kind, layout, transfer_id, out);
 }
 
 }  // namespace imu::hal

@@ -5,8 +5,9 @@
 // --send first sends one config record (cfg_id 1, 100 Hz, ADIS16405 LSBs), then N samples with
 // seq 0..N-1 (except --skip SEQ, to provoke a gap) and counts[c] = seq * (c + 1).
 // --recv ends after N samples + missing, or when idle for timeout-ms; prints RxStats and
-// LinkStats. --print also prints every sample, gap and model record (push or echo, version 1
-// or 2) as it arrives. Exit: 0 ok, 1 runtime error, 2 usage, 3 bus cannot be opened.
+// LinkStats. --print also prints every sample, gap, model record (push or echo, version 1 or 2)
+// and model signals record (push or echo) as it arrives. Exit: 0 ok, 1 runtime error, 2 usage,
+// 3 bus cannot be opened.
 #include <poll.h>
 
 #include <cstdio>
@@ -56,7 +57,8 @@ void print_rx(const imu::hal::RxStats& s) {
       "rx frames=%llu samples=%llu missing=%llu gaps=%llu crc_errors=%llu bad_mtu=%llu "
       "bad_dlc=%llu unknown_id=%llu remote=%llu error_frames=%llu err_class_bits=%llu "
       "duplicates=%llu late=%llu reordered=%llu truncated=%llu orphan_fragments=%llu "
-      "resyncs=%llu configs=%llu models=%llu model_echoes=%llu\n",
+      "resyncs=%llu configs=%llu models=%llu model_echoes=%llu model_signals=%llu "
+      "model_signals_echoes=%llu\n",
       static_cast<unsigned long long>(s.frames), static_cast<unsigned long long>(s.samples),
       static_cast<unsigned long long>(s.missing), static_cast<unsigned long long>(s.gaps),
       static_cast<unsigned long long>(s.crc_errors), static_cast<unsigned long long>(s.bad_mtu),
@@ -70,7 +72,9 @@ void print_rx(const imu::hal::RxStats& s) {
       static_cast<unsigned long long>(s.records[static_cast<std::size_t>(imu::hal::RecordKind::kConfig)]),
       records(s, imu::hal::RecordKind::kModel) + records(s, imu::hal::RecordKind::kModel2),
       records(s, imu::hal::RecordKind::kModelEcho) +
-          records(s, imu::hal::RecordKind::kModelEcho2));
+          records(s, imu::hal::RecordKind::kModelEcho2),
+      records(s, imu::hal::RecordKind::kModelSignals),
+      records(s, imu::hal::RecordKind::kModelSignalsEcho));
 }
 
 // A model record (push or echo, version 1 or 2) as key=value; version 1 has no filter and no
@@ -85,6 +89,15 @@ void print_model(const imu::hal::ModelRecord& m, bool echo) {
       static_cast<unsigned>(m.flags), d(m.n), d(m.q), d(m.gm_sb[0]), d(m.gm_sb[1]),
       d(m.gm_tb_s[0]), d(m.gm_tb_s[1]), d(m.k), d(m.bi), d(m.bi_tau_lo_s), d(m.bi_tau_hi_s),
       d(m.n_filter_s), d(m.osc_sigma), d(m.osc_f0_hz), d(m.osc_beta_per_s));
+}
+
+// A model signals record (push or echo) as key=value.
+void print_signals(const imu::hal::ModelSignalsRecord& m, bool echo) {
+  const auto d = [](float v) { return static_cast<double>(v); };
+  std::printf("%s channel=%u flags=%u ramp_r=%g sin_a=%g,%g sin_f0_hz=%g,%g memory_s=%g\n",
+              echo ? "model_signals_echo" : "model_signals", static_cast<unsigned>(m.channel),
+              static_cast<unsigned>(m.flags), d(m.ramp_r), d(m.sin_a[0]), d(m.sin_a[1]),
+              d(m.sin_f0_hz[0]), d(m.sin_f0_hz[1]), d(m.memory_s));
 }
 
 int send_all(imu::hal::CanSocket& bus, long n, imu::hal::Layout layout, double rate_hz, long skip) {
@@ -155,6 +168,9 @@ int recv_all(imu::hal::CanSocket& bus, long count, int timeout_ms, bool print) {
       } else if (print && (e.type == imu::hal::RxEvent::Type::kModel ||
                            e.type == imu::hal::RxEvent::Type::kModelEcho)) {
         print_model(e.rec.model, e.type == imu::hal::RxEvent::Type::kModelEcho);
+      } else if (print && (e.type == imu::hal::RxEvent::Type::kModelSignals ||
+                           e.type == imu::hal::RxEvent::Type::kModelSignalsEcho)) {
+        print_signals(e.rec.signals, e.type == imu::hal::RxEvent::Type::kModelSignalsEcho);
       }
     });
     if (st == IoStatus::kTimeout || (count > 0 && delivered >= count)) {

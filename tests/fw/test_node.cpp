@@ -593,9 +593,9 @@ TEST_F(NodeTest, PushedModelIsValidatedSwappedAndEchoed) {
   }
   EXPECT_TRUE(std::isfinite(node_->bias(2)));
   EXPECT_GT(node_->bias_var(2), 0.0F);
-  std::printf("RAM: sizeof(KalmanFilter<float, %zu>) = %zu bytes per channel, sizeof(Node) = %zu\n",
-              imu::node::kNodeStates, sizeof(imu::KalmanFilter<float, imu::node::kNodeStates>),
-              sizeof(Node));
+  std::printf("RAM: sizeof(NodeFilter) = %zu bytes per channel (%zu process states), "
+              "sizeof(Node) = %zu\n",
+              sizeof(imu::node::NodeFilter), imu::node::kNodeProcessStates, sizeof(Node));
 }
 
 namespace {
@@ -820,4 +820,112 @@ TEST_F(NodeTest, PushedModelVersion2StatesAreCountedAgainstTheFilter) {
   EXPECT_EQ(e.flags, 0U);
   EXPECT_EQ(e.n_states, 1U);
   EXPECT_EQ(e.version, imu::hal::kModelVersion2) << "answered in the version pushed";
+}
+
+namespace {
+
+imu::hal::ModelSignalsRecord signals_echo_of(const std::vector<imu::hal::RxEvent>& ev,
+                                             std::size_t chan, std::size_t& count) {
+  imu::hal::ModelSignalsRecord last{};
+  count = 0;
+  for (const auto& e : ev) {
+    if (e.type == imu::hal::RxEvent::Type::kModelSignalsEcho && e.rec.signals.channel == chan) {
+      last = e.rec.signals;
+      ++count;
+    }
+  }
+  return last;
+}
+
+}  // namespace
+
+// The deterministic terms travel in their own record before the channel's ModelRecord: the
+// node runs them as states beside the stochastic terms (ramp 2, each sinusoid 2), echoes them,
+// counts them against its states, refuses what is out of range, and keeps them across a rate
+// change; a later ModelRecord without them replaces the whole model.
+TEST_F(NodeTest, DeterministicTermsRunWithTheModelTheyCameWith) {
+  send_config(100.0, 1e-4);
+  const auto push_model = [this](const imu::hal::ModelRecord& m) {
+    EncodedFrames fr{};
+    imu::hal::encode(m, false, imu::hal::Layout::kFd, 0, fr);
+    push(fr);
+  };
+  const auto push_signals = [this](const imu::hal::ModelSignalsRecord& s) {
+    EncodedFrames fr{};
+    imu::hal::encode(s, false, imu::hal::Layout::kClassic, 3, fr);
+    push(fr);
+  };
+  imu::hal::ModelRecord m{};
+  m.version = imu::hal::kModelVersion2;
+  m.channel = 2;
+  m.n = 3.3e-3F;
+  m.gm_sb[0] = 2.68e-8F;
+  m.gm_tb_s[0] = 158.7F;
+  imu::hal::ModelSignalsRecord s{};
+  s.channel = 2;
+  s.ramp_r = -2e-6F;
+  s.sin_a[0] = 0.01F;
+  s.sin_f0_hz[0] = 0.37F;
+  s.memory_s = 3600.0F;
+  push_signals(s);
+  EXPECT_EQ(node_->stats().model_rejected, 0U);
+  push_model(m);
+  EXPECT_EQ(node_->stats().models_accepted, 1U);
+  std::vector<imu::hal::RxEvent> ev = sink_.events();
+  std::size_t echoes = 0;
+  imu::hal::ModelSignalsRecord se = signals_echo_of(ev, 2, echoes);
+  EXPECT_EQ(echoes, 1U);
+  EXPECT_EQ(se.flags, imu::hal::kModelPushed);
+  EXPECT_EQ(se.ramp_r, s.ramp_r);
+  EXPECT_EQ(se.sin_f0_hz[0], s.sin_f0_hz[0]);
+  EXPECT_EQ(se.memory_s, s.memory_s);
+  EXPECT_EQ(echo_of(ev, 2).n_states, 5U) << "GM 1 + ramp 2 + sinusoid 2";
+  (void)signals_echo_of(ev, 1, echoes);
+  EXPECT_EQ(echoes, 0U) << "channels without deterministic terms send no signals echo";
+
+  // Out of range (a second sinusoid without a first; a NaN; a memory under 1 s): refused at
+  // once, the model running stays.
+  imu::hal::ModelSignalsRecord second_only{};
+  second_only.channel = 2;
+  second_only.sin_a[1] = 0.01F;
+  second_only.sin_f0_hz[1] = 1.0F;
+  imu::hal::ModelSignalsRecord nan_sig = s;
+  nan_sig.sin_f0_hz[0] = std::numeric_limits<float>::quiet_NaN();
+  imu::hal::ModelSignalsRecord short_memory = s;
+  short_memory.memory_s = 0.5F;
+  std::uint64_t refused = 0;
+  for (const auto& bad : {second_only, nan_sig, short_memory}) {
+    push_signals(bad);
+    EXPECT_EQ(node_->stats().model_rejected, ++refused);
+  }
+  ev = sink_.events();
+  EXPECT_EQ(echo_of(ev, 2).n_states, 5U);
+
+  // The model with them over the node's states: refused, counted, the old model stays.
+  imu::hal::ModelRecord big = m;
+  big.k = 1.4e-4F;
+  big.bi = 1e-3F;
+  big.bi_tau_lo_s = 1.0F;
+  big.bi_tau_hi_s = 100.0F;  // 4 members: 1 + 1 + 4 + 4 = 10 > 8 with the signals
+  imu::ModelParams alone{};
+  ASSERT_TRUE(imu::node::model_record_valid(big, alone)) << "8 states without the signals";
+  push_signals(s);
+  push_model(big);
+  EXPECT_EQ(node_->stats().model_rejected, ++refused);
+  ev = sink_.events();
+  EXPECT_EQ(echo_of(ev, 2).n_states, 5U);
+
+  // A rate change rebuilds the model with its deterministic terms.
+  send_config(200.0, 1e-4, 2);
+  EXPECT_EQ(node_->stats().restarts, 1U);
+  EXPECT_EQ(node_->stats().model_rejected, refused);
+  EXPECT_EQ(node_->signals_echo(2).flags, imu::hal::kModelPushed);
+  EXPECT_EQ(node_->signals_echo(2).sin_a[0], s.sin_a[0]);
+  EXPECT_EQ(node_->model_echo(2).n_states, 5U);
+
+  // A ModelRecord with nothing pushed before it replaces the whole model: no signals now.
+  push_model(m);
+  EXPECT_EQ(node_->model_echo(2).n_states, 1U);
+  EXPECT_EQ(node_->signals_echo(2).flags, 0U);
+  EXPECT_EQ(node_->stats().models_accepted, 2U);
 }

@@ -123,7 +123,10 @@ void run_structured(const std::uint8_t* data, std::size_t size) {
         mr.version = static_cast<std::uint8_t>(a % 4U);  // 1, 2: layouts; 0, 3: refused
         mr.channel = static_cast<std::uint8_t>(b % 8U);
         mr.osc_sigma = static_cast<float>(a);
-        switch (a % 8U) {
+        imu::hal::ModelSignalsRecord ms{};
+        ms.channel = static_cast<std::uint8_t>(b % 8U);  // 6 and 7: refused (bad_record)
+        ms.ramp_r = -static_cast<float>(a);
+        switch (a % 10U) {
           case 0: imu::hal::encode(imu::hal::ConfigRecord{}, layout, b, out); break;
           case 1: imu::hal::encode(imu::hal::AdevRecord{}, layout, b, out); break;
           case 2: imu::hal::encode(imu::hal::BiasRecord{}, layout, b, out); break;
@@ -131,6 +134,8 @@ void run_structured(const std::uint8_t* data, std::size_t size) {
           case 4: imu::hal::encode(cm, layout, b, out); break;
           case 5: imu::hal::encode(mr, false, layout, b, out); break;  // push
           case 6: imu::hal::encode(mr, true, layout, b, out); break;   // echo
+          case 7: imu::hal::encode(ms, false, layout, b, out); break;  // signals push
+          case 8: imu::hal::encode(ms, true, layout, b, out); break;   // signals echo
           default: imu::hal::encode(imu::hal::StatsRecord{}, layout, b, out); break;
         }
         for (std::size_t k = 0; k < out.count; ++k) {

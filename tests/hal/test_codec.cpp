@@ -669,3 +669,208 @@ TEST(Codec, ChannelMonitorRecordRoundTripsAndRefusesABadChannel) {
   imu::hal::encode(b, Layout::kFd, 0, out);
   expect_refused(out);
 }
+
+namespace {
+
+// A model signals record with every field distinct (a negative ramp: the slope is signed).
+imu::hal::ModelSignalsRecord model_signals() {
+  imu::hal::ModelSignalsRecord r{};
+  r.channel = 5;
+  r.flags = imu::hal::kModelPushed;
+  r.ramp_r = -3.25e-5F;
+  r.sin_a[0] = 1.5e-3F;
+  r.sin_a[1] = 2.75e-4F;
+  r.sin_f0_hz[0] = 50.0F;
+  r.sin_f0_hz[1] = 100.0F;
+  r.memory_s = 3600.5F;
+  return r;
+}
+
+}  // namespace
+
+// ModelSignalsRecord: 32 bytes (channel, flags, 2 reserved, ramp_r, sin_a[0], sin_a[1],
+// sin_f0_hz[0], sin_f0_hz[1], memory_s, CRC), 0x094/0x095 as a push and 0x254/0x255 as the
+// echo; one FD frame of len 32 or 5 classic frames; every field back bit for bit, as
+// kModelSignals / kModelSignalsEcho events counted under their own kinds.
+TEST(Codec, ModelSignalsRecordRoundTripsInBothLayouts) {
+  const imu::hal::ModelSignalsRecord r = model_signals();
+  for (const bool echo : {false, true}) {
+    const imu::hal::RecordKind kind =
+        echo ? imu::hal::RecordKind::kModelSignalsEcho : imu::hal::RecordKind::kModelSignals;
+    const imu::hal::RecordKind other =
+        echo ? imu::hal::RecordKind::kModelSignals : imu::hal::RecordKind::kModelSignalsEcho;
+    for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+      EncodedFrames out{};
+      imu::hal::encode(r, echo, layout, 13, out);
+      const std::uint32_t id = (echo ? 0x254U : 0x094U) + (layout == Layout::kFd ? 0U : 1U);
+      ASSERT_EQ(out.count, layout == Layout::kFd ? 1U : 5U);  // ceil(32 / 7)
+      for (std::size_t i = 0; i < out.count; ++i) {
+        EXPECT_EQ(out.frame[i].can_id, id);
+        EXPECT_EQ(out.frame[i].len, layout == Layout::kFd ? 32U : 8U);
+        if (layout == Layout::kClassic) {
+          EXPECT_EQ(out.frame[i].data[0], 0xD0U | i) << "counter 13, fragment i";
+        }
+      }
+      imu::hal::Receiver<8> rx;
+      std::vector<imu::hal::RxEvent> ev;
+      for (std::size_t i = 0; i < out.count; ++i) {
+        (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
+                            [&ev](const imu::hal::RxEvent& e) { ev.push_back(e); });
+      }
+      ASSERT_EQ(ev.size(), 1U);
+      ASSERT_EQ(ev[0].type, echo ? imu::hal::RxEvent::Type::kModelSignalsEcho
+                                 : imu::hal::RxEvent::Type::kModelSignals);
+      const imu::hal::ModelSignalsRecord& m = ev[0].rec.signals;
+      EXPECT_EQ(m.channel, 5U);
+      EXPECT_EQ(m.flags, imu::hal::kModelPushed);
+      EXPECT_EQ(bits(m.ramp_r), bits(r.ramp_r));
+      EXPECT_EQ(bits(m.sin_a[0]), bits(r.sin_a[0]));
+      EXPECT_EQ(bits(m.sin_a[1]), bits(r.sin_a[1]));
+      EXPECT_EQ(bits(m.sin_f0_hz[0]), bits(r.sin_f0_hz[0]));
+      EXPECT_EQ(bits(m.sin_f0_hz[1]), bits(r.sin_f0_hz[1]));
+      EXPECT_EQ(bits(m.memory_s), bits(r.memory_s));
+      std::uint8_t a[imu::hal::kModelSignalsLen];
+      std::uint8_t b[imu::hal::kModelSignalsLen];
+      imu::hal::serialize(m, a);
+      imu::hal::serialize(r, b);
+      EXPECT_EQ(std::memcmp(a, b, sizeof a), 0);
+      EXPECT_EQ(rx.stats().records[static_cast<std::size_t>(kind)], 1U);
+      EXPECT_EQ(rx.stats().records[static_cast<std::size_t>(other)], 0U);
+      EXPECT_EQ(rx.stats().crc_errors, 0U);
+      EXPECT_EQ(rx.stats().bad_record, 0U);
+    }
+  }
+  // The wire bytes, offset by offset, against the layout written out by hand.
+  Bytes want;
+  want.u8(5);
+  want.u8(imu::hal::kModelPushed);
+  want.u8(0);
+  want.u8(0);
+  for (const float v : {r.ramp_r, r.sin_a[0], r.sin_a[1], r.sin_f0_hz[0], r.sin_f0_hz[1],
+                        r.memory_s}) {
+    want.f32(v);
+  }
+  want.crc();
+  ASSERT_EQ(want.b.size(), imu::hal::kModelSignalsLen);
+  std::uint8_t got[imu::hal::kModelSignalsLen + 1];
+  std::memset(got, 0xA5, sizeof got);
+  imu::hal::serialize(r, got);
+  EXPECT_EQ(std::memcmp(got, want.b.data(), want.b.size()), 0);
+  EXPECT_EQ(le32(got + 28), imu::hal::crc32c(got, 28));
+  EXPECT_EQ(got[imu::hal::kModelSignalsLen], 0xA5) << "serialize wrote past the record";
+  EXPECT_TRUE(imu::hal::crc_ok(got, imu::hal::kModelSignalsLen));
+}
+
+// Refusals of model signals records, each counted: a CRC error (a flipped bit, FD and classic);
+// a channel >= 6 (bad_record, CRC valid, push and echo); a 48-byte FD frame on the 32-byte
+// identifier (bad_dlc); a classic fragment index beyond the 5 fragments (bad_fragment). Nonzero
+// reserved bytes are no reason to refuse. The identifiers classify back to the kinds.
+TEST(Codec, ModelSignalsRecordErrorsAreRefusedAndCounted) {
+  const imu::hal::ModelSignalsRecord r = model_signals();
+  for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+    for (const std::size_t byte : {0U, 2U, 13U, 31U}) {  // channel, reserved, a float, CRC
+      EncodedFrames out{};
+      imu::hal::encode(r, true, layout, 4, out);
+      if (layout == Layout::kFd) {
+        out.frame[0].data[byte] ^= 0x10U;
+      } else {
+        out.frame[byte / 7].data[1 + byte % 7] ^= 0x10U;
+      }
+      imu::hal::Receiver<8> rx;
+      std::size_t got = 0;
+      for (std::size_t i = 0; i < out.count; ++i) {
+        (void)rx.push_drain(out.frame[i], imu::hal::wire_size(out.frame[i]), 0,
+                            [&got](const imu::hal::RxEvent&) { ++got; });
+      }
+      EXPECT_EQ(got, 0U) << byte;
+      EXPECT_EQ(rx.stats().crc_errors, 1U) << byte;
+      EXPECT_EQ(
+          rx.stats().records[static_cast<std::size_t>(imu::hal::RecordKind::kModelSignalsEcho)],
+          0U);
+    }
+  }
+  for (const bool echo : {false, true}) {
+    imu::hal::ModelSignalsRecord b = r;
+    b.channel = 6;  // no such channel: CRC-valid but refused, never an index out of range
+    EncodedFrames out{};
+    imu::hal::encode(b, echo, Layout::kFd, 0, out);
+    expect_refused(out);
+  }
+  // Reserved bytes set, CRC recomputed: accepted, the fields unchanged.
+  std::uint8_t wire[imu::hal::kModelSignalsLen];
+  imu::hal::serialize(r, wire);
+  wire[2] = 0x5A;
+  wire[3] = 0xFF;
+  Bytes res{std::vector<std::uint8_t>(wire, wire + 28)};
+  res.crc();
+  const auto ev = decode(fd_frame(0x094, res.b));
+  ASSERT_EQ(ev.size(), 1U);
+  ASSERT_EQ(ev[0].type, imu::hal::RxEvent::Type::kModelSignals);
+  EXPECT_EQ(ev[0].rec.signals.channel, 5U);
+  EXPECT_EQ(bits(ev[0].rec.signals.ramp_r), bits(r.ramp_r));
+  EXPECT_EQ(bits(ev[0].rec.signals.memory_s), bits(r.memory_s));
+  // The identifier fixes the length: a 48-byte FD frame on 0x094 ...
+  {
+    imu::hal::Receiver<8> rx;
+    EncodedFrames long_frame = fd_frame(0x094, std::vector<std::uint8_t>(48, 0));
+    EXPECT_EQ(rx.push(long_frame.frame[0], imu::hal::kCanFdMtu, 0),
+              imu::hal::FrameVerdict::kBadDlc);
+    EXPECT_EQ(rx.stats().bad_dlc, 1U);
+  }
+  // ... and a classic fragment index 5 on 0x255 (a 32-byte record has fragments 0..4).
+  {
+    imu::hal::Receiver<8> rx;
+    EncodedFrames out{};
+    imu::hal::encode(r, true, Layout::kClassic, 1, out);
+    ASSERT_EQ(out.count, 5U);
+    CanFrame f = out.frame[4];
+    f.data[0] = 0x15U;
+    EXPECT_EQ(rx.push(f, imu::hal::kCanMtu, 0), imu::hal::FrameVerdict::kBadFragment);
+    EXPECT_EQ(rx.stats().bad_fragment, 1U);
+  }
+  imu::hal::RecordKind k{};
+  Layout l{};
+  ASSERT_TRUE(imu::hal::kind_of_id(0x094, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kModelSignals);
+  EXPECT_EQ(l, Layout::kFd);
+  ASSERT_TRUE(imu::hal::kind_of_id(0x095, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kModelSignals);
+  EXPECT_EQ(l, Layout::kClassic);
+  ASSERT_TRUE(imu::hal::kind_of_id(0x254, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kModelSignalsEcho);
+  EXPECT_EQ(l, Layout::kFd);
+  ASSERT_TRUE(imu::hal::kind_of_id(0x255, k, l));
+  EXPECT_EQ(k, imu::hal::RecordKind::kModelSignalsEcho);
+  EXPECT_EQ(l, Layout::kClassic);
+  EXPECT_FALSE(imu::hal::kind_of_id(0x096, k, l));
+  EXPECT_FALSE(imu::hal::kind_of_id(0x256, k, l));
+  EXPECT_EQ(imu::hal::record_len(imu::hal::RecordKind::kModelSignals), 32U);
+  EXPECT_EQ(imu::hal::record_len(imu::hal::RecordKind::kModelSignalsEcho), 32U);
+  EXPECT_EQ(imu::hal::model_version(imu::hal::RecordKind::kModelSignals), 0U);
+  EXPECT_EQ(imu::hal::model_version(imu::hal::RecordKind::kModelSignalsEcho), 0U);
+}
+
+// Every kind has its own pair of identifiers (FD even, classic = FD + 1), and each of them
+// classifies back to that kind and layout.
+TEST(Codec, EveryKindHasItsOwnIdentifiers) {
+  for (std::size_t i = 0; i < imu::hal::kRecordKinds; ++i) {
+    const auto ki = static_cast<imu::hal::RecordKind>(i);
+    const std::uint32_t id = imu::hal::fd_id(ki);
+    EXPECT_EQ(id % 2U, 0U) << i;
+    EXPECT_GT(imu::hal::record_len(ki), 0U) << i;
+    EXPECT_LE(imu::hal::record_len(ki), imu::hal::kMaxRecordLen) << i;
+    for (const Layout layout : {Layout::kFd, Layout::kClassic}) {
+      imu::hal::RecordKind k{};
+      Layout l{};
+      ASSERT_TRUE(imu::hal::kind_of_id(id + (layout == Layout::kFd ? 0U : 1U), k, l)) << i;
+      EXPECT_EQ(k, ki) << i;
+      EXPECT_EQ(l, layout) << i;
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      const std::uint32_t other = imu::hal::fd_id(static_cast<imu::hal::RecordKind>(j));
+      EXPECT_NE(id, other) << i << " " << j;
+      EXPECT_NE(id + 1U, other) << i << " " << j;
+      EXPECT_NE(id, other + 1U) << i << " " << j;
+    }
+  }
+}

@@ -33,7 +33,19 @@ bool zero_or(float v, float lo, float hi) { return !(v > 0.0F) ? !(v < 0.0F) : (
 
 }  // namespace
 
-bool model_record_valid(const hal::ModelRecord& r, ModelParams& out) {
+std::size_t pushed_states(const ModelParams& p) {
+  std::size_t states = p.n_gm + (p.k > 0.0 ? 1U : 0U) + (p.n_filter_s > 0.0 ? 1U : 0U) +
+                       (p.osc_sigma > 0.0 ? 2U : 0U) + (p.r > 0.0 || p.r < 0.0 ? 2U : 0U) +
+                       (p.sin_a > 0.0 ? 2U : 0U) + (p.sin2_a > 0.0 ? 2U : 0U);
+  if (p.bi > 0.0) {
+    GmParam bank[kMaxFlickerGm] = {};
+    states += flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank);
+  }
+  return states;
+}
+
+bool model_record_valid(const hal::ModelRecord& r, ModelParams& out,
+                        std::size_t reserved_states) {
   const float vals[] = {r.n,          r.q,         r.gm_sb[0],   r.gm_tb_s[0],    r.gm_sb[1],
                         r.gm_tb_s[1], r.k,         r.bi,         r.bi_tau_lo_s,   r.bi_tau_hi_s,
                         r.n_filter_s, r.osc_sigma, r.osc_f0_hz,  r.osc_beta_per_s};
@@ -82,9 +94,6 @@ bool model_record_valid(const hal::ModelRecord& r, ModelParams& out) {
       ++p.n_gm;
     }
   }
-  // States as build_model makes them: a GM, RRW and the filtered white noise 1 each, the
-  // oscillation 2, the flicker bank 1 per member.
-  std::size_t states = p.n_gm + (r.k > 0.0F ? 1U : 0U) + (filter ? 1U : 0U) + (osc ? 2U : 0U);
   if (r.bi > 0.0F) {
     if (!(r.bi_tau_lo_s >= kMinPushedTbS && r.bi_tau_hi_s <= kMaxPushedTbS &&
           r.bi_tau_lo_s < r.bi_tau_hi_s)) {
@@ -94,16 +103,59 @@ bool model_record_valid(const hal::ModelRecord& r, ModelParams& out) {
     p.bi_tau_lo_s = static_cast<double>(r.bi_tau_lo_s);
     p.bi_tau_hi_s = static_cast<double>(r.bi_tau_hi_s);
     GmParam bank[kMaxFlickerGm] = {};
-    const std::size_t nb = flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank);
-    if (nb == 0) {
+    if (flicker_bank(p.bi, p.bi_tau_lo_s, p.bi_tau_hi_s, bank) == 0) {
       return false;
     }
-    states += nb;
   }
-  if (states == 0 || states > kNodeProcessStates) {
+  const std::size_t states = pushed_states(p);
+  if (states == 0 || reserved_states > kNodeProcessStates ||
+      states > kNodeProcessStates - reserved_states) {
     return false;  // no bias state to estimate, or more than the node's filter holds
   }
   out = p;
+  return true;
+}
+
+std::size_t signal_states(const hal::ModelSignalsRecord& r) {
+  return (r.ramp_r > 0.0F || r.ramp_r < 0.0F ? 2U : 0U) + (r.sin_a[0] > 0.0F ? 2U : 0U) +
+         (r.sin_a[1] > 0.0F ? 2U : 0U);
+}
+
+bool model_signals_valid(const hal::ModelSignalsRecord& r, ModelParams& p) {
+  const float vals[] = {r.ramp_r, r.sin_a[0], r.sin_a[1], r.sin_f0_hz[0], r.sin_f0_hz[1],
+                        r.memory_s};
+  for (const float v : vals) {
+    if (!finite_f(v)) {
+      return false;
+    }
+  }
+  if (r.channel >= kChannels || !zero_or(std::fabs(r.ramp_r), 1e-15F, 1e3F) ||
+      !zero_or(r.memory_s, kMinSignalMemoryS, kMaxSignalMemoryS)) {
+    return false;
+  }
+  for (std::size_t i = 0; i < 2; ++i) {
+    const bool present = r.sin_a[i] > 0.0F;
+    const bool ok = present ? r.sin_a[i] <= 1e3F && r.sin_a[i] >= 1e-15F &&
+                                  r.sin_f0_hz[i] > 0.0F && r.sin_f0_hz[i] <= kMaxPushedOscF0Hz
+                            : is_zero(r.sin_a[i]) && is_zero(r.sin_f0_hz[i]);
+    if (!ok) {
+      return false;
+    }
+  }
+  if (r.sin_a[1] > 0.0F && !(r.sin_a[0] > 0.0F)) {
+    return false;  // the second only beside the first
+  }
+  ModelParams q = p;
+  q.r = static_cast<double>(r.ramp_r);
+  q.sin_a = static_cast<double>(r.sin_a[0]);
+  q.sin_f0_hz = static_cast<double>(r.sin_f0_hz[0]);
+  q.sin2_a = static_cast<double>(r.sin_a[1]);
+  q.sin2_f0_hz = static_cast<double>(r.sin_f0_hz[1]);
+  q.signal_memory_s = static_cast<double>(r.memory_s);
+  if (pushed_states(q) > kNodeProcessStates) {
+    return false;
+  }
+  p = q;
   return true;
 }
 
@@ -116,16 +168,6 @@ bool discretize_pushed(const ModelParams& p, double rate_hz, DiscreteModel<kNode
     return false;
   }
   n_states = out.n_states - 1;  // the model's states (the echo's n_states); + the sample mean
-  // Pad to kNodeStates with inert states: Phi = Qd = P0 = H = 0 keeps them at x = 0, P = 0.
-  for (std::size_t i = out.n_states; i < kNodeStates; ++i) {
-    for (std::size_t j = 0; j < kNodeStates; ++j) {
-      out.phi(i, j) = out.phi(j, i) = 0.0;
-      out.qd(i, j) = out.qd(j, i) = 0.0;
-      out.p0(i, j) = out.p0(j, i) = 0.0;
-    }
-    out.h(0, i) = 0.0;
-  }
-  out.n_states = kNodeStates;
   return true;
 }
 
@@ -237,6 +279,9 @@ void Node::on_event(const hal::RxEvent& e) {
     case hal::RxEvent::Type::kModel:
       on_model(e.rec.model);
       break;
+    case hal::RxEvent::Type::kModelSignals:
+      on_model_signals(e.rec.signals);
+      break;
     case hal::RxEvent::Type::kModelEcho:
     case hal::RxEvent::Type::kAdev:
     case hal::RxEvent::Type::kBias:
@@ -244,6 +289,7 @@ void Node::on_event(const hal::RxEvent& e) {
     case hal::RxEvent::Type::kChannelMonitor:
     case hal::RxEvent::Type::kStats:
     case hal::RxEvent::Type::kRejects:
+    case hal::RxEvent::Type::kModelSignalsEcho:
       break;  // another node's telemetry on a shared bus: not ours to process
   }
 }
@@ -284,8 +330,9 @@ void Node::on_config(const hal::ConfigRecord& c) {
       ++stats_.model_rejected;  // cannot happen: model_in_range() checked both rate limits
     }
     ModelParams p{};
-    if (pushed_[c_i] && !(model_record_valid(model_rec_[c_i], p) && build_pushed(c_i, p))) {
+    if (pushed_[c_i] && !(pushed_params(c_i, p) && build_pushed(c_i, p))) {
       pushed_[c_i] = false;  // valid at the old rate, not at this one: back to the example's
+      has_signals_[c_i] = false;
       ++stats_.model_rejected;
     }
   }
@@ -302,7 +349,7 @@ bool Node::build_pushed(std::size_t c, const ModelParams& p) {
 }
 
 bool Node::install_filter(std::size_t c) {
-  KalmanFilter<float, kNodeStates> kf;
+  NodeFilter kf;
   if (kf.configure(scratch_dm_, static_cast<double>(known_[c])) != KfStatus::kOk) {
     return false;
   }
@@ -311,12 +358,36 @@ bool Node::install_filter(std::size_t c) {
   return true;
 }
 
+bool Node::pushed_params(std::size_t c, ModelParams& p) const {
+  return model_record_valid(model_rec_[c], p, has_signals_[c] ? signal_states(signals_rec_[c]) : 0U) &&
+         (!has_signals_[c] || model_signals_valid(signals_rec_[c], p));
+}
+
+void Node::on_model_signals(const hal::ModelSignalsRecord& r) {
+  ModelParams p{};  // the terms alone: their ranges (the state count is checked with the model)
+  if (r.channel >= kChannels || !model_signals_valid(r, p)) {
+    ++stats_.model_rejected;
+    send_models();
+    return;
+  }
+  pending_signals_[r.channel] = r;  // applied with the channel's next ModelRecord
+  pending_[r.channel] = true;
+}
+
 void Node::on_model(const hal::ModelRecord& r) {
   if (r.channel < kChannels) {  // the receiver refused any other
     echo_v2_[r.channel] = r.version == hal::kModelVersion2;  // answer in the version pushed
   }
+  // The deterministic terms pushed for this channel go with this record, whatever its fate.
+  const bool with_signals = r.channel < kChannels && pending_[r.channel];
+  const hal::ModelSignalsRecord signals = with_signals ? pending_signals_[r.channel]
+                                                       : hal::ModelSignalsRecord{};
+  if (r.channel < kChannels) {
+    pending_[r.channel] = false;
+  }
   ModelParams p{};
-  if (!model_record_valid(r, p)) {
+  if (!model_record_valid(r, p, with_signals ? signal_states(signals) : 0U) ||
+      (with_signals && !model_signals_valid(signals, p))) {
     ++stats_.model_rejected;
     send_models();
     return;
@@ -339,6 +410,8 @@ void Node::on_model(const hal::ModelRecord& r) {
   }
   model_rec_[c] = r;
   model_states_[c] = n;
+  signals_rec_[c] = signals;
+  has_signals_[c] = with_signals;
   pushed_[c] = true;
   ++stats_.models_accepted;
   (void)mon_[c].configure(cfg_node_.monitor_window);  // innovations of a new filter
@@ -368,6 +441,16 @@ hal::ModelRecord Node::model_echo(std::size_t c) const {
   return e;
 }
 
+hal::ModelSignalsRecord Node::signals_echo(std::size_t c) const {
+  hal::ModelSignalsRecord e{};
+  if (pushed_[c] && has_signals_[c]) {
+    e = signals_rec_[c];
+    e.flags = hal::kModelPushed;
+  }
+  e.channel = static_cast<std::uint8_t>(c);
+  return e;
+}
+
 void Node::send_models() {
   if (!cfg_node_.telemetry) {
     return;
@@ -376,6 +459,10 @@ void Node::send_models() {
   for (std::size_t c = 0; c < kChannels; ++c) {
     hal::encode(model_echo(c), true, cfg_node_.layout, transfer_id_++, fr);
     send_frames(fr);
+    if (pushed_[c] && has_signals_[c]) {  // only channels that run deterministic terms
+      hal::encode(signals_echo(c), true, cfg_node_.layout, transfer_id_++, fr);
+      send_frames(fr);
+    }
   }
 }
 

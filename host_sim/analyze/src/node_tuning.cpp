@@ -423,14 +423,15 @@ constexpr unsigned kAllWays = 7U;
 
 // r with the ways applied; what went is said in `given_up`. False if a way does not apply or
 // the result does not run on the node.
-bool make_room(hal::ModelRecord& r, unsigned ways, double fast_tb_s, std::string& given_up) {
+bool make_room(hal::ModelRecord& r, unsigned ways, double fast_tb_s, std::size_t reserved,
+               std::string& given_up) {
   ModelParams p{};
   const auto add = [&given_up](const std::string& t) {
     given_up += (given_up.empty() ? "" : ", ") + t;
   };
   if ((ways & kNarrowBank) != 0U) {
     const float bank_lo_s = r.bi_tau_lo_s;
-    if (!narrow_flicker_bank(r, 10.0F)) {  // a decade left
+    if (!narrow_flicker_bank(r, 10.0F, reserved)) {  // a decade left
       return false;
     }
     add("the bias-instability bank below " + num_text(static_cast<double>(r.bi_tau_lo_s)) +
@@ -465,7 +466,7 @@ bool make_room(hal::ModelRecord& r, unsigned ways, double fast_tb_s, std::string
     r.n_filter_s = 0.0F;
     add("the output filter");
   }
-  return node::model_record_valid(r, p);
+  return node::model_record_valid(r, p, reserved);
 }
 
 // An oscillation added at each of the band's largest excesses over rec (where rec fills the
@@ -474,7 +475,7 @@ bool make_room(hal::ModelRecord& r, unsigned ways, double fast_tb_s, std::string
 // whitest at its monitor's lags (the node has one oscillation slot, and its whiteness monitor
 // is what the term is for), the likelihood deciding between those the monitor cannot tell
 // apart. Returns its 2 ln LR (0: none passed); `given_up` says what made room for it.
-double best_oscillation(const Band& b, double fs_hz, double fast_tb_s,
+double best_oscillation(const Band& b, double fs_hz, double fast_tb_s, std::size_t reserved,
                         const hal::ModelRecord& rec, double cost_rec, double level,
                         hal::ModelRecord& best, std::string& given_up) {
   const std::vector<double> s = spectrum_at(b, fs_hz, rec);
@@ -499,14 +500,14 @@ double best_oscillation(const Band& b, double fs_hz, double fast_tb_s,
     tried.push_back(added);
     // As it is if the node holds it, else every least way of making room that gives a model
     // it runs (not one that holds another that does).
-    const bool fits = node::model_record_valid(added, p);
+    const bool fits = node::model_record_valid(added, p, reserved);
     std::vector<unsigned> valid;
     for (unsigned ways = 0; ways <= (fits ? 0U : kAllWays); ++ways) {
       hal::ModelRecord cand = added;
       std::string room;
       const auto holds = [ways](unsigned v) { return (ways & v) == v; };
       if (!fits && (ways == 0U || std::any_of(valid.begin(), valid.end(), holds) ||
-                    !make_room(cand, ways, fast_tb_s, room))) {
+                    !make_room(cand, ways, fast_tb_s, reserved, room))) {
         continue;
       }
       valid.push_back(ways);
@@ -569,10 +570,84 @@ bool above_rounding(const Band& b, const double* x, std::size_t n) {
 
 }  // namespace
 
-bool narrow_flicker_bank(hal::ModelRecord& rec, float min_span) {
+bool remove_signals(double* x, std::size_t n, double fs_hz,
+                    const hal::ModelSignalsRecord& signals) {
+  constexpr std::size_t kMaxReg = 6;  // constant, line, 2 x (sine, cosine)
+  double freq[2] = {};
+  std::size_t nf = 0;
+  for (std::size_t i = 0; i < 2; ++i) {
+    if (signals.sin_a[i] > 0.0F && signals.sin_f0_hz[i] > 0.0F) {
+      freq[nf++] = static_cast<double>(signals.sin_f0_hz[i]);
+    }
+  }
+  const std::size_t m = 2 + 2 * nf;
+  if (!(fs_hz > 0.0) || n < 4 * m) {
+    return false;
+  }
+  const double mid = 0.5 * static_cast<double>(n);
+  const auto regressors = [&](std::size_t k, double (&r)[kMaxReg]) {
+    const double t_s = static_cast<double>(k) / fs_hz;
+    r[0] = 1.0;
+    r[1] = (static_cast<double>(k) - mid) / mid;  // the line, scaled to [-1, 1]
+    for (std::size_t j = 0; j < nf; ++j) {
+      const double ph = kTwoPi * freq[j] * t_s;
+      r[2 + 2 * j] = std::sin(ph);
+      r[3 + 2 * j] = std::cos(ph);
+    }
+  };
+  double a[kMaxReg][kMaxReg + 1] = {};  // normal equations, right-hand side in the last column
+  double r[kMaxReg] = {};
+  for (std::size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(x[k])) {
+      continue;
+    }
+    regressors(k, r);
+    for (std::size_t i = 0; i < m; ++i) {
+      for (std::size_t j = 0; j < m; ++j) {
+        a[i][j] += r[i] * r[j];
+      }
+      a[i][m] += r[i] * x[k];
+    }
+  }
+  for (std::size_t c = 0; c < m; ++c) {  // Gauss-Jordan with partial pivoting
+    std::size_t piv = c;
+    for (std::size_t i = c + 1; i < m; ++i) {
+      piv = std::fabs(a[i][c]) > std::fabs(a[piv][c]) ? i : piv;
+    }
+    if (!(std::fabs(a[piv][c]) > 1e-12 * static_cast<double>(n))) {
+      return false;
+    }
+    for (std::size_t j = 0; j <= m; ++j) {
+      std::swap(a[c][j], a[piv][j]);
+    }
+    for (std::size_t i = 0; i < m; ++i) {
+      if (i != c) {
+        const double f = a[i][c] / a[c][c];
+        for (std::size_t j = c; j <= m; ++j) {
+          a[i][j] -= f * a[c][j];
+        }
+      }
+    }
+  }
+  double coef[kMaxReg] = {};
+  for (std::size_t i = 0; i < m; ++i) {
+    coef[i] = a[i][m] / a[i][i];
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    if (std::isfinite(x[k])) {
+      regressors(k, r);
+      for (std::size_t i = 0; i < m; ++i) {
+        x[k] -= coef[i] * r[i];
+      }
+    }
+  }
+  return true;
+}
+
+bool narrow_flicker_bank(hal::ModelRecord& rec, float min_span, std::size_t reserved_states) {
   ModelParams p{};
   const float lo_s = rec.bi_tau_lo_s;
-  while (!node::model_record_valid(rec, p) && rec.bi > 0.0F && rec.bi_tau_lo_s > 0.0F &&
+  while (!node::model_record_valid(rec, p, reserved_states) && rec.bi > 0.0F && rec.bi_tau_lo_s > 0.0F &&
          std::isfinite(rec.bi_tau_hi_s) && rec.bi_tau_lo_s * 10.0F * min_span <= rec.bi_tau_hi_s) {
     rec.bi_tau_lo_s *= 10.0F;
   }
@@ -580,7 +655,7 @@ bool narrow_flicker_bank(hal::ModelRecord& rec, float min_span) {
 }
 
 NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
-                            hal::ModelRecord& rec) {
+                            hal::ModelRecord& rec, std::size_t reserved_states) {
   NodeTuning out;
   std::size_t start = 0;
   const std::size_t run = finite_run(x, n, start);
@@ -617,7 +692,7 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
     out.oscillation_level =
         chi2_quantile(1.0 - kOscillationAlpha / static_cast<double>(b.f.size()), 3.0);
     hal::ModelRecord with_osc = rec;
-    out.oscillation_two_ln_lr = best_oscillation(b, fs_hz, fast_tb_s, rec, cost,
+    out.oscillation_two_ln_lr = best_oscillation(b, fs_hz, fast_tb_s, reserved_states, rec, cost,
                                                  out.oscillation_level, with_osc, given_up);
     if (out.oscillation_two_ln_lr > 0.0) {
       out.oscillation_added = true;
@@ -636,7 +711,10 @@ NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
                 num_text(out.oscillation_level) + ")";
     if (!given_up.empty()) {
       out.note += " in place of " + given_up + ": the node holds " +
-                  std::to_string(node::kNodeProcessStates) + " states";
+                  std::to_string(node::kNodeProcessStates) + " states" +
+                  (reserved_states > 0 ? " (" + std::to_string(reserved_states) +
+                                             " of them the deterministic terms')"
+                                       : std::string());
     }
   }
   return out;

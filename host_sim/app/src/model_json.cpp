@@ -148,19 +148,19 @@ bool string_member_is(const std::string& s, std::size_t obj, const std::string& 
 // monitor still sees). A record refused for another reason is sent as it is: the node refuses
 // and counts it. n: model_after's N; root: the channel's object (its fs_hz, or its full-rate
 // head's). Notes go to `dropped`.
-bool fit_to_node(const std::string& json, std::size_t root, double n, hal::ModelRecord& rec,
-                 std::string& dropped, std::string& err) {
-  const auto runs = [](const hal::ModelRecord& m) {
+bool fit_to_node(const std::string& json, std::size_t root, double n, std::size_t reserved,
+                 hal::ModelRecord& rec, std::string& dropped, std::string& err) {
+  const auto runs = [reserved](const hal::ModelRecord& m) {
     ModelParams p{};
-    return node::model_record_valid(m, p);
+    return node::model_record_valid(m, p, reserved);
   };
   const auto note = [&dropped](const std::string& t) {
     dropped += (dropped.empty() ? "" : "; ") + t;
   };
   // A bank the node refuses at every width (a zero or non-finite end, a B out of range) ends
   // the narrowing where the float's range does: at most 83 decades. Two decades stay.
-  const auto narrowed = [](hal::ModelRecord m) {
-    (void)analyze::narrow_flicker_bank(m, 100.0F);
+  const auto narrowed = [reserved](hal::ModelRecord m) {
+    (void)analyze::narrow_flicker_bank(m, 100.0F, reserved);
     return m;
   };
   const auto runs_narrowed = [&](const hal::ModelRecord& m) { return runs(narrowed(m)); };
@@ -351,11 +351,56 @@ bool read_oscillation(const std::string& json, std::size_t m, hal::ModelRecord& 
   return true;
 }
 
-}  // namespace
 
-bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
-                              std::size_t channel_index, hal::ModelRecord& out,
-                              std::string& dropped, std::string& err) {
+// The base a record keeps at the last stage of fit_to_node (no output filter, no oscillation,
+// the bank narrowed): the node runs it beside `reserved` states of deterministic terms.
+bool base_runs(hal::ModelRecord m, std::size_t reserved) {
+  m.n_filter_s = 0.0F;
+  m.osc_sigma = 0.0F;
+  m.osc_f0_hz = 0.0F;
+  m.osc_beta_per_s = 0.0F;
+  (void)analyze::narrow_flicker_bank(m, 100.0F, reserved);
+  ModelParams p{};
+  return node::model_record_valid(m, p, reserved);
+}
+
+// model_after's ramp and sinusoids as a ModelSignalsRecord (has: any of them present), their
+// memory the analysed record's length. False with err for a malformed number.
+bool read_signals(const std::string& json, std::size_t root, std::size_t m, double r,
+                  double sin_a, double sin2_a, hal::ModelSignalsRecord& out, bool& has,
+                  std::string& err) {
+  has = r > 0.0 || r < 0.0 || sin_a > 0.0 || sin2_a > 0.0;
+  if (!has) {
+    return true;
+  }
+  double f1 = 0.0;
+  double f2 = 0.0;
+  if ((sin_a > 0.0 && !get_number(json, m, "sin_f0_hz", f1, err)) ||
+      (sin2_a > 0.0 && !get_number(json, m, "sin2_f0_hz", f2, err))) {
+    return false;
+  }
+  double n_samples = 0.0;
+  double fs_hz = 0.0;
+  const bool length = number_at(json, member(json, root, "n_samples"), n_samples) &&
+                      number_at(json, member(json, root, "fs_hz"), fs_hz) && fs_hz > 0.0;
+  out = hal::ModelSignalsRecord{};
+  out.ramp_r = static_cast<float>(r);
+  out.sin_a[0] = static_cast<float>(sin_a);
+  out.sin_f0_hz[0] = static_cast<float>(sin_a > 0.0 ? f1 : 0.0);
+  out.sin_a[1] = static_cast<float>(sin2_a);
+  out.sin_f0_hz[1] = static_cast<float>(sin2_a > 0.0 ? f2 : 0.0);
+  const double memory = length ? n_samples / fs_hz : 0.0;
+  const auto lo = static_cast<double>(node::kMinSignalMemoryS);
+  const auto hi = static_cast<double>(node::kMaxSignalMemoryS);
+  out.memory_s = static_cast<float>(memory < lo ? 0.0 : (memory > hi ? hi : memory));
+  return true;
+}
+
+// model_from_analysis_json (both): with_signals = false leaves the deterministic terms out
+// (said in `dropped`) and gives the stochastic terms every state.
+bool read_node_model(const std::string& json, const std::string& channel_name,
+                     std::size_t channel_index, bool with_signals, NodeModel& out,
+                     std::string& dropped, std::string& err) {
   const std::size_t root = channel_object(json, channel_name, err);
   if (root == std::string::npos) {
     return false;
@@ -382,26 +427,86 @@ bool model_from_analysis_json(const std::string& json, const std::string& channe
       !get_number(json, m, "n_filter_s", n_filter_s, err)) {
     return false;
   }
-  hal::ModelRecord rec{};
+  NodeModel nm{};
+  hal::ModelRecord& rec = nm.rec;
   rec.version = hal::kModelVersion2;
   rec.channel = static_cast<std::uint8_t>(channel_index);
   rec.n = static_cast<float>(n);
   rec.q = static_cast<float>(q);
   rec.k = static_cast<float>(k);
-  if (!read_gm_terms(json, m, rec, err) || !read_bias_instability(json, m, rec, err)) {
+  if (!read_gm_terms(json, m, rec, err) || !read_bias_instability(json, m, rec, err) ||
+      !read_signals(json, root, m, r, sin_a, sin2_a, nm.signals, nm.has_signals, err)) {
     return false;
   }
+  nm.signals.channel = rec.channel;
   dropped.clear();
-  if (r > 0.0 || sin_a > 0.0 || sin2_a > 0.0) {
-    dropped = "ramp/sinusoid of model_after not sent: deterministic, not filter states";
+  if (nm.has_signals && !with_signals) {
+    dropped = "ramp/sinusoids of model_after not included (deterministic terms)";
+    nm.has_signals = false;
   }
   rec.n_filter_s = static_cast<float>(n_filter_s);
-  if (!read_oscillation(json, m, rec, dropped, err) ||
-      !fit_to_node(json, root, n, rec, dropped, err)) {
+  if (!read_oscillation(json, m, rec, dropped, err)) {
+    return false;
+  }
+  // The deterministic terms' states first; where even the base does not fit beside them, they
+  // go one at a time: the second sinusoid, the ramp, the first sinusoid.
+  hal::ModelSignalsRecord& sg = nm.signals;
+  const auto note = [&dropped](const std::string& t) {
+    dropped += (dropped.empty() ? "" : "; ") + t;
+  };
+  const std::string room = " of model_after not sent: the node's " +
+                           std::to_string(node::kNodeProcessStates) +
+                           " states do not hold it beside the stochastic terms";
+  if (nm.has_signals && !base_runs(rec, node::signal_states(sg)) && sg.sin_a[1] > 0.0F) {
+    note("second sinusoid (" + num_text(static_cast<double>(sg.sin_f0_hz[1])) + " Hz)" + room);
+    sg.sin_a[1] = 0.0F;
+    sg.sin_f0_hz[1] = 0.0F;
+  }
+  if (nm.has_signals && !base_runs(rec, node::signal_states(sg)) &&
+      (sg.ramp_r > 0.0F || sg.ramp_r < 0.0F)) {
+    note("ramp" + room);
+    sg.ramp_r = 0.0F;
+  }
+  if (nm.has_signals && !base_runs(rec, node::signal_states(sg)) && sg.sin_a[0] > 0.0F) {
+    note("sinusoid (" + num_text(static_cast<double>(sg.sin_f0_hz[0])) + " Hz)" + room);
+    sg.sin_a[0] = 0.0F;
+    sg.sin_f0_hz[0] = 0.0F;
+  }
+  nm.has_signals = node::signal_states(sg) > 0;
+  ModelParams check{};
+  if (nm.has_signals && !node::model_signals_valid(sg, check)) {
+    note("ramp/sinusoids of model_after not sent: out of the node's ranges");
+    nm.has_signals = false;
+  }
+  if (!nm.has_signals) {
+    sg = hal::ModelSignalsRecord{};
+    sg.channel = rec.channel;
+  }
+  if (!fit_to_node(json, root, n, nm.has_signals ? node::signal_states(sg) : 0U, rec, dropped,
+                   err)) {
     return false;
   }
   err.clear();
-  out = rec;
+  out = nm;
+  return true;
+}
+
+}  // namespace
+
+bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
+                              std::size_t channel_index, NodeModel& out, std::string& dropped,
+                              std::string& err) {
+  return read_node_model(json, channel_name, channel_index, true, out, dropped, err);
+}
+
+bool model_from_analysis_json(const std::string& json, const std::string& channel_name,
+                              std::size_t channel_index, hal::ModelRecord& out,
+                              std::string& dropped, std::string& err) {
+  NodeModel nm{};
+  if (!read_node_model(json, channel_name, channel_index, false, nm, dropped, err)) {
+    return false;
+  }
+  out = nm.rec;
   return true;
 }
 

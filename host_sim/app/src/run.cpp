@@ -65,6 +65,8 @@ struct Telemetry {
   hal::RejectsRecord rejects{};
   hal::ModelRecord model_echo[hal::kChannels] = {};  // what the node runs, per channel
   bool have_model_echo[hal::kChannels] = {};
+  hal::ModelSignalsRecord signals_echo[hal::kChannels] = {};  // its deterministic terms
+  bool have_signals_echo[hal::kChannels] = {};
   hal::ChannelMonitorRecord chan_mon[hal::kChannels] = {};  // each channel's monitors
   bool have_chan_mon[hal::kChannels] = {};
   // Each detected level shift's first sample, as the per-second records show them (two within
@@ -153,10 +155,16 @@ struct Telemetry {
         have_chan_mon[cm.channel] = true;
         break;
       }
+      case hal::RxEvent::Type::kModelSignalsEcho:
+        signals_echo[e.rec.signals.channel] = e.rec.signals;  // channel < 6: the receiver's
+        have_signals_echo[e.rec.signals.channel] =
+            (e.rec.signals.flags & hal::kModelPushed) != 0U;
+        break;
       case hal::RxEvent::Type::kModel:
       case hal::RxEvent::Type::kSample:
       case hal::RxEvent::Type::kMissing:
       case hal::RxEvent::Type::kConfig:
+      case hal::RxEvent::Type::kModelSignals:
         break;  // samples of another sender on a shared bus: not ours
     }
   }
@@ -331,6 +339,9 @@ struct RunOptions {
   std::string model_path;       ///< --model: analysis JSON whose model_after is pushed
   hal::ModelRecord model[kNumChannels] = {};  ///< read from model_path, per channel slot
   bool pushed[kNumChannels] = {};             ///< model[c] is sent
+  /// model_after's deterministic terms, sent before model[c] when has_signals[c]
+  hal::ModelSignalsRecord signals[kNumChannels] = {};
+  bool has_signals[kNumChannels] = {};
   bool push_model = false;
   bool model_as_is = false;  ///< --model-as-is: push model_after untuned
 };
@@ -966,7 +977,11 @@ int send_one(const SensorData& sd, std::uint64_t q, std::uint64_t span,
     hal::encode(tx.cfg, tx.s.layout, tx.cfg_tid++, tx.fr);
     int st = tx.send_frames(q == 0, q == 0 && tx.o.node_mode != "inproc");
     for (std::size_t c = 0; st == kExitOk && q == 0 && c < kNumChannels; ++c) {
-      if (tx.o.pushed[c]) {  // after the config
+      if (tx.o.pushed[c] && tx.o.has_signals[c]) {  // its deterministic terms first
+        hal::encode(tx.o.signals[c], false, tx.s.layout, tx.cfg_tid++, tx.fr);
+        st = tx.send_frames(false, false);
+      }
+      if (st == kExitOk && tx.o.pushed[c]) {  // after the config
         hal::encode(tx.o.model[c], false, tx.s.layout, tx.cfg_tid++, tx.fr);
         st = tx.send_frames(false, false);
       }
@@ -1226,11 +1241,15 @@ bool load_models(const std::string& json, RunOptions& o, std::string& notes, std
       continue;
     }
     std::string dropped;
-    if (!model_from_analysis_json(json, name, c, o.model[c], dropped, err)) {
+    NodeModel nm{};
+    if (!model_from_analysis_json(json, name, c, nm, dropped, err)) {
       err.insert(0, ": ");
       err.insert(0, name);
       return false;
     }
+    o.model[c] = nm.rec;
+    o.signals[c] = nm.signals;
+    o.has_signals[c] = nm.has_signals;
     o.pushed[c] = true;
     ++n_pushed;
     if (!dropped.empty()) {
@@ -1269,7 +1288,14 @@ bool tune_models(RunOptions& o, const SensorData& sd, std::string& notes, std::s
     const std::size_t c = todo[i];
     std::vector<double> head;
     if (read_channel_head(sd, c, std::min(sd.n_samples, kTuneSamples), head, errs[c])) {
-      said[c] = analyze::tune_node_record(head.data(), head.size(), sd.fs_hz, o.model[c]).note;
+      // The deterministic terms are no part of the spectrum tuned: the record less their fit.
+      std::size_t reserved = 0;
+      if (o.has_signals[c]) {
+        (void)analyze::remove_signals(head.data(), head.size(), sd.fs_hz, o.signals[c]);
+        reserved = node::signal_states(o.signals[c]);
+      }
+      said[c] =
+          analyze::tune_node_record(head.data(), head.size(), sd.fs_hz, o.model[c], reserved).note;
     }
   });
   for (const std::size_t c : todo) {
@@ -1439,7 +1465,20 @@ std::string node_json(const RunOptions& o, const Telemetry& tel, const Verdicts&
          ", \"tau_lo_s\": " + f(m.bi_tau_lo_s) + ", \"tau_hi_s\": " + f(m.bi_tau_hi_s) +
          "}, \"n_filter_s\": " + f(m.n_filter_s) + ", \"oscillation\": {\"sigma\": " +
          f(m.osc_sigma) + ", \"f0_hz\": " + f(m.osc_f0_hz) + ", \"beta_per_s\": " +
-         f(m.osc_beta_per_s) + "}}";
+         f(m.osc_beta_per_s) + "}";
+    // The deterministic terms it runs beside them (zeros: none).
+    const bool sig = tel.have_signals_echo[o.chan];
+    const hal::ModelSignalsRecord se = sig ? tel.signals_echo[o.chan] : hal::ModelSignalsRecord{};
+    j += ", \"ramp_r\": " + f(se.ramp_r) + ", \"sinusoids\": [";
+    bool first_s = true;
+    for (std::size_t i = 0; i < 2; ++i) {
+      if (se.sin_a[i] > 0.0F) {
+        j += std::string(first_s ? "" : ", ") + "{\"a\": " + f(se.sin_a[i]) +
+             ", \"f0_hz\": " + f(se.sin_f0_hz[i]) + "}";
+        first_s = false;
+      }
+    }
+    j += "], \"signal_memory_s\": " + f(se.memory_s) + "}";
   } else {
     j += "null";
   }
@@ -1546,7 +1585,13 @@ ReportInput report_input(const RunOptions& o, const SensorData& sd, const SendPl
   }
   ri.node_json = node_json(o, tel, vs);
   if (tel.have_model_echo[o.chan] && (tel.model_echo[o.chan].flags & hal::kModelPushed) != 0U) {
-    ri.node_model_pushed = node::model_record_valid(tel.model_echo[o.chan], ri.node_model);
+    // With the deterministic terms it echoes beside it: the whole model the node runs.
+    const bool sig = tel.have_signals_echo[o.chan];
+    const hal::ModelSignalsRecord& se = tel.signals_echo[o.chan];
+    ri.node_model_pushed =
+        node::model_record_valid(tel.model_echo[o.chan], ri.node_model,
+                                 sig ? node::signal_states(se) : 0U) &&
+        (!sig || node::model_signals_valid(se, ri.node_model));
   }
   ri.node_text = node_channels_text(o, vs);
   return ri;

@@ -132,11 +132,11 @@ NodeRunStatus run_node_workload(NodeWriteFn write, NodeMarkFn mark, void* ctx) {
   // RAM per channel of what the node keeps per channel (the rest of sizeof(Node) is shared:
   // receiver, stats, discretisation workspace, push_frame buffer).
   line.str(" per_channel=").u64(sizeof(node::NodeAdev::Channel) +
-                                sizeof(KalmanFilter<float, node::kNodeStates>) +
+                                sizeof(node::NodeFilter) +
                                 sizeof(ScalarBiasKf<float>) + sizeof(ResidualMonitors<4>) +
                                 sizeof(hal::ModelRecord) + sizeof(ModelParams) + sizeof(float) +
                                 sizeof(double) + sizeof(std::size_t) + 2 * sizeof(bool));
-  line.str(" kf8=").u64(sizeof(KalmanFilter<float, node::kNodeStates>));
+  line.str(" kf8=").u64(sizeof(node::NodeFilter));
   line.str("\n");
   write(line.c_str(), ctx);
   if (g_node.configure(nc, sink, nullptr, nullptr) != node::NodeStatus::kOk) {

@@ -78,11 +78,14 @@ enum class Layout : std::uint8_t { kFd, kClassic };
 /// by before the version byte is readable, and a receiver that knows only version 1 counts them
 /// as unknown_id instead of bad_dlc or bad_fragment. Both parse into ModelRecord and arrive as
 /// RxEvent kModel / kModelEcho; ModelRecord::version tells which.
+/// kModelSignals (host -> node) / kModelSignalsEcho (node -> host) carry a channel's
+/// deterministic terms (ModelSignalsRecord), which ModelRecord has no slot for; added in the same
+/// way, next to the model identifiers.
 enum class RecordKind : std::uint8_t {
   kConfig, kSample, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho, kChannelMonitor,
-  kModel2, kModelEcho2
+  kModel2, kModelEcho2, kModelSignals, kModelSignalsEcho
 };
-inline constexpr std::size_t kRecordKinds = 12;
+inline constexpr std::size_t kRecordKinds = 14;
 
 inline constexpr std::uint32_t kIdConfigFd = 0x080;
 inline constexpr std::uint32_t kIdSampleFd = 0x100;
@@ -93,8 +96,11 @@ inline constexpr std::uint32_t kIdStatsFd = 0x230;
 inline constexpr std::uint32_t kIdRejectsFd = 0x240;
 inline constexpr std::uint32_t kIdModelFd = 0x090;      ///< after config, before samples
 inline constexpr std::uint32_t kIdModel2Fd = 0x092;     ///< next to kIdModelFd (classic 0x093)
+inline constexpr std::uint32_t kIdModelSignalsFd = 0x094;  ///< after kIdModel2Fd (classic 0x095)
 inline constexpr std::uint32_t kIdModelEchoFd = 0x250;
 inline constexpr std::uint32_t kIdModelEcho2Fd = 0x252; ///< next to kIdModelEchoFd (classic 0x253)
+/// After kIdModelEcho2Fd (classic 0x255).
+inline constexpr std::uint32_t kIdModelSignalsEchoFd = 0x254;
 inline constexpr std::uint32_t kIdChannelMonitorFd = 0x260;
 
 inline constexpr std::size_t kChannels = 6;  ///< ax, ay, az (accelerometer), gx, gy, gz (gyro)
@@ -230,8 +236,8 @@ inline constexpr std::uint8_t kModelVersion1 = 1;  ///< 48 bytes, kModel / kMode
 inline constexpr std::uint8_t kModelVersion2 = 2;  ///< 64 bytes, kModel2 / kModelEcho2
 /// ModelRecord::flags bits (echo only).
 inline constexpr std::uint8_t kModelPushed = 1U << 0;  ///< the node runs a pushed model (else its default first-order)
-/// Stochastic error model of one channel (imu::ModelParams without the deterministic terms:
-/// ramp and sinusoids are not filter states on the node). 48 bytes (version 1) or 64 bytes
+/// Stochastic error model of one channel (imu::ModelParams without the deterministic terms,
+/// ramp and sinusoids: ModelSignalsRecord carries those). 48 bytes (version 1) or 64 bytes
 /// (version 2: the last four fields; a version 1 record has no slot for them and parses them as
 /// 0). Sent by the host as kModel / kModel2 (n_states and flags 0); echoed by the node as
 /// kModelEcho / kModelEcho2 with what it runs. A zero parameter means the term is absent;
@@ -257,6 +263,21 @@ struct ModelRecord {
   float osc_beta_per_s;          ///< v2: its damping rate [1/s]
 };
 
+/// The deterministic terms of one channel's model: a ramp and up to two sinusoids (e.g. a line
+/// and its harmonic). Pushed by the host as kModelSignals before the channel's ModelRecord (the
+/// node applies it with the next ModelRecord of that channel); echoed by the node as
+/// kModelSignalsEcho with what it runs (flags kModelPushed). A zero parameter means the term is
+/// absent. 32 bytes on the wire, CRC included (bytes 2-3 reserved: written 0, ignored when
+/// parsed).
+struct ModelSignalsRecord {
+  std::uint8_t channel;          ///< 0..5
+  std::uint8_t flags;            ///< echo: kModelPushed when the node runs these terms; 0 in a push
+  float ramp_r;                  ///< ramp R [unit/s] (signed; 0: none)
+  float sin_a[2];                ///< sinusoid amplitudes [unit] (0: none)
+  float sin_f0_hz[2];            ///< their frequencies [Hz]
+  float memory_s;                ///< time over which the record established them [s] (0: unknown)
+};
+
 /// Record lengths in bytes on the wire, CRC included.
 inline constexpr std::size_t kConfigLen = 64;
 inline constexpr std::size_t kSampleLen = 42;
@@ -268,6 +289,7 @@ inline constexpr std::size_t kRejectsLen = 64;
 inline constexpr std::size_t kModelLen = 48;   ///< version 1
 inline constexpr std::size_t kModel2Len = 64;  ///< version 2
 inline constexpr std::size_t kChannelMonitorLen = 44;
+inline constexpr std::size_t kModelSignalsLen = 32;
 
 /// Wire length of a record kind; FD identifier of a kind. Constant time.
 [[nodiscard]] std::size_t record_len(RecordKind k);
@@ -302,6 +324,9 @@ void encode(const ModelRecord& r, bool echo, Layout layout, std::uint8_t transfe
             EncodedFrames& out);
 void encode(const ChannelMonitorRecord& r, Layout layout, std::uint8_t transfer_id,
             EncodedFrames& out);
+/// echo = true: kModelSignalsEcho (node telemetry), else kModelSignals (host -> node).
+void encode(const ModelSignalsRecord& r, bool echo, Layout layout, std::uint8_t transfer_id,
+            EncodedFrames& out);
 
 // ---- Record serialisation (used by the encoders and by Receiver) ------------------------------
 
@@ -316,6 +341,7 @@ void serialize(const StatsRecord& r, std::uint8_t* buf);
 void serialize(const RejectsRecord& r, std::uint8_t* buf);
 void serialize(const ModelRecord& r, std::uint8_t* buf);
 void serialize(const ChannelMonitorRecord& r, std::uint8_t* buf);
+void serialize(const ModelSignalsRecord& r, std::uint8_t* buf);
 
 /// True if the last 4 bytes of buf[0, len) are the CRC-32C of the bytes before them.
 [[nodiscard]] bool crc_ok(const std::uint8_t* buf, std::size_t len);
@@ -332,6 +358,7 @@ void parse(const std::uint8_t* buf, StatsRecord& r);
 void parse(const std::uint8_t* buf, RejectsRecord& r);
 void parse(const std::uint8_t* buf, ModelRecord& r);
 void parse(const std::uint8_t* buf, ChannelMonitorRecord& r);
+void parse(const std::uint8_t* buf, ModelSignalsRecord& r);
 
 }  // namespace imu::hal
 

@@ -40,7 +40,8 @@ struct RxStats {
                                        ///< record whose channel count is not kChannels, a
                                        ///< Model record whose version byte is not its kind's
                                        ///< or whose channel is not below kChannels, a
-                                       ///< ChannelMonitor record's channel likewise
+                                       ///< ChannelMonitor or ModelSignals record's channel
+                                       ///< likewise
   std::uint64_t records[kRecordKinds] = {};
   std::uint64_t samples = 0;           ///< samples released (Sample events)
   std::uint64_t duplicates = 0;        ///< sample with a sequence number already received
@@ -73,7 +74,7 @@ enum class FrameVerdict : std::uint8_t {
 struct RxEvent {
   enum class Type : std::uint8_t {
     kSample, kMissing, kConfig, kAdev, kBias, kMonitor, kStats, kRejects, kModel, kModelEcho,
-    kChannelMonitor
+    kChannelMonitor, kModelSignals, kModelSignalsEcho
   };
   Type type;
   std::uint64_t rx_time_ns;           ///< receive time of the frame that completed the record
@@ -91,6 +92,7 @@ struct RxEvent {
     RejectsRecord rejects;
     ModelRecord model;                ///< kModel and kModelEcho, record version 1 or 2
     ChannelMonitorRecord channel_monitor;
+    ModelSignalsRecord signals;       ///< kModelSignals and kModelSignalsEcho
   } rec;
 };
 
@@ -374,7 +376,9 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
     ++stats_.bad_record;
     return FrameVerdict::kBadRecord;
   }
-  if (k == RecordKind::kChannelMonitor && buf[0] >= kChannels) {  // byte 0: the channel
+  if ((k == RecordKind::kChannelMonitor || k == RecordKind::kModelSignals ||
+       k == RecordKind::kModelSignalsEcho) &&
+      buf[0] >= kChannels) {  // byte 0: the channel
     ++stats_.bad_record;
     return FrameVerdict::kBadRecord;
   }
@@ -416,6 +420,12 @@ FrameVerdict Receiver<W>::on_record(RecordKind k, const std::uint8_t* buf,
       break;
     case RecordKind::kChannelMonitor:
       parse(buf, enqueue(RxEvent::Type::kChannelMonitor, rx_time_ns).rec.channel_monitor);
+      break;
+    case RecordKind::kModelSignals:
+      parse(buf, enqueue(RxEvent::Type::kModelSignals, rx_time_ns).rec.signals);
+      break;
+    case RecordKind::kModelSignalsEcho:
+      parse(buf, enqueue(RxEvent::Type::kModelSignalsEcho, rx_time_ns).rec.signals);
       break;
   }
   return FrameVerdict::kRecord;

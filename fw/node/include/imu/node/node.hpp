@@ -22,7 +22,7 @@
 // forged sequence number 2^31 ahead costs the same as one lost sample (a pushed model: at most
 // kMaxGapSteps predictions).
 // Pushed models (ModelRecord): see on_model in node.cpp and host_sim/README.md; a
-// channel runs either the first-order model (ScalarBiasKf) or its pushed KalmanFilter<float, 9>.
+// channel runs either the first-order model (ScalarBiasKf) or its pushed model's NodeFilter.
 // Filter: the known signal of each channel (gravity + initial bias) is the mean of its first
 // init_samples samples; the filter then estimates the bias relative to it, updating only while
 // the static input is active (no input: always static). A channel whose counts have all been 0
@@ -31,7 +31,7 @@
 // status period, not per sample (one GPIO ioctl per period).
 //
 // Memory: sizeof(Node) is the whole state (62.8 kB on x86-64, mostly six OnlineAdev<8,22> and
-// six KalmanFilter<float, 9> for pushed models); no
+// six NodeFilters for pushed models); no
 // heap, no exceptions, no OS calls: the library is compiled with fw/src/fw_prelude.hpp. Not
 // re-entrant on one instance. Cost per sample: 6 ADEV pushes (amortised ~12 multiply-adds each)
 // + 6 scalar filter steps + monitors; a full ADEV telemetry set is 6 snapshots (O(96 * 8)) and
@@ -42,6 +42,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "imu/averaged_kf.hpp"
 #include "imu/bias_kf.hpp"
 #include "imu/error_model.hpp"
 #include "imu/hal/codec.hpp"
@@ -83,22 +84,23 @@ inline constexpr double kMaxTpS = 1e8;
 /// True if every parameter is in the ranges above and the first-order model and its filter
 /// are valid at kMinRateHz and kMaxRateHz. O(1) (two small matrix exponentials).
 [[nodiscard]] bool model_in_range(const ChannelModel& m);
-/// Largest pushed model the node runs: kNodeProcessStates states of its terms (2 GM + RRW + a
-/// flicker bank of at most 5 decades) and one more, the sample's mean over its interval: the
+/// Largest pushed model the node runs: kNodeProcessStates states of its terms (e.g. 2 GM + RRW +
+/// a flicker bank of at most 5 decades) and one more, the sample mean over its interval: the
 /// node observes the model through an averaging sampler (imu::discretize_averaged), as the
-/// sensor delivers it and as the fit's AVAR formulas describe it. Filters are
-/// KalmanFilter<float, kNodeStates>; a model with fewer states is padded with inert states
-/// (Phi = Qd = P0 = H = 0), so the per-sample cost is that of kNodeStates states.
+/// sensor delivers it and as the fit's AVAR formulas describe it. Filters are NodeFilter
+/// (imu::AveragedKf, computed on the model's block structure): a model with fewer states costs
+/// less.
 inline constexpr std::size_t kNodeProcessStates = 8;
 inline constexpr std::size_t kNodeStates = kNodeProcessStates + 1;
+using NodeFilter = AveragedKf<float, kNodeProcessStates>;
 /// Accepted ranges of a pushed ModelRecord (both ends included, zero = term absent where noted):
 /// N in 1e-12 .. 1e3 (required: the filter needs measurement noise, and with an output filter N
 /// is still the white noise's density, the filter only shapes it); Q, K, B in 0 or
 /// 1e-15 .. 1e3; a GM's Sb in 0 or 1e-30 .. 1e6 with Tb in 1e-3 .. 1e8 s; the flicker range
 /// 1e-3 .. 1e8 s with lo < hi. Version 2 only (0 in version 1): the output filter's time
 /// constant in 0 or 1e-6 .. 1e3 s; the oscillation absent (sigma, f0 and beta all 0) or sigma
-/// in 1e-15 .. 1e3, f0 in 0 .. 5e4 Hz, beta in 1e-6 .. 1e6 per s. Ramp and sinusoids are
-/// deterministic and are not filter states (the record has no field for them).
+/// in 1e-15 .. 1e3, f0 in 0 .. 5e4 Hz, beta in 1e-6 .. 1e6 per s. The deterministic terms
+/// travel in a ModelSignalsRecord (model_signals_valid).
 inline constexpr float kMaxPushedTbS = 1e8F;
 inline constexpr float kMinPushedTbS = 1e-3F;
 inline constexpr float kMinPushedFilterS = 1e-6F;
@@ -113,13 +115,34 @@ using NodeMonitors = ResidualMonitors<kMonitorLags>;
 /// everything long before; RRW variance is capped by the filter): a 2^31 jump stays O(1).
 inline constexpr std::uint64_t kMaxGapSteps = 4096;
 
+/// Accepted ranges of a pushed ModelSignalsRecord (both ends included): |R| in 0 or
+/// 1e-15 .. 1e3; each sinusoid absent (A = f0 = 0) or A in 1e-15 .. 1e3 with f0 in
+/// (0, 5e4] Hz, the second only beside the first; the memory 0 (constant terms) or
+/// 1 .. 1e8 s.
+inline constexpr float kMinSignalMemoryS = 1.0F;
+inline constexpr float kMaxSignalMemoryS = 1e8F;
+
+/// Filter states of a model the node would build from p: the output filter, each GM, each
+/// flicker bank member and the walk 1; ramp, each sinusoid and the oscillation 2 (what
+/// imu::build_model makes). The sample mean is not counted. O(1).
+[[nodiscard]] std::size_t pushed_states(const ModelParams& p);
+
 /// Validate a pushed model record (version 1 or 2) and build its parameters: every field finite
 /// and in the ranges above, and the model (flicker bank rebuilt by imu::flicker_bank; the
-/// output filter 1 state, the oscillation 2) has at most kNodeProcessStates states. Does not
-/// discretise. O(1).
-[[nodiscard]] bool model_record_valid(const hal::ModelRecord& r, ModelParams& out);
-/// Build, discretise at rate_hz (Van Loan, averaging sampler) and pad a pushed model to
-/// kNodeStates; false if any step fails. O(kNodeStates^3) (matrix exponential of 2 * kNodeStates).
+/// output filter 1 state, the oscillation 2) has at least one state and at most
+/// kNodeProcessStates - reserved_states (the states of the deterministic terms that go with it).
+/// Does not discretise. O(1).
+[[nodiscard]] bool model_record_valid(const hal::ModelRecord& r, ModelParams& out,
+                                      std::size_t reserved_states = 0);
+/// States of the deterministic terms of r (ramp 2, each sinusoid 2), whether valid or not. O(1).
+[[nodiscard]] std::size_t signal_states(const hal::ModelSignalsRecord& r);
+/// Validate a pushed ModelSignalsRecord (every field finite and in the ranges above) and add
+/// its terms to p (ramp, sinusoids, signal_memory_s): false, p unchanged, if a field is out of
+/// range or the model with them would exceed kNodeProcessStates. O(1).
+[[nodiscard]] bool model_signals_valid(const hal::ModelSignalsRecord& r, ModelParams& p);
+/// Build and discretise a pushed model at rate_hz (Van Loan per term, averaging sampler):
+/// n_states process states + the sample mean in out; false if any step fails. O(n^4) flops for
+/// the initial covariance, a few thousand at the largest model.
 [[nodiscard]] bool discretize_pushed(const ModelParams& p, double rate_hz,
                                      DiscreteModel<kNodeStates>& out, std::size_t& n_states);
 
@@ -218,6 +241,9 @@ class Node {
   /// In the version of the channel's last push (version 1 before any), and in version 2
   /// whenever the model it runs was pushed in version 2 (version 1 may not describe it).
   [[nodiscard]] hal::ModelRecord model_echo(std::size_t c) const;
+  /// The deterministic terms channel c runs with its pushed model (flags kModelPushed), or a
+  /// record with every term 0 and flags 0 when it runs none.
+  [[nodiscard]] hal::ModelSignalsRecord signals_echo(std::size_t c) const;
   /// Channel c runs a pushed model whose filter has frozen its steady-state gain.
   [[nodiscard]] bool filter_steady(std::size_t c) const { return pushed_[c] && kfn_[c].steady(); }
   [[nodiscard]] float known_signal(std::size_t c) const { return known_[c]; }
@@ -247,6 +273,8 @@ class Node {
   void on_sample(const hal::SampleRecord& s);
   void on_missing(std::uint32_t n);
   void on_model(const hal::ModelRecord& r);
+  void on_model_signals(const hal::ModelSignalsRecord& r);
+  [[nodiscard]] bool pushed_params(std::size_t c, ModelParams& p) const;
   void send_models();
   void send_channel_monitors();
   bool build_pushed(std::size_t c, const ModelParams& p);
@@ -270,13 +298,19 @@ class Node {
   NodeAdev adev_;
   ScalarBiasKf<float> kf_[kChannels];
   // Pushed models: per channel the record and its filter; pushed_ selects kfn_ over kf_. RAM
-  // per channel: sizeof(KalmanFilter<float, 8>) (printed by the test) + the record. A new rate
+  // per channel: sizeof(NodeFilter) (printed by the test) + the record. A new rate
   // rebuilds the filter from the record (model_record_valid gives its parameters again).
-  KalmanFilter<float, kNodeStates> kfn_[kChannels];
+  NodeFilter kfn_[kChannels];
   hal::ModelRecord model_rec_[kChannels] = {};
   std::size_t model_states_[kChannels] = {};
   bool pushed_[kChannels] = {};
   bool echo_v2_[kChannels] = {};  // the channel's last push was version 2: echo in version 2
+  // Deterministic terms: those the channel runs (with its pushed model), and those pushed and
+  // waiting for the channel's next ModelRecord.
+  hal::ModelSignalsRecord signals_rec_[kChannels] = {};
+  hal::ModelSignalsRecord pending_signals_[kChannels] = {};
+  bool has_signals_[kChannels] = {};
+  bool pending_[kChannels] = {};
   DiscreteModel<kNodeStates> scratch_dm_{};  // discretisation workspace (not on the stack)
   NodeMonitors mon_[kChannels];
   LevelShifts shifts_[kChannels] = {};

@@ -51,18 +51,28 @@ struct NodeTuning {
   std::string note;                 ///< what changed, in one line (for the report)
 };
 
-/// Tune `rec` (a model the node runs: node::model_record_valid holds) to the record x[0..n) at
-/// fs_hz as described above. rec is changed only where the likelihood rises and the result is
+/// Tune `rec` (a model the node runs beside reserved_states states of deterministic terms:
+/// node::model_record_valid(rec, p, reserved_states) holds) to the record x[0..n) at fs_hz as
+/// described above; x holds no deterministic term (the caller removes them: they are no part
+/// of the spectrum tuned). rec is changed only where the likelihood rises and the result is
 /// still a record the node runs. A record without a usable stretch (fewer than 2^12 finite
 /// samples in a row) is left as it is, said in the note.
 [[nodiscard]] NodeTuning tune_node_record(const double* x, std::size_t n, double fs_hz,
-                                          hal::ModelRecord& rec);
+                                          hal::ModelRecord& rec,
+                                          std::size_t reserved_states = 0);
+
+/// x[0..n) at fs_hz less its least-squares fit of a constant, a line and a sine and cosine at
+/// each frequency of `signals` (its sinusoids present): what tune_node_record needs of a record
+/// whose model has deterministic terms. Non-finite samples stay as they are and take no part in
+/// the fit. False (x unchanged) if the fit's normal equations are singular. O(n).
+bool remove_signals(double* x, std::size_t n, double fs_hz, const hal::ModelSignalsRecord& signals);
 
 /// Move rec's bias-instability bank's short end up a decade at a time (one state less each)
-/// while the node would not run rec and the bank keeps a span of at least min_span (its upper
-/// end over its lower) after the move; the node then realises B from there up. Returns
-/// whether the bank moved. O(moves), each a model_record_valid.
-bool narrow_flicker_bank(hal::ModelRecord& rec, float min_span);
+/// while the node would not run rec (beside reserved_states states of deterministic terms) and
+/// the bank keeps a span of at least min_span (its upper end over its lower) after the move;
+/// the node then realises B from there up. Returns whether the bank moved. O(moves), each a
+/// model_record_valid.
+bool narrow_flicker_bank(hal::ModelRecord& rec, float min_span, std::size_t reserved_states = 0);
 
 }  // namespace imu::analyze
 
