@@ -80,6 +80,13 @@ struct Telemetry {
   std::uint64_t target = ~std::uint64_t{0};  // samples sent, once all are sent
   bool armed = false;
   bool final_done = false;
+  // Each ADEV set on its own (reset at the end of every set): a set received whole, and the
+  // samples the node had processed by its StatsRecord just before it. A node whose last sample
+  // falls on its ADEV period sends its final set as it processes that sample, and nothing at
+  // idle (no sample since): that set is the final one, whether it arrives before the sender
+  // knows it has sent the last sample, or while the check below re-arms.
+  std::bitset<node::kMaxAdevPoints> set_got[kNumChannels];
+  std::uint64_t whole_set_processed = 0;
 
   [[nodiscard]] std::uint64_t processed() const {
     return have_stats ? std::uint64_t{stats.samples} + stats.missing : 0;
@@ -125,6 +132,16 @@ struct Telemetry {
         }
         curve[a.channel][a.index] = a;
         got[a.channel].set(a.index);
+        set_got[a.channel].set(a.index);
+        if (a.channel + 1U == kNumChannels && a.index + 1U == a.n_points) {  // a set's end
+          bool whole = true;
+          for (std::size_t c = 0; c < kNumChannels; ++c) {
+            whole = whole && n_points[c] > 0 && set_got[c].count() == n_points[c];
+            set_got[c].reset();
+          }
+          whole_set_processed = whole ? processed() : whole_set_processed;
+          final_done = final_done || (whole && processed() >= target);
+        }
         if (armed && !final_done) {
           bool all = true;
           for (std::size_t c = 0; c < kNumChannels; ++c) {
@@ -1651,7 +1668,10 @@ int cmd_run(int argc, char** argv) {
   tx.last_credit = tx.t_send0;
   const int status = send_samples(sd, plan, tx);
   tel.target = span;
-  if (tel.processed() >= span) {
+  if (tel.processed() >= span && tel.whole_set_processed >= span) {
+    tel.armed = true;  // the final set came whole before the last sample was known sent
+    tel.final_done = true;
+  } else if (tel.processed() >= span) {
     tel.armed = true;  // already reported: the next complete set is the final one
     for (auto& g : tel.got) {
       g.reset();
