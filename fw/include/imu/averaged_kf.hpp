@@ -70,34 +70,40 @@ class AveragedKf {
     }
     AveragedKf f;  // filled completely, then copied: a refused model leaves *this untouched
     f.n_ = n;
-    double pmax = m.p0(n, n) > m.qd(n, n) ? m.p0(n, n) : m.qd(n, n);
-    for (std::size_t i = 0; i < n;) {
-      const std::size_t size = i + 1 < n && coupled(m, i, i + 1) ? 2U : 1U;
-      f.block_start_[f.n_blocks_] = static_cast<Index>(i);
-      f.block_size_[f.n_blocks_] = static_cast<Index>(size);
-      ++f.n_blocks_;
-      for (std::size_t a = i; a < i + size; ++a) {
-        f.block_col_[a] = static_cast<Index>(i);
-        f.block_of_size2_[a] = size == 2;
-        for (std::size_t b = 0; b < size; ++b) {
-          f.d_[a][b] = static_cast<T>(m.phi(a, i + b));
-          f.qb_[a][b] = static_cast<T>(m.qd(a, i + b));
+    // The states in the filter's order: every 1-state block first, then the 2-state blocks,
+    // each pair adjacent (from_[i]: the model's index of the filter's state i).
+    std::size_t k = 0;
+    for (std::size_t pass = 1; pass <= 2; ++pass) {
+      for (std::size_t i = 0; i < n;) {
+        const std::size_t size = i + 1 < n && coupled(m, i, i + 1) ? 2U : 1U;
+        for (std::size_t a = 0; size == pass && a < size; ++a) {
+          f.from_[k++] = static_cast<Index>(i + a);
         }
-        f.c_[a] = static_cast<T>(m.phi(n, a));
-        f.qj_[a] = static_cast<T>(m.qd(a, n));
-        pmax = m.p0(a, a) > pmax ? m.p0(a, a) : pmax;
-        pmax = m.qd(a, a) > pmax ? m.qd(a, a) : pmax;
-        // Persistent and undriven (a row of D but no drive): the gain never settles.
-        if (!(m.qd(a, a) > 0.0)) {
-          f.steady_allowed_ = false;
-        }
+        i += size;
       }
-      i += size;
+      if (pass == 1) {
+        f.n1_ = k;
+      }
     }
+    double pmax = m.p0(n, n) > m.qd(n, n) ? m.p0(n, n) : m.qd(n, n);
     for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t a = f.from_[i];
+      const std::size_t b = f.from_[f.partner(i)];  // a itself in a 1-state block
+      f.dd_[i] = static_cast<T>(m.phi(a, a));
+      f.do_[i] = i < f.n1_ ? T(0) : static_cast<T>(m.phi(a, b));
+      f.qd_[i] = static_cast<T>(m.qd(a, a));
+      f.qo_[i] = i < f.n1_ ? T(0) : static_cast<T>(m.qd(a, b));
+      f.c_[i] = static_cast<T>(m.phi(n, a));
+      f.qj_[i] = static_cast<T>(m.qd(a, n));
       f.row_[i] = static_cast<Row>(i * (i + 1) / 2);
       for (std::size_t j = 0; j <= i; ++j) {
-        f.p_[packed(i, j)] = static_cast<T>(m.p0(i, j));
+        f.p_[f.row_[i] + j] = static_cast<T>(m.p0(a, f.from_[j]));
+      }
+      pmax = m.p0(a, a) > pmax ? m.p0(a, a) : pmax;
+      pmax = m.qd(a, a) > pmax ? m.qd(a, a) : pmax;
+      // Persistent and undriven (a row of D but no drive): the gain never settles.
+      if (!(m.qd(a, a) > 0.0)) {
+        f.steady_allowed_ = false;
       }
     }
     f.qjj_ = static_cast<T>(m.qd(n, n));
@@ -144,21 +150,15 @@ class AveragedKf {
   [[nodiscard]] T bias() const { return xj_; }
   /// Its variance H P H^T (after the last step).
   [[nodiscard]] T bias_variance() const { return pjj_; }
-  /// Process state i's estimate (i < process_states()).
-  [[nodiscard]] T state(std::size_t i) const { return i < n_ ? x_[i] : T(0); }
-  /// Process covariance entry (i, j) (i, j < process_states()).
-  [[nodiscard]] T covariance(std::size_t i, std::size_t j) const {
-    return i < n_ && j < n_ ? p_[packed(i, j)] : T(0);
-  }
   [[nodiscard]] const KfStats& stats() const { return stats_; }
 
  private:
   using Index = std::uint8_t;
   using Row = std::conditional_t<(kPacked < 256), std::uint8_t, std::uint16_t>;
 
-  // Lower-triangle packed index of (i, j), either order.
-  static constexpr std::size_t packed(std::size_t i, std::size_t j) {
-    return i >= j ? i * (i + 1) / 2 + j : j * (j + 1) / 2 + i;
+  // The other state of i's 2-state block (the filter's order); i in a 1-state block.
+  [[nodiscard]] std::size_t partner(std::size_t i) const {
+    return i < n1_ ? i : n1_ + ((i - n1_) ^ 1U);
   }
 
   template <std::size_t kMaxStates>
@@ -188,65 +188,63 @@ class AveragedKf {
     }
     // Blocks: walk the states, a block is one state or two coupled neighbours; nothing else
     // couples.
-    std::size_t start[kMaxProcess] = {};
-    std::size_t size[kMaxProcess] = {};
-    std::size_t nb = 0;
     for (std::size_t i = 0; i < n;) {
-      const std::size_t s = i + 1 < n && coupled(m, i, i + 1) ? 2U : 1U;
-      start[nb] = i;
-      size[nb++] = s;
-      i += s;
-    }
-    for (std::size_t b = 0; b < nb; ++b) {
-      for (std::size_t i = start[b]; i < start[b] + size[b]; ++i) {
+      const std::size_t size = i + 1 < n && coupled(m, i, i + 1) ? 2U : 1U;
+      for (std::size_t a = i; a < i + size; ++a) {
         for (std::size_t j = 0; j < n; ++j) {
-          const bool inside = j >= start[b] && j < start[b] + size[b];
-          if (!inside && coupled(m, i, j)) {
+          if ((j < i || j >= i + size) && coupled(m, a, j)) {
             return false;
           }
         }
       }
+      i += size;
     }
     return true;
   }
 
-  KfStep<T> step_time_varying(T z, bool update) {
-    // u = Ppp c over the packed lower triangle.
-    T u[kMaxProcess] = {};
+  // u = Ppp c over the packed lower triangle (when the last step did not leave it).
+  void compute_u() {
+    for (std::size_t i = 0; i < n_; ++i) {
+      u_[i] = T(0);
+    }
     for (std::size_t i = 0; i < n_; ++i) {
       const T* row = p_ + row_[i];
       const T ci = c_[i];
       T acc = T(0);
       for (std::size_t j = 0; j < i; ++j) {
         acc += row[j] * c_[j];
-        u[j] += row[j] * ci;
+        u_[j] += row[j] * ci;
       }
-      u[i] += acc + row[i] * ci;
+      u_[i] += acc + row[i] * ci;
     }
-    // Prior of the mean: variance c^T u + qJJ and the cross terms v = D u + qJ; state and mean.
+    u_valid_ = true;
+  }
+
+  KfStep<T> step_time_varying(T z, bool update) {
+    if (!u_valid_) {
+      compute_u();
+    }
+    // Prior of the mean: variance c^T u + qJJ, its cross terms v = D u + qJ; state and mean.
     T pjj = qjj_;
     T xj = T(0);
-    T v[kMaxProcess] = {};
-    T xn[kMaxProcess] = {};
-    for (std::size_t b = 0; b < n_blocks_; ++b) {
-      const std::size_t s0 = block_start_[b];
-      const std::size_t sz = block_size_[b];
-      for (std::size_t a = s0; a < s0 + sz; ++a) {
-        T du = T(0);
-        T dx = T(0);
-        for (std::size_t k = 0; k < sz; ++k) {
-          du += d_[a][k] * u[s0 + k];
-          dx += d_[a][k] * x_[s0 + k];
-        }
-        v[a] = du + qj_[a];
-        xn[a] = dx;
-        pjj += c_[a] * u[a];
-        xj += c_[a] * x_[a];
-      }
+    T v[kMaxProcess];
+    T xn[kMaxProcess];
+    for (std::size_t i = 0; i < n1_; ++i) {
+      v[i] = dd_[i] * u_[i] + qj_[i];
+      xn[i] = dd_[i] * x_[i];
+      pjj += c_[i] * u_[i];
+      xj += c_[i] * x_[i];
+    }
+    for (std::size_t i = n1_; i < n_; ++i) {
+      const std::size_t p = partner(i);
+      v[i] = dd_[i] * u_[i] + do_[i] * u_[p] + qj_[i];
+      xn[i] = dd_[i] * x_[i] + do_[i] * x_[p];
+      pjj += c_[i] * u_[i];
+      xj += c_[i] * x_[i];
     }
     ++stats_.predictions;
     KfStep<T> out;
-    T k[kMaxProcess] = {};
+    T k[kMaxProcess];
     T kj = T(0);
     if (update) {
       const T s = pjj + r_;
@@ -263,13 +261,17 @@ class AveragedKf {
       out.updated = true;
       out.innovation = e;
       out.innovation_var = s;
+    } else {
+      for (std::size_t i = 0; i < n_; ++i) {
+        k[i] = T(0);
+      }
     }
     for (std::size_t i = 0; i < n_; ++i) {
       x_[i] = xn[i];
     }
     xj_ = xj;
     pjj_ = pjj;
-    predict_and_update_rows(k, v);
+    predict_and_update(k, v);
     bound_covariance();
     if (update) {
       track_convergence(k, kj, out.innovation_var);
@@ -279,69 +281,102 @@ class AveragedKf {
     return out;
   }
 
-  // Ppp = D Ppp D^T + Qb - K v^T, one block of rows at a time: the rows A = D_b Ppp(b, :) of
-  // block b read only the old rows of b (the entries right of the diagonal inside a 2-state
-  // block are in its second row), and the new rows of b, (A D^T)(i, j) for j <= i, need only A:
-  // so the rows of b are overwritten once both are computed, in place, in packed order.
-  void predict_and_update_rows(const T (&k)[kMaxProcess], const T (&v)[kMaxProcess]) {
-    T a_rows[2][kMaxProcess] = {};
-    for (std::size_t b = 0; b < n_blocks_; ++b) {
-      const std::size_t i0 = block_start_[b];
-      const std::size_t nb = block_size_[b];
-      const std::size_t width = i0 + nb;  // columns 0 .. the block's last state
-      for (std::size_t r = 0; r < nb; ++r) {
-        const std::size_t i = i0 + r;
-        T* a = a_rows[r];
-        const T d0 = d_[i][0];
-        const T* p0 = p_ + row_[i0];  // row i0: columns 0 .. i0
-        for (std::size_t y = 0; y <= i0; ++y) {
-          a[y] = d0 * p0[y];
-        }
-        if (nb == 2) {
-          const T d1 = d_[i][1];
-          const T* p1 = p_ + row_[i0 + 1];  // row i0 + 1: columns 0 .. i0 + 1
-          for (std::size_t y = 0; y <= i0; ++y) {
-            a[y] += d1 * p1[y];
-          }
-          a[i0 + 1] = d0 * p1[i0] + d1 * p1[i0 + 1];  // old(i0, i0 + 1) = old(i0 + 1, i0)
-        }
-        (void)width;
-      }
-      for (std::size_t r = 0; r < nb; ++r) {
-        const std::size_t i = i0 + r;
-        const T* a = a_rows[r];
-        T* row = p_ + row_[i];
-        const T ki = k[i];
-        for (std::size_t j = 0; j <= i; ++j) {
-          const std::size_t j0 = block_col_[j];
-          T acc = a[j0] * d_[j][0];
-          if (block_of_size2_[j]) {
-            acc += a[j0 + 1] * d_[j][1];
-          }
-          row[j] = acc - ki * v[j];
-        }
-        for (std::size_t j = i0; j <= i; ++j) {
-          row[j] += qb_[i][j - i0];  // Qb inside the block
-        }
-      }
+  // Ppp = D Ppp D^T + Qb - K v^T in place, with the next step's u = Ppp c from the new entries.
+  // Rows of 1-state blocks (the first n1_): each entry needs only its own old value. Rows of a
+  // 2-state block (a, a + 1): both rows are computed from their old values before either is
+  // stored (the entry (a, a + 1) is in row a + 1).
+  void predict_and_update(const T (&k)[kMaxProcess], const T (&v)[kMaxProcess]) {
+    for (std::size_t i = 0; i < n_; ++i) {
+      u_[i] = T(0);
     }
+    for (std::size_t i = 0; i < n1_; ++i) {
+      T* row = p_ + row_[i];
+      const T di = dd_[i];
+      const T ki = k[i];
+      const T ci = c_[i];
+      T acc = T(0);
+      for (std::size_t j = 0; j < i; ++j) {
+        const T pij = di * row[j] * dd_[j] - ki * v[j];
+        row[j] = pij;
+        acc += pij * c_[j];
+        u_[j] += pij * ci;
+      }
+      const T pii = di * row[i] * di + qd_[i] - ki * v[i];
+      row[i] = pii;
+      u_[i] += acc + pii * ci;
+    }
+    T ra_new[kMaxProcess];  // a 2-state block's new rows before they are stored
+    T rb_new[kMaxProcess];
+    for (std::size_t a = n1_; a < n_; a += 2) {
+      const std::size_t b = a + 1;
+      T* ra = p_ + row_[a];
+      T* rb = p_ + row_[b];
+      const T daa = dd_[a];
+      const T dab = do_[a];
+      const T dba = do_[b];
+      const T dbb = dd_[b];
+      T acc_a = T(0);
+      T acc_b = T(0);
+      // Columns of the earlier blocks: (D_blk old(rows a, b; cols of j's block) D_j^T).
+      for (std::size_t j = 0; j < a; ++j) {
+        const std::size_t pj = partner(j);
+        const T oa = daa * ra[j] + dab * rb[j];  // (D_blk old)(a, j)
+        const T ob = dba * ra[j] + dbb * rb[j];
+        T na = oa * dd_[j];
+        T nb = ob * dd_[j];
+        if (pj != j) {  // j in a 2-state block: its partner's column too
+          const T oa_p = daa * ra[pj] + dab * rb[pj];
+          const T ob_p = dba * ra[pj] + dbb * rb[pj];
+          na += oa_p * do_[j];
+          nb += ob_p * do_[j];
+        }
+        ra_new[j] = na - k[a] * v[j];
+        rb_new[j] = nb - k[b] * v[j];
+      }
+      // The diagonal tile: old [[p_aa, p_ba], [p_ba, p_bb]].
+      const T paa = ra[a];
+      const T pba = rb[a];
+      const T pbb = rb[b];
+      const T ma = daa * paa + dab * pba;  // (D old)(a, a), (a, b), (b, a), (b, b)
+      const T mab = daa * pba + dab * pbb;
+      const T mb = dba * paa + dbb * pba;
+      const T mbb = dba * pba + dbb * pbb;
+      const T new_aa = ma * daa + mab * dab + qd_[a] - k[a] * v[a];
+      const T new_ba = mb * daa + mbb * dab + qo_[b] - k[b] * v[a];
+      const T new_bb = mb * dba + mbb * dbb + qd_[b] - k[b] * v[b];
+      for (std::size_t j = 0; j < a; ++j) {
+        ra[j] = ra_new[j];
+        rb[j] = rb_new[j];
+        acc_a += ra[j] * c_[j];
+        acc_b += rb[j] * c_[j];
+        u_[j] += ra[j] * c_[a] + rb[j] * c_[b];
+      }
+      ra[a] = new_aa;
+      rb[a] = new_ba;
+      rb[b] = new_bb;
+      u_[a] += acc_a + new_aa * c_[a] + new_ba * c_[b];
+      u_[b] += acc_b + new_ba * c_[a] + new_bb * c_[b];
+    }
+    u_valid_ = true;
   }
 
   // Diagonal floor at 0; a diagonal above p_max scales its row and column (D P D, D > 0
-  // diagonal, keeps P positive semi-definite).
+  // diagonal, keeps P positive semi-definite). Either makes u stale.
   void bound_covariance() {
     for (std::size_t i = 0; i < n_; ++i) {
-      T& pii = p_[packed(i, i)];
+      T& pii = p_[row_[i] + i];
       if (pii < T(0)) {
         pii = T(0);
         ++stats_.covariance_floored;
+        u_valid_ = false;
       } else if (pii > p_max_) {
         const T sc = std::sqrt(p_max_ / pii);
         for (std::size_t j = 0; j < n_; ++j) {
-          p_[packed(i, j)] *= sc;
+          p_[j <= i ? row_[i] + j : row_[j] + i] *= sc;
         }
-        p_[packed(i, i)] *= sc;  // the diagonal is in both the row and the column
+        pii *= sc;  // the diagonal is in both the row and the column
         ++stats_.covariance_capped;
+        u_valid_ = false;
       }
     }
   }
@@ -349,18 +384,14 @@ class AveragedKf {
   // Frozen K and S: J = c^T x, x = D x, e = z - known - J, x += K e, J += K_J e.
   KfStep<T> step_steady(T z) {
     T xj = T(0);
-    T xn[kMaxProcess] = {};
-    for (std::size_t b = 0; b < n_blocks_; ++b) {
-      const std::size_t s0 = block_start_[b];
-      const std::size_t sz = block_size_[b];
-      for (std::size_t a = s0; a < s0 + sz; ++a) {
-        T dx = T(0);
-        for (std::size_t q = 0; q < sz; ++q) {
-          dx += d_[a][q] * x_[s0 + q];
-        }
-        xn[a] = dx;
-        xj += c_[a] * x_[a];
-      }
+    T xn[kMaxProcess];
+    for (std::size_t i = 0; i < n1_; ++i) {
+      xj += c_[i] * x_[i];
+      xn[i] = dd_[i] * x_[i];
+    }
+    for (std::size_t i = n1_; i < n_; ++i) {
+      xj += c_[i] * x_[i];
+      xn[i] = dd_[i] * x_[i] + do_[i] * x_[partner(i)];
     }
     const T e = (z - known_) - xj;
     for (std::size_t i = 0; i < n_; ++i) {
@@ -417,11 +448,14 @@ class AveragedKf {
     steady_ = settled;
   }
 
-  T p_[kPacked] = {};             // process covariance, packed lower triangle
-  T d_[kMaxProcess][2] = {};      // D: row a's entries in its block's columns
-  T qb_[kMaxProcess][2] = {};     // Qb likewise
-  T c_[kMaxProcess] = {};         // Phi(J, p)
-  T qj_[kMaxProcess] = {};        // Qd(p, J)
+  T p_[kPacked] = {};             // process covariance, packed lower triangle, filter's order
+  T u_[kMaxProcess] = {};         // Ppp c of the current Ppp (u_valid_)
+  T dd_[kMaxProcess] = {};        // D(i, i)
+  T do_[kMaxProcess] = {};        // D(i, partner): 0 in a 1-state block
+  T qd_[kMaxProcess] = {};        // Qb(i, i)
+  T qo_[kMaxProcess] = {};        // Qb(i, partner)
+  T c_[kMaxProcess] = {};         // Phi(J, i)
+  T qj_[kMaxProcess] = {};        // Qd(i, J)
   T x_[kMaxProcess] = {};
   T k_ss_[kMaxProcess] = {};
   T qjj_ = T(0);
@@ -435,12 +469,10 @@ class AveragedKf {
   KfStats stats_{};
   std::uint32_t block_updates_ = 0;
   std::size_t n_ = 0;
-  std::size_t n_blocks_ = 0;
-  Index block_start_[kMaxProcess] = {};
-  Index block_size_[kMaxProcess] = {};
-  Index block_col_[kMaxProcess] = {};    // first state of state i's block
-  bool block_of_size2_[kMaxProcess] = {};
-  Row row_[kMaxProcess] = {};            // packed offset of row i
+  std::size_t n1_ = 0;            // states in 1-state blocks, first in the filter's order
+  Index from_[kMaxProcess] = {};  // the model's index of the filter's state i
+  Row row_[kMaxProcess] = {};     // packed offset of row i
+  bool u_valid_ = false;
   bool steady_enabled_ = false;
   bool steady_allowed_ = true;
   bool steady_ = false;

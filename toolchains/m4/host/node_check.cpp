@@ -36,6 +36,9 @@ struct TargetLog {
   unsigned long long adev_frames = 0;
   unsigned long long adev_block_ticks = 0;
   unsigned long long adev_samples = 0;
+  unsigned long long kf_tv_ticks = 0;
+  unsigned long long kf_steady_ticks = 0;
+  unsigned long long kf_steps = 0;
 };
 
 // Reads a qemu-system-arm log; false if it cannot be opened. Echoes the target's banners.
@@ -63,6 +66,8 @@ bool read_target(const char* path, TargetLog& t) {
     std::sscanf(l.c_str(),
                 "IMU-ADEV COST frame_ticks=%llu frames=%llu block_ticks=%llu samples=%llu",
                 &t.adev_frame_ticks, &t.adev_frames, &t.adev_block_ticks, &t.adev_samples);
+    std::sscanf(l.c_str(), "IMU-KF COST tv_ticks=%llu steady_ticks=%llu steps=%llu",
+                &t.kf_tv_ticks, &t.kf_steady_ticks, &t.kf_steps);
   }
   return true;
 }
@@ -97,6 +102,14 @@ void print_costs(const TargetLog& t) {
                 static_cast<double>(t.adev_block_ticks) * per_tick /
                     static_cast<double>(t.adev_samples),
                 t.adev_samples);
+  }
+  if (t.cal_ticks > 0 && t.kf_steps > 0) {
+    const double per_tick = static_cast<double>(t.cal_insns) / static_cast<double>(t.cal_ticks);
+    const double steps = static_cast<double>(t.kf_steps);
+    std::printf("node-check: the node's filter alone (largest model): %.0f instructions per "
+                "time-varying step, %.0f per frozen-gain step (%llu steps each)\n",
+                static_cast<double>(t.kf_tv_ticks) * per_tick / steps,
+                static_cast<double>(t.kf_steady_ticks) * per_tick / steps, t.kf_steps);
   }
 }
 

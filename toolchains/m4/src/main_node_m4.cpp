@@ -20,6 +20,7 @@
 #include "imu/online_adev.hpp"
 
 #include "line.hpp"
+#include "largest_model.hpp"
 #include "node_workload.hpp"
 #include "semihost.hpp"
 
@@ -106,6 +107,46 @@ void adev_kernel_cost(std::uint64_t& frame_ticks, std::uint64_t& block_ticks) {
   block_ticks = t.total;
 }
 
+// The node's filter alone (NodeFilter on the largest model, discretised on target at 100 Hz):
+// time-varying steps from its prior, then, once its gain has frozen, frozen steps. Static.
+constexpr std::uint32_t kKfSteps = 2000;
+imu::DiscreteModel<imu::node::kNodeStates> g_kf_model;
+imu::node::NodeFilter g_kf;
+
+bool filter_cost(std::uint64_t& tv_ticks, std::uint64_t& steady_ticks) {
+  imu::ModelParams p{};
+  std::size_t states = 0;
+  if (!imu::node::model_record_valid(imu::m4::largest_model(0), p) ||
+      !imu::node::discretize_pushed(p, 100.0, g_kf_model, states) ||
+      g_kf.configure(g_kf_model, 0.0) != imu::KfStatus::kOk) {
+    return false;
+  }
+  g_kf.set_steady_state(true);
+  std::uint32_t s = 777U;
+  volatile float sink = 0.0F;
+  TickCounter t;
+  t.start();
+  for (std::uint32_t k = 0; k < kKfSteps; ++k) {
+    sink = g_kf.step(static_cast<float>(next_counts(s)) * 0.01F, true).innovation;
+    t.poll();
+  }
+  tv_ticks = t.total;
+  for (std::uint32_t k = 0; k < 400000 && !g_kf.steady(); ++k) {
+    sink = g_kf.step(static_cast<float>(next_counts(s)) * 0.01F, true).innovation;
+  }
+  if (!g_kf.steady()) {
+    return false;
+  }
+  t.start();
+  for (std::uint32_t k = 0; k < kKfSteps; ++k) {
+    sink = g_kf.step(static_cast<float>(next_counts(s)) * 0.01F, true).innovation;
+    t.poll();
+  }
+  steady_ticks = t.total;
+  (void)sink;
+  return true;
+}
+
 constexpr std::uint32_t kCalIterations = 1000000;
 
 std::uint64_t calibrate() {
@@ -146,6 +187,14 @@ extern "C" int imu_m4_main() {
   line.str("IMU-ADEV COST frame_ticks=").u64(frame_ticks).str(" frames=").u64(kAdevFrames);
   line.str(" block_ticks=").u64(block_ticks).str(" samples=").u64(kAdevBlock).str("\n");
   imu::m4::semihost_write0(line.c_str());
+  std::uint64_t tv_ticks = 0;
+  std::uint64_t kf_steady_ticks = 0;
+  if (filter_cost(tv_ticks, kf_steady_ticks)) {
+    line.clear();
+    line.str("IMU-KF COST tv_ticks=").u64(tv_ticks).str(" steady_ticks=").u64(kf_steady_ticks);
+    line.str(" steps=").u64(kKfSteps).str("\n");
+    imu::m4::semihost_write0(line.c_str());
+  }
   line.clear();
   line.str("IMU-M4 STACK used=").u64(imu::hal::mcu::stack_high_water_bytes());
   line.str(" of=").u64(imu::hal::mcu::stack_size_bytes()).str("\n");
