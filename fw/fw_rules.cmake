@@ -6,6 +6,10 @@
 #    bits on every target (the Cortex-M4's VFMA.F32 and aarch64's FMADD would otherwise round
 #    differently from x86-64; the M4 node image's telemetry is compared with the host's byte
 #    for byte). Cost: a separate multiply and add where one fused instruction would do;
+#  * -fno-math-errno: fw has no errno to read (no OS), so a math function need not set it:
+#    sqrt(f) compiles to the FPU's own instruction (VSQRT.F32 on the M4, SQRTSS on x86-64;
+#    both correctly rounded, like the library's) instead of a call that checks its argument.
+#    It changes no result;
 #  * fw/src/fw_prelude.hpp force-included in every translation unit: it includes the only
 #    standard headers fw code may use and then poisons heap, exception, RTTI, stdio and OS
 #    identifiers (a use is a compile error);
@@ -21,7 +25,7 @@ set(IMU_FW_SYMBOL_CHECK ${CMAKE_CURRENT_LIST_DIR}/check_fw_symbols.cmake)
 function(imu_apply_fw_rules target)
   cmake_parse_arguments(ARG "" "SYMBOL_TEST" "" ${ARGN})
   target_compile_options(${target} PRIVATE -fno-exceptions -fno-rtti -ffp-contract=off
-    "SHELL:-include ${IMU_FW_PRELUDE}")
+    -fno-math-errno "SHELL:-include ${IMU_FW_PRELUDE}")
   target_link_libraries(${target} PRIVATE imu_warnings)
   get_target_property(type ${target} TYPE)
   if(type STREQUAL "STATIC_LIBRARY" AND NOT IMU_BARE_METAL)

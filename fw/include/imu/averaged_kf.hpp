@@ -224,21 +224,17 @@ class AveragedKf {
     if (!u_valid_) {
       compute_u();
     }
-    // Prior of the mean: variance c^T u + qJJ, its cross terms v = D u + qJ; state and mean.
+    // Prior of the mean: variance c^T u + qJJ, its cross terms v = D u + qJ, its estimate c^T x.
     T pjj = qjj_;
     T xj = T(0);
     T v[kMaxProcess];
-    T xn[kMaxProcess];
     for (std::size_t i = 0; i < n1_; ++i) {
       v[i] = dd_[i] * u_[i] + qj_[i];
-      xn[i] = dd_[i] * x_[i];
       pjj += c_[i] * u_[i];
       xj += c_[i] * x_[i];
     }
     for (std::size_t i = n1_; i < n_; ++i) {
-      const std::size_t p = partner(i);
-      v[i] = dd_[i] * u_[i] + do_[i] * u_[p] + qj_[i];
-      xn[i] = dd_[i] * x_[i] + do_[i] * x_[p];
+      v[i] = dd_[i] * u_[i] + do_[i] * u_[partner(i)] + qj_[i];
       pjj += c_[i] * u_[i];
       xj += c_[i] * x_[i];
     }
@@ -246,13 +242,13 @@ class AveragedKf {
     KfStep<T> out;
     T k[kMaxProcess];
     T kj = T(0);
+    T e = T(0);
     if (update) {
       const T s = pjj + r_;
-      const T e = (z - known_) - xj;
+      e = (z - known_) - xj;
       const T inv_s = T(1) / s;
       for (std::size_t i = 0; i < n_; ++i) {
         k[i] = v[i] * inv_s;
-        xn[i] += k[i] * e;
       }
       kj = pjj * inv_s;
       xj += kj * e;
@@ -266,9 +262,7 @@ class AveragedKf {
         k[i] = T(0);
       }
     }
-    for (std::size_t i = 0; i < n_; ++i) {
-      x_[i] = xn[i];
-    }
+    advance_state(k, e);
     xj_ = xj;
     pjj_ = pjj;
     predict_and_update(k, v);
@@ -279,6 +273,19 @@ class AveragedKf {
       block_updates_ = 0;  // a block is consecutive updates
     }
     return out;
+  }
+
+  // x = D x + K e in place (a 2-state block's pair from both old values).
+  void advance_state(const T (&k)[kMaxProcess], T e) {
+    for (std::size_t i = 0; i < n1_; ++i) {
+      x_[i] = dd_[i] * x_[i] + k[i] * e;
+    }
+    for (std::size_t a = n1_; a < n_; a += 2) {
+      const T xa = x_[a];
+      const T xb = x_[a + 1];
+      x_[a] = dd_[a] * xa + do_[a] * xb + k[a] * e;
+      x_[a + 1] = do_[a + 1] * xa + dd_[a + 1] * xb + k[a + 1] * e;
+    }
   }
 
   // Ppp = D Ppp D^T + Qb - K v^T in place, with the next step's u = Ppp c from the new entries.
@@ -381,22 +388,14 @@ class AveragedKf {
     }
   }
 
-  // Frozen K and S: J = c^T x, x = D x, e = z - known - J, x += K e, J += K_J e.
+  // Frozen K and S: J = c^T x, e = z - known - J, x = D x + K e, J += K_J e.
   KfStep<T> step_steady(T z) {
     T xj = T(0);
-    T xn[kMaxProcess];
-    for (std::size_t i = 0; i < n1_; ++i) {
+    for (std::size_t i = 0; i < n_; ++i) {
       xj += c_[i] * x_[i];
-      xn[i] = dd_[i] * x_[i];
-    }
-    for (std::size_t i = n1_; i < n_; ++i) {
-      xj += c_[i] * x_[i];
-      xn[i] = dd_[i] * x_[i] + do_[i] * x_[partner(i)];
     }
     const T e = (z - known_) - xj;
-    for (std::size_t i = 0; i < n_; ++i) {
-      x_[i] = xn[i] + k_ss_[i] * e;
-    }
+    advance_state(k_ss_, e);
     xj_ = xj + kj_ss_ * e;
     ++stats_.predictions;
     ++stats_.updates;

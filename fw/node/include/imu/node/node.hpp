@@ -316,7 +316,7 @@ class Node {
   LevelShifts shifts_[kChannels] = {};
   float known_[kChannels] = {};
   bool active_[kChannels] = {};  // a non-zero count was seen since the stream started
-  double init_sum_[kChannels] = {};
+  std::int64_t init_sum_[kChannels] = {};  // counts of the known-signal average
   std::uint32_t init_count_ = 0;
   std::uint64_t pending_missing_ = 0;  // reported missing, not yet applied
   std::uint64_t kernel_drops_ = 0;     // from the host loop (set_link_counters)
@@ -325,6 +325,7 @@ class Node {
   // try may wait send_timeout_ms) until the next received frame shows a peer again.
   bool tx_down_ = false;
   double lsb_[kChannels] = {};
+  float lsb_f_[kChannels] = {};  // the same in the filters' precision
   hal::ConfigRecord cfg_{};
   bool have_cfg_ = false;
   bool configured_ = false;
