@@ -227,7 +227,7 @@ class AveragedKf {
     // Prior of the mean: variance c^T u + qJJ, its cross terms v = D u + qJ, its estimate c^T x.
     T pjj = qjj_;
     T xj = T(0);
-    T v[kMaxProcess];
+    T* const v = v_;  // scratch members, not locals: no zeroing per step
     for (std::size_t i = 0; i < n1_; ++i) {
       v[i] = dd_[i] * u_[i] + qj_[i];
       pjj += c_[i] * u_[i];
@@ -240,7 +240,7 @@ class AveragedKf {
     }
     ++stats_.predictions;
     KfStep<T> out;
-    T k[kMaxProcess];
+    T* const k = k_;  // 0 without an update: x = D x, P = D P D^T + Qb
     T kj = T(0);
     T e = T(0);
     if (update) {
@@ -262,13 +262,13 @@ class AveragedKf {
         k[i] = T(0);
       }
     }
-    advance_state(k, e);
+    advance_state(k_, e);
     xj_ = xj;
     pjj_ = pjj;
-    predict_and_update(k, v);
+    predict_and_update(k_, v_);
     bound_covariance();
     if (update) {
-      track_convergence(k, kj, out.innovation_var);
+      track_convergence(k_, kj, out.innovation_var);
     } else {
       block_updates_ = 0;  // a block is consecutive updates
     }
@@ -312,8 +312,8 @@ class AveragedKf {
       row[i] = pii;
       u_[i] += acc + pii * ci;
     }
-    T ra_new[kMaxProcess];  // a 2-state block's new rows before they are stored
-    T rb_new[kMaxProcess];
+    T* const ra_new = ra_new_;
+    T* const rb_new = rb_new_;
     for (std::size_t a = n1_; a < n_; a += 2) {
       const std::size_t b = a + 1;
       T* ra = p_ + row_[a];
@@ -449,6 +449,10 @@ class AveragedKf {
 
   T p_[kPacked] = {};             // process covariance, packed lower triangle, filter's order
   T u_[kMaxProcess] = {};         // Ppp c of the current Ppp (u_valid_)
+  T v_[kMaxProcess] = {};         // a step's P'(p, J) and gain: scratch, written before read
+  T k_[kMaxProcess] = {};
+  T ra_new_[kMaxProcess] = {};    // a 2-state block's new rows before they are stored
+  T rb_new_[kMaxProcess] = {};
   T dd_[kMaxProcess] = {};        // D(i, i)
   T do_[kMaxProcess] = {};        // D(i, partner): 0 in a 1-state block
   T qd_[kMaxProcess] = {};        // Qb(i, i)
