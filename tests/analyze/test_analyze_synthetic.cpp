@@ -15,6 +15,7 @@
 #include "imu/analyze/analyze.hpp"
 #include "imu/analyze/synth.hpp"
 #include "imu/error_model.hpp"
+#include "analyse_checked.hpp"
 #include "synth_cases.hpp"
 
 namespace {
@@ -135,16 +136,55 @@ TEST(AnalyzeSynthetic, Quantization) {
   EXPECT_LE(t.extra, 1);
 }
 
+// The named walk's K (0 if none).
+double named_k(const ia::Report& r) {
+  for (const auto& e : r.effects) {
+    if (e.type == "rate_random_walk") {
+      return e.k;
+    }
+  }
+  return 0.0;
+}
+
 TEST(AnalyzeSynthetic, RateRandomWalk) {
-  // Target: K within 25 % on >= 9 of 10 (seeds 101..110). Before the slow-GM check
-  // (analyze.cpp drop_unneeded_slow_gm) it was 7/10: the joint ADEV fit gave part of the walk's
-  // power to a slow GM (K -38 % to -51 %); the record's likelihood with the walk alone now
-  // gives K within 5 % on all ten.
-  const Tally t = tally("rate_random_walk", "rate_random_walk", [](const ia::Effect& e) {
-    return std::fabs(e.k - tc::kK) <= 0.25 * tc::kK;
-  });
-  EXPECT_GE(t.found, 9);
-  EXPECT_LE(t.extra, 1);
+  // The walk (K = 1e-3) crosses the white noise near 3 s and holds the ADEV up to T/10 beside
+  // no GM the ADEV shows (the example's GM peaks at 300 s a tenth below it): a rise without a
+  // peak, which the first-order model's own GM with a Tb the record does not bound above
+  // explains as well as the walk. The record does not tell a GM slower than it resolves from a
+  // walk, and the base model's GM is no name (slow_gm_for_walk); before, this expected the walk
+  // named with K within 25 % on >= 9 of 10 (10 of 10, within 5 %), the rule that a rise
+  // without a peak is a walk. Target now: the walk's power in the model after on >= 9 of 10: a
+  // walk named with K within 25 %, or none and one GM with Tb's interval open above (the walk,
+  // Tb = infinity, inside it) whose drive sqrt(Sb), the walk's K at tau << Tb, is within 25 %
+  // of K (the GM on 9 of 10, sqrt(Sb) within 5 %; seed 108 names the walk beside the
+  // example's GM, which the ADEV shows there, with K 38 % low).
+  int held = 0;
+  int walks = 0;
+  int extra = 0;
+  for (int i = 0; i < kSeeds11; ++i) {
+    const std::uint64_t seed = kFirst11 + static_cast<std::uint64_t>(i);
+    const ia::Report r = run("rate_random_walk", seed);
+    const imu::ModelParams& m = r.model_after;
+    bool ok = false;
+    for (const auto& e : r.effects) {
+      ok = ok || (e.type == "rate_random_walk" && std::fabs(e.k - tc::kK) <= 0.25 * tc::kK);
+      walks += e.type == "rate_random_walk" ? 1 : 0;
+      extra += e.type != "rate_random_walk" ? 1 : 0;
+    }
+    const double k_gm = m.n_gm > 0 ? std::sqrt(m.gm[0].sb) : 0.0;
+    ok = ok || (tc::slow_gm_stands_in(r) && std::fabs(k_gm - tc::kK) <= 0.25 * tc::kK);
+    held += ok ? 1 : 0;
+    std::printf("rate_random_walk seed %llu: walk named %d, K %.4g, one GM's sqrt(Sb) %.4g, "
+                "Tb %.4g s\n", static_cast<unsigned long long>(seed),
+                named_k(r) > 0.0 ? 1 : 0, named_k(r), k_gm, m.n_gm > 0 ? m.gm[0].tb_s : 0.0);
+    if (!ok) {
+      print_report("rate_random_walk", seed, r);
+    }
+  }
+  std::printf("rate_random_walk: the walk's power held on %d of %d (walk named on %d), other "
+              "effects %d\n", held, kSeeds11, walks, extra);
+  EXPECT_GE(held, 9);
+  EXPECT_LE(extra, 1);
 }
 
 TEST(AnalyzeSynthetic, Ramp) {
@@ -1218,9 +1258,13 @@ TEST(AnalyzeSynthetic, NsIntervalBesideTheOutputFilterHoldsIt) {
 // ---- 95 % intervals (ParamInterval): the true parameter inside the reported interval on at
 // least 9 of 10 records per case (seeds 401..410, which no other test uses) for the model's
 // white noise N and for Q; each interval narrower than a decade on these 2.8-hour records,
-// where every parameter is determined. K inside on at least 7 of the 9 named: 8 with the
-// interval no narrower than the record's Cramer-Rao bound, 4 with the ADEV fit's alone (its
-// long-tau points count the walk's few increments as independent readings).
+// where every parameter is determined. The walk: K inside on at least 7 of the 10 where it is
+// named, and where it is not (a walk beside no GM the ADEV shows is the first-order model's GM
+// slower than the record resolves, slow_gm_for_walk), that GM's Tb interval open above (the
+// walk's Tb, infinity, inside it): at least 7 of 10 in all, 9 here (K inside on 1 of 1 named,
+// the GM on 8). Before, when a rise without a peak was named a walk: K inside on 8 of 9 named,
+// 4 with the ADEV fit's interval alone (its long-tau points count the walk's few increments as
+// independent readings).
 TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
   for (const char* name : {"quantization", "rate_random_walk"}) {
     SCOPED_TRACE(name);
@@ -1243,6 +1287,11 @@ TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
         std::printf("%s seed %llu: %s %.4g in [%.4g, %.4g]\n", name,
                     static_cast<unsigned long long>(seed), iv.name.c_str(), truth, iv.lo, iv.hi);
       }
+      if (std::string(name) == "rate_random_walk" && tc::slow_gm_stands_in(r)) {
+        ++effect_in;  // the walk's Tb (infinity) inside the GM's Tb interval, open above
+        std::printf("%s seed %llu: no walk named, one GM with Tb's interval open above\n", name,
+                    static_cast<unsigned long long>(seed));
+      }
       ASSERT_FALSE(r.model_after_ci95.empty());
       const ia::ParamInterval& n = r.model_after_ci95.front();
       EXPECT_EQ(n.name, "n");
@@ -1251,8 +1300,9 @@ TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
       std::printf("%s seed %llu: N %.5g in [%.5g, %.5g]\n", name,
                   static_cast<unsigned long long>(seed), spec.n, n.lo, n.hi);
     }
-    std::printf("%s: the true parameter inside the effect's 95 %% interval on %d of %d named, N "
-                "inside its interval on %d of 10\n", name, effect_in, named, n_in);
+    std::printf("%s: the true parameter inside the effect's 95 %% interval on %d (of %d named; "
+                "the walk: or in the GM's Tb interval where none is named), N inside its "
+                "interval on %d of 10\n", name, effect_in, named, n_in);
     if (std::string(name) == "quantization") {
       EXPECT_GE(named, 9);
       EXPECT_GE(effect_in, 9) << effect_in << " of " << named;

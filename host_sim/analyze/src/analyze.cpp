@@ -36,6 +36,10 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr std::size_t kAuxBlocks = 1024;
 // Events each scale's step detector keeps: enough to count repeated level shifts.
 constexpr std::size_t kStepEvents = 64;
+// The longest Tb the first-order model's GM may take in place of a walk (slow_gm_for_walk), in
+// record lengths: over the record such a GM is the walk (its PSD is the walk's above 1 / (2 pi
+// Tb)), so the walk can beat it only with a GM the ADEV shows beside it.
+constexpr double kSlowGmTbPerRecord = 100.0;
 using Adev = OnlineAdev<8, 22>;
 using Points = std::vector<AdevPoint>;
 
@@ -2860,6 +2864,28 @@ WalkOnly walk_only_k(const AfterContext& c, const std::vector<double>& y_fit, bo
   return WalkOnly{f.model.k, slow_tb};
 }
 
+// A GM of p that the ADEV shows beside the other terms: its peak (1.89 Tb) inside [Ts, T/10]
+// and dominating the model there somewhere (at least half its AVAR, as a named term must). A
+// rise at the long taus beyond such a GM is more than the first-order model (white + one GM)
+// holds. A GM that shares a bend with the white noise or the walk without dominating anywhere
+// (the fit's GMs of Tb 0.01 to 50 s on records of white noise and one GM of Tb ~T/6) is not
+// shown: what it carries on the ADEV is judged by the refit without it (slow_gm_for_walk).
+bool has_visible_gm(const AfterContext& c, const ModelParams& p) {
+  const Points pts = in_range(points_for_model(c.clean, p), c.tau_max);
+  for (std::size_t g = 0; g < p.n_gm; ++g) {
+    if (!(p.gm[g].sb > 0.0) || kGmPeakTauFactor * p.gm[g].tb_s > c.tau_max) {
+      continue;
+    }
+    for (const AdevPoint& pt : pts) {
+      const double total = model_avar(p, pt.tau_s);
+      if (total > 0.0 && avar_gauss_markov(p.gm[g].sb, p.gm[g].tb_s, pt.tau_s) >= 0.5 * total) {
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 // Effects whose term left the model are not reported; the rest take their parameters from the
 // final model. A term a refit put at 0 is said in a note (say = false: a trial report whose
 // notes join out's, which says it).
@@ -4197,7 +4223,46 @@ class Analysis {
                         " explains the record nearly as well (" +
                         fmt("%.1f", std::max(lt.lr, lr_bi)) + ", + 2 for the step's time):"
                         " not named a step");
+    rival_shift = RivalShift{true, sl, lt.block_s,
+                             std::string(lt.lr >= lr_bi ? "a walk" : "bias instability") +
+                                 " explains the record nearly as well, " +
+                                 fmt("%.1f", std::max(lt.lr, lr_bi))};
     return false;
+  }
+
+  // A shift a walk or bias instability explained nearly as well (step_beats_alternatives: not
+  // named a step, left in the record) while the model after holds neither, nor a GM that took
+  // a walk's place (slow_gm_for_walk: the same reading of the wander). Tried again against the
+  // model after (its GMs, its ramp's line removed, its sinusoids out of the record: a ramp the
+  // search takes later bends the record as the shift did): where it is still significant at its
+  // place (step_stands_beside, the step search's threshold), nothing in the report accounts for
+  // it, and it is an unexplained time range over its 95 % set there, as a shift taken out
+  // unnamed is (walk_or_step_range), unless a time range already holds its time.
+  void add_rival_shift_range() {
+    const ModelParams& m = out.model_after;
+    if (!rival_shift.found || m.k > 0.0 || m.bi > 0.0 || slow_gm.tb_s > 0.0) {
+      return;
+    }
+    const double t_s = static_cast<double>(rival_shift.sl.sample) * ts;
+    for (const UnexplainedRun& u : out.unexplained) {
+      if (u.t_max_s > u.t_min_s && u.t_min_s <= t_s && t_s <= u.t_max_s) {
+        return;
+      }
+    }
+    const RrwLikelihoodTest lt =
+        test_rrw(fit_record(), ts, m, tb_max, m.r > 0.0, step_at, kAuxBlocks, false);
+    if (!lt.ok) {
+      return;
+    }
+    const StepLikelihood sw = profile_step(lt, step_margin(lt));
+    if (!step_stands_beside(sw, rival_shift.sl, step_threshold(lt, sw.positions))) {
+      return;
+    }
+    UnexplainedRun u = walk_or_step_range(sw, lt.block_s, rival_shift.why);
+    u.what = u.what.substr(0, u.what.rfind("; the model is fitted without it")) +
+             "; the model after holds neither";
+    out.unexplained.push_back(u);
+    out.notes.push_back("not named: " + u.what);
   }
 
   // A step sl that beats a walk the record needs on its own (lt.lr above its level): true when
@@ -5402,8 +5467,12 @@ class Analysis {
     const bool keep_sines = shape.sin_a > 0.0;
     const Points pts =
         in_range(points_for_model(keep_sines ? ac.fit_set : ac.clean, shape), tau_max);
+    const double tb_fixed = ac.gm_tb_fixed_s;
     const auto cost_with = [&](double tf) {
-      const FitResult f = fit_terms(pts, choice.terms, ts, tau_max, tb_max, &shape, tf);
+      const FitResult f =
+          tb_fixed > 0.0 ? fit_terms(pts, choice.terms, ts, tau_max, tb_fixed * (1.0 + 1e-9),
+                                     &shape, tf, tb_fixed * (1.0 - 1e-9))
+                         : fit_terms(pts, choice.terms, ts, tau_max, tb_max, &shape, tf);
       if (f.status != FitStatus::kOk || !(f.params.n > 0.0)) {
         return std::numeric_limits<double>::infinity();
       }
@@ -5443,10 +5512,172 @@ class Analysis {
     return tf;
   }
 
-  // The model after's terms named or removed (walk_only_k, name_terms, remove_unnamed_terms):
-  // changes choice and out's effects and notes.
+  // A walk in the model after beside no GM the ADEV shows (has_visible_gm: the GMs it holds, if
+  // any, dominate the model nowhere or peak beyond T/10): the record's only feature beyond the
+  // white noise at the long taus is then a rise without a peak, which the first-order model's
+  // own GM with a Tb beyond what the record resolves explains as well. On the walk's block
+  // means (test_rrw of the model as it stands), the walk model (white + GMs with tb <= tb_max
+  // + K) against white + one GM with Tb free up to kSlowGmTbPerRecord x T
+  // (slow_gm_against_walk): where the walk does not beat it by the likelihood's level (2 ln LR
+  // <= lr_thr), nothing beyond the base model is named. The model after takes that GM in place
+  // of K and of its other GMs: Tb from the block means (the ADEV cannot place a peak it does
+  // not show), Sb and the rest from the ADEV with Tb held (below); kept when its ADEV cost is
+  // within cost_thr of the walk model's and it is not worse than before where the walk model
+  // was not (a GM the fit placed beside the walk that the ADEV needs keeps the walk). Its Tb's
+  // 95 % interval is the block means' profile likelihood's, open-ended where the record bounds
+  // it from below only (attach_slow_gm_interval). A GM that shows its peak with a further rise
+  // after it keeps the walk (the demo's GM of Tb = 159 s with a walk). Returns true when the GM
+  // took the walk's place (slow_gm set).
+  bool slow_gm_for_walk(const AfterContext& ac, AfterChoice& choice) {
+    const ModelParams& p = choice.p;
+    if (!(p.k > 0.0) || (choice.terms & kFitRrw) == 0U || p.bi > 0.0 ||
+        has_visible_gm(ac, p)) {
+      return false;
+    }
+    const bool ramp = (choice.terms & kFitRamp) != 0U;
+    const RrwLikelihoodTest lt = test_rrw(fit_record(), ts, p, tb_max, ramp, step_at);
+    if (!lt.ok) {
+      return false;
+    }
+    const double t_rec_s = lt.block_s * static_cast<double>(lt.blocks);
+    const SlowGmFit sg = slow_gm_against_walk(lt, kSlowGmTbPerRecord * t_rec_s);
+    if (!sg.ok) {
+      return false;
+    }
+    const std::string against =
+        "on " + std::to_string(lt.blocks) + " block means of " + fmt("%.3g", lt.block_s) +
+        " s the walk model (K = " + fmt("%.3g", lt.h1.model.k) + ", GMs with Tb <= " +
+        fmt("%.0f", tb_max) + " s) against white + one GM with Tb free up to " +
+        fmt("%.0f", kSlowGmTbPerRecord) + " T (its Tb " + fmt("%.4g", sg.fit.model.gm[0].tb_s) +
+        " s, 2 ln LR " + fmt("%.1f", sg.lr_reverts) + " against Tb = " +
+        fmt("%.0f", kSlowGmTbPerRecord) + " T): 2 ln LR = " + fmt("%.1f", sg.lr_walk);
+    if (sg.lr_walk > lr_thr) {
+      out.notes.push_back("rate_random_walk beside no GM the ADEV shows: " + against + " > " +
+                          fmt("%.2f", lr_thr) + ": more than the first-order model holds");
+      return false;
+    }
+    // Tb: the block means' own, where the model with it passes (below); else the ADEV's
+    // preferred model (never worse than before first, then the lower cost) over octaves from it
+    // either way inside the block means' 95 % set, up to kSlowGmTbPerRecord T. At each Tb two
+    // models: the ADEV refit with Tb held, and the walk model as it stands with K read as the
+    // GM's drive (Sb = K^2: the same curve where tau << Tb) and its other GMs left out (a
+    // K the block means set, as walk_only_k's, is not the ADEV fit's optimum, and a refit by
+    // the EDF weights can cost more in sum z^2 than the model it replaces).
+    const double tb = sg.fit.model.gm[0].tb_s;
+    const double tb_top = std::min(sg.tb_hi_95_s, kSlowGmTbPerRecord * t_rec_s);
+    std::vector<double> tbs = {tb};
+    for (int i = 1; i < 64 && std::ldexp(tb, -i) >= sg.tb_lo_95_s; ++i) {
+      tbs.push_back(std::ldexp(tb, -i));  // octaves down to the set's lower end
+    }
+    for (int i = 1; i < 64 && std::ldexp(tb, i) <= tb_top; ++i) {
+      tbs.push_back(std::ldexp(tb, i));  // and up to its upper end
+    }
+    const std::uint32_t one_gm = (choice.terms & ~(kFitRrw | kFitGm2)) | kFitGm1;
+    const auto passes = [&](const AfterChoice& f) {
+      return f.ok && f.p.n_gm == 1 && f.p.gm[0].sb > 0.0 && !(f.p.k > 0.0) &&
+             f.e.cost <= choice.e.cost + ac.cost_thr &&
+             (not_worse(f.e, ac.before) || !not_worse(choice.e, ac.before));
+    };
+    AfterChoice ch;
+    for (std::size_t i = 0; i < tbs.size(); ++i) {
+      AfterContext fixed = ac;
+      fixed.gm_tb_fixed_s = tbs[i];
+      AfterChoice read;
+      read.terms = one_gm;
+      read.p = p;
+      read.p.k = 0.0;
+      read.p.n_gm = 1;
+      read.p.gm[0] = GmParam{p.k * p.k, tbs[i]};
+      fill_errors(points_for_model(ac.clean, read.p), read.p, o, ts, tau_max, read.e);
+      read.ok = true;
+      AfterChoice best_here;
+      for (const AfterChoice& f : {fit_after(fixed, one_gm, p, p.sin_a > 0.0), read}) {
+        // (at the block means' own Tb, of those that pass)
+        if (f.ok && f.p.n_gm == 1 && f.p.gm[0].sb > 0.0 && (i > 0 || passes(f)) &&
+            preferred(f, best_here, ac.before)) {
+          best_here = f;
+        }
+      }
+      if (i == 0 && best_here.ok) {  // the block means' own Tb
+        ch = best_here;
+        break;
+      }
+      if (preferred(best_here, ch, ac.before)) {
+        ch = best_here;
+      }
+    }
+    if (!passes(ch)) {
+      out.notes.push_back(
+          "rate_random_walk beside no GM the ADEV shows: " + against + " <= " +
+          fmt("%.2f", lr_thr) + ", but that GM (Tb " + tb_set_text(sg.tb_lo_95_s, sg.tb_hi_95_s) +
+          ") misses the ADEV over [Ts, T/10]" +
+          (ch.ok ? " (cost " + fmt("%.1f", ch.e.cost) + " against the walk model's " +
+                       fmt("%.1f", choice.e.cost) + ", RMS " + fmt("%.3f", ch.e.adev_rms_rel) +
+                       " / max " + fmt("%.3f", ch.e.adev_max_rel) + ")"
+                 : std::string(" (its fit failed)")) +
+          ": the walk stays");
+      return false;
+    }
+    out.effects = without_type(out.effects, "rate_random_walk");
+    out.effects = without_type(out.effects, "gauss_markov");
+    slow_gm = SlowGm{ch.p.gm[0].tb_s, sg.tb_lo_95_s, sg.tb_hi_95_s};
+    out.notes.push_back(
+        "not named: rate_random_walk (K = " + fmt("%.4g", p.k) + "): the record does not tell a "
+        "GM slower than it resolves from a rate random walk; " + against + " <= " +
+        fmt("%.2f", lr_thr) + ". The model after holds the first-order model's GM with that Tb "
+        "(Sb = " + fmt("%.4g", ch.p.gm[0].sb) + ", Tb = " + fmt("%.4g", ch.p.gm[0].tb_s) +
+        " s, 95 %: Tb " + tb_set_text(sg.tb_lo_95_s, sg.tb_hi_95_s) + ") in place of K" +
+        (p.n_gm > 0 ? " and of its GMs that the ADEV does not show" : "") +
+        ": error over [Ts, T/10] RMS " + fmt("%.3f", ch.e.adev_rms_rel) + " / max " +
+        fmt("%.3f", ch.e.adev_max_rel) + " (with K " + fmt("%.3f", choice.e.adev_rms_rel) +
+        " / " + fmt("%.3f", choice.e.adev_max_rel) + ")");
+    choice = ch;
+    return true;
+  }
+
+  // "from 1200 s, not bounded above by this record" / "1200 to 5000 s": a Tb's 95 % set.
+  [[nodiscard]] static std::string tb_set_text(double lo_s, double hi_s) {
+    return std::isfinite(hi_s)
+               ? fmt("%.3g", lo_s) + " to " + fmt("%.3g", hi_s) + " s"
+               : "from " + fmt("%.3g", lo_s) + " s, not bounded above by this record";
+  }
+
+  // The model after's GM that took a walk's place (slow_gm_for_walk): its Tb's interval is the
+  // block means' profile likelihood's (the ADEV, over [Ts, T/10], shows no peak to place it
+  // by), said in a note where it spans more than two decades or is open-ended.
+  void attach_slow_gm_interval() {
+    const ModelParams& m = out.model_after;
+    if (!(slow_gm.tb_s > 0.0) || m.n_gm == 0 ||
+        std::fabs(m.gm[0].tb_s / slow_gm.tb_s - 1.0) > 1e-6) {
+      return;
+    }
+    // With Tb open above, sigma = sqrt(Sb Tb / 2) is too (the walk's power Sb is what the
+    // record determines).
+    const bool open = !std::isfinite(slow_gm.tb_hi_s);
+    for (ParamInterval& iv : out.model_after_ci95) {
+      if (iv.name == "gm_tb_s") {
+        iv.lo = slow_gm.tb_lo_s;
+        iv.hi = slow_gm.tb_hi_s;
+      } else if (iv.name == "gm_sigma" && open) {
+        iv.lo = 0.0;
+        iv.hi = std::numeric_limits<double>::infinity();
+      }
+    }
+    if (!(slow_gm.tb_hi_s <= 100.0 * slow_gm.tb_lo_s)) {
+      out.notes.push_back(std::string("model after, GM ") + (open ? "sigma and tb_s" : "tb_s") +
+                          ": not determined by this record (95 % interval of Tb " +
+                          tb_set_text(slow_gm.tb_lo_s, slow_gm.tb_hi_s) +
+                          ", the block means' profile likelihood; its drive Sb = " +
+                          fmt("%.4g", m.gm[0].sb) + " is the walk's K^2 at tau << Tb; a longer "
+                          "record narrows it)");
+    }
+  }
+
+  // The model after's terms named or removed (walk_only_k, slow_gm_for_walk, name_terms,
+  // remove_unnamed_terms): changes choice and out's effects and notes, and slow_gm.
   void settle_terms(const AfterContext& ac, AfterChoice& choice,
                     std::vector<UnexplainedRun>& withdrawn) {
+    slow_gm = SlowGm{};
     const WalkOnly walk =
         walk_only_k(ac, fit_record(), (terms & kFitRamp) != 0U, step_at, choice.p, out.notes);
     if (walk.k > 0.0) {
@@ -5455,10 +5686,17 @@ class Analysis {
       choice.p = q;
       fill_errors(points_for_model(ac.clean, q), q, o, ts, tau_max, choice.e);
     }
+    // After walk_only_k: a slow GM + K whose GM the record does not need is the walk alone,
+    // and the walk alone beside no GM the ADEV shows is the base GM, slower than the record
+    // resolves, when the record does not tell them apart.
+    AfterContext acs = ac;
+    if (slow_gm_for_walk(ac, choice)) {
+      acs.gm_tb_fixed_s = slow_gm.tb_s;
+    }
     drop_unmodelled_effects(choice.p, out);
-    name_terms(ac, choice, withdrawn);
+    name_terms(acs, choice, withdrawn);
     drop_degenerate_effects(ts, n_d, out);
-    remove_unnamed_terms(ac, choice, out);
+    remove_unnamed_terms(acs, choice, out);
   }
 
   // settle_terms on the model after with the output filter (if it passes output_filter_fit)
@@ -5476,6 +5714,7 @@ class Analysis {
       std::vector<UnexplainedRun> withdrawn_f;
       settle_terms(acf, filtered, withdrawn_f);
       Report with_filter = std::move(out);
+      const SlowGm slow_gm_f = slow_gm;
       out = plain_start;
       settle_terms(ac0, choice, withdrawn);
       const double settled_drop = choice.e.cost - filtered.e.cost;
@@ -5483,6 +5722,7 @@ class Analysis {
         out = std::move(with_filter);
         choice = filtered;
         withdrawn = std::move(withdrawn_f);
+        slow_gm = slow_gm_f;
         white_filter_s = tf;
         out.notes.push_back(filter_kept_note(tf, "", settled_drop));
       } else if (!filter_on_settled(ac0, choice)) {
@@ -5511,7 +5751,9 @@ class Analysis {
   bool filter_on_settled(const AfterContext& ac0, AfterChoice& choice) {
     AfterChoice filtered = choice;
     double drop = 0.0;
-    const double tf = output_filter_fit(ac0, filtered, drop);
+    AfterContext ac = ac0;
+    ac.gm_tb_fixed_s = slow_gm.tb_s;  // a GM that took a walk's place keeps its Tb
+    const double tf = output_filter_fit(ac, filtered, drop);
     if (!(tf > 0.0) || filtered.terms != choice.terms) {
       return false;
     }
@@ -5746,8 +5988,11 @@ class Analysis {
     std::vector<UnexplainedRun> withdrawn;
     settle_terms_and_filter(ac0, choice, withdrawn);
     const AfterContext ac{o,        ts,       tau_max, tb_max, clean, fit_set, out.error_before,
-                          cost_thr, white_filter_s, required, walk_lr, bi_lr};
+                          cost_thr, white_filter_s, required, walk_lr, bi_lr, slow_gm.tb_s};
     const Points agreed = refit_gross_misfit(ac, choice);
+    if (!agreed.empty()) {
+      slow_gm = SlowGm{};  // robust_after's GM is its own
+    }
     cur_p = choice.p;
     out.model_after = cur_p;
     out.error_after = choice.e;
@@ -5762,6 +6007,8 @@ class Analysis {
       readings.push_back(std::move(rd));
     }
     widen_for_readings(readings, out);
+    attach_slow_gm_interval();
+    add_rival_shift_range();
     for (const auto& w : withdrawn) {
       bool covered = false;
       for (const auto& u : out.unexplained) {
@@ -5876,8 +6123,25 @@ class Analysis {
     std::size_t range = 0;
   };
   std::vector<UnnamedShift> unnamed_shifts;
+  // The significant shift that a walk or bias instability explained nearly as well
+  // (step_beats_alternatives), left in the record: add_rival_shift_range.
+  struct RivalShift {
+    bool found = false;
+    StepLikelihood sl;
+    double block_s = 0.0;
+    std::string why;
+  };
+  RivalShift rival_shift;
   std::size_t frozen_samples = 0;            // marked missing by mark_frozen_runs
   double white_filter_s = 0.0;  // the sensor's output filter on the white noise (0: none)
+  // The model after's GM that took a walk's place (slow_gm_for_walk; tb_s 0: none): its Tb,
+  // held in every later refit, and its 95 % set from the block means' profile likelihood.
+  struct SlowGm {
+    double tb_s = 0.0;
+    double tb_lo_s = 0.0;
+    double tb_hi_s = 0.0;
+  };
+  SlowGm slow_gm;
   // Terms the record's likelihood could not tell from a look-alike (ramp_or_walk,
   // walk_or_flicker): not proposed again.
   std::vector<std::string> ruled_out;

@@ -819,4 +819,110 @@ double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u,
   return ae * ae / ee;
 }
 
+SlowGmFit slow_gm_against_walk(const RrwLikelihoodTest& test, double tb_hi_s) {
+  SlowGmFit out;
+  if (!test.ok || !test.h0.ok || !test.h1.ok || test.means.size() < 16 ||
+      !(test.block_s > 0.0)) {
+    return out;
+  }
+  const double h = test.block_s;
+  const double t_rec = h * static_cast<double>(test.means.size());
+  const double tb_lo = h;
+  const double tb_hi = std::max(tb_hi_s, 2.0 * h);
+  std::vector<BlockModel> starts;
+  BlockModel s0 = test.h0.model;  // its slowest GM alone
+  std::size_t slowest = 0;
+  for (std::size_t i = 1; i < s0.n_gm; ++i) {
+    slowest = s0.gm[i].tb_s > s0.gm[slowest].tb_s ? i : slowest;
+  }
+  if (s0.n_gm > 0) {
+    s0.gm[0] = s0.gm[slowest];
+    s0.n_gm = 1;
+    s0.k = 0.0;
+    starts.push_back(s0);
+  }
+  const double k = test.h1.model.k;
+  if (k > 0.0) {
+    for (const double tb : {0.25 * t_rec, t_rec, 10.0 * t_rec}) {
+      BlockModel w = test.h1.model;
+      w.k = 0.0;
+      w.n_gm = 1;
+      w.gm[0] = GmParam{k * k, std::clamp(tb, tb_lo, 0.5 * tb_hi)};
+      starts.push_back(w);
+    }
+  }
+  for (const BlockModel& st : starts) {
+    const LikelihoodFit f = fit_block_model(test.means, h, st, false, tb_lo, tb_hi, test.resets);
+    if (f.ok && (!out.fit.ok || f.loglik > out.fit.loglik)) {
+      out.fit = f;
+    }
+  }
+  if (!out.fit.ok) {
+    return out;
+  }
+  // The profile over Tb: the GM's Tb held, white and sb refitted (sigma^2 = sb tb / 2 kept as
+  // a start below the optimum's Tb, the walk's power sb above it).
+  const double tb_best = out.fit.model.gm[0].tb_s;
+  double l_max = out.fit.loglik;
+  LikelihoodFit better;  // a profile point above the fit's optimum (Nelder-Mead stopped short)
+  const auto profile = [&](double tb) {
+    BlockModel st = out.fit.model;
+    st.gm[0].tb_s = tb;
+    st.gm[0].sb *= tb < tb_best ? tb_best / tb : 1.0;
+    const LikelihoodFit f =
+        fit_block_model(test.means, h, st, false, tb * (1.0 - 1e-6), tb * (1.0 + 1e-6),
+                        test.resets);
+    if (!f.ok) {
+      return -std::numeric_limits<double>::infinity();
+    }
+    if (f.loglik > l_max) {
+      l_max = f.loglik;
+      better = f;
+    }
+    return f.loglik;
+  };
+  constexpr double kHalfChi2One95 = 0.5 * 3.841458820694124;  // in ln L
+  // One end of the set: from tb_best by factors of 2 towards `limit` until the profile falls
+  // below the level (then 5 bisections in ln tb), or `limit` itself when it never does.
+  const auto set_end = [&](double limit) {
+    const bool down = limit < tb_best;
+    double in = tb_best;
+    for (int i = 0; i < 64; ++i) {
+      const bool last = down ? in * 0.5 <= limit : in * 2.0 >= limit;
+      const double next = last ? limit : (down ? in * 0.5 : in * 2.0);
+      if (l_max - profile(next) > kHalfChi2One95) {
+        double outside = next;
+        for (int b = 0; b < 5; ++b) {
+          const double mid = std::sqrt(in * outside);
+          if (l_max - profile(mid) > kHalfChi2One95) {
+            outside = mid;
+          } else {
+            in = mid;
+          }
+        }
+        return in;
+      }
+      in = next;
+      if (last) {
+        break;
+      }
+    }
+    return limit;
+  };
+  out.tb_lo_95_s = tb_best > tb_lo * (1.0 + 1e-9) ? set_end(tb_lo) : tb_lo;
+  const double l_top = profile(tb_hi);
+  if (l_max - l_top <= kHalfChi2One95) {
+    out.tb_hi_95_s = std::numeric_limits<double>::infinity();
+  } else {
+    out.tb_hi_95_s = tb_best < tb_hi * (1.0 - 1e-9) ? set_end(tb_hi) : tb_hi;
+  }
+  if (better.ok) {
+    out.fit = better;
+  }
+  out.lr_walk = 2.0 * (test.h1.loglik - out.fit.loglik);
+  out.lr_reverts = std::max(0.0, 2.0 * (out.fit.loglik - l_top));
+  out.ok = true;
+  return out;
+}
+
 }  // namespace imu::analyze

@@ -102,6 +102,26 @@ struct RrwLikelihoodTest {
   std::vector<std::size_t> resets;   ///< level resets at the steps given
 };
 
+/// The first-order model (white + one GM) with its correlation time free over [block, tb_hi_s]
+/// on the block means of `test`, against the test's walk model (test.h1, white + GMs with
+/// tb <= tb_max + K). A GM whose Tb is a sizeable fraction of the record or beyond it has the
+/// walk's covariance over the record as nearly as its Tb is long (its PSD sb tb^2 / (1 + (w tb)^2)
+/// is the walk's K^2 / w^2 with K^2 = sb wherever w tb >> 1): where the walk does not beat it,
+/// the record does not tell a GM slower than it resolves from a walk. Starts: the test's H0 GM,
+/// and a GM carrying the walk's power (sb = K^2) at tb = T / 4, T, 10 T. The 95 % set of Tb is
+/// the profile likelihood's, {tb : 2 (l_max - l(tb)) <= 3.84} (chi-square(1) at 0.95), tb held
+/// and white and sb refitted; tb_hi_95_s is +inf where the set reaches tb_hi_s (the record
+/// bounds Tb from below only).
+struct SlowGmFit {
+  bool ok = false;
+  LikelihoodFit fit{};      ///< white + one GM, tb in [block_s, tb_hi_s]
+  double lr_walk = 0.0;     ///< 2 (l(test.h1) - l(fit)): the walk against the free GM (may be < 0)
+  double lr_reverts = 0.0;  ///< 2 (l(fit) - l(tb = tb_hi_s)): the GM against one as slow as allowed
+  double tb_lo_95_s = 0.0;  ///< the 95 % set of the GM's Tb: from
+  double tb_hi_95_s = 0.0;  ///< to (+inf: open-ended)
+};
+[[nodiscard]] SlowGmFit slow_gm_against_walk(const RrwLikelihoodTest& test, double tb_hi_s);
+
 /// The likelihood-ratio set of a change point's time (Siegmund, "Confidence sets in
 /// change-point problems", Int. Stat. Rev. 56, 1988): beside the true time the profile's
 /// 2 ln LR falls as 2 W(s) - |s| on either side (W a Brownian motion, s in units of the
