@@ -22,7 +22,7 @@
 //   quantization Q (sqrt(3) Q / Ts against the white ADEV N / sqrt(Ts) at Ts: 0.1 to 10 x),
 //   rate random walk K (meets the white noise at tau from T/1000 to T/10),
 //   ramp R (R tau / sqrt 2 meets B at tau from T/1000 to T/10),
-//   sinusoid (f from 20 / T to fs / 4; A from 0.1 to 10 x the white ADEV at its bump),
+//   sinusoid (f from 5 / T to fs / 4; A from 0.1 to 10 x the white ADEV at its bump),
 //   bias instability B_f (0.1 to 10 x the base B),
 //   narrowband oscillation (f0 from 1 Hz to fs / 5, half-power width 1 % to 30 % of f0, sigma
 //     0.03 to 3 x the white std per sample),
@@ -240,7 +240,7 @@ void draw_terms(std::mt19937_64& rng, Record& r, double gm_sigma, double white_s
     r.truth[kRamp] = s.ramp_r;
   }
   if (r.has[kSine]) {
-    s.sin_f_hz = log_uniform(rng, 20.0 / t_rec, s.fs_hz / 4.0);
+    s.sin_f_hz = log_uniform(rng, 5.0 / t_rec, s.fs_hz / 4.0);
     const double tau_bump = 0.371 / s.sin_f_hz;
     s.sin_a = std::sqrt(base_avar(s, tau_bump)) * log_uniform(rng, 0.1, 10.0);
     r.truth[kSine] = s.sin_a;

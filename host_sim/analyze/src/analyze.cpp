@@ -34,6 +34,10 @@ constexpr double kPi = 3.14159265358979323846;
 // Block means for the auxiliary likelihood comparisons (steps, the long-tau family, a ramp's
 // bend): half the RRW test's 2048, a quarter of its cost (the step profile is O(blocks^2)).
 constexpr std::size_t kAuxBlocks = 1024;
+// A sinusoid is looked for from this many periods in the record; below kSineCyclesByAdev its
+// line must also be needed on the record's likelihood (slow_line_stands).
+constexpr double kMinSineCycles = 5.0;
+constexpr double kSineCyclesByAdev = 20.0;
 // Events each scale's step detector keeps: enough to count repeated level shifts.
 constexpr std::size_t kStepEvents = 64;
 // The longest Tb the first-order model's GM may take in place of a walk (slow_gm_for_walk), in
@@ -1799,6 +1803,10 @@ OscFit estimate_oscillation(const WelchPsd& w_psd, double f_c) {
 struct SineCand {
   SineFit fit;
   AdevSet adev;
+  // A line of few periods (slow_line_stands): its 2 ln LR on the record's block means and the
+  // level it passed; lr_thr = 0 for a line the ADEV's residual proposed.
+  double lr = 0.0;
+  double lr_thr = 0.0;
 };
 struct Cand {
   std::string type;
@@ -4538,14 +4546,24 @@ class Analysis {
     y_minus_sine = std::vector<double>{};  // the record itself
     for (int round = 0; round < 6; ++round) {
       const Residual res = residual(eval, cur_p, o, ts, tau_max);
-      if (res.check.n_runs == 0) {
-        break;  // every residual is within the intervals: say nothing
+      if (res.check.n_runs > 0) {
+        std::vector<Cand> cands;
+        term_candidates(cands);
+        sine_candidates(res, cands);
+        oscillation_candidates(res, cands);
+        if (take_best(cands)) {
+          continue;
+        }
       }
-      std::vector<Cand> cands;
-      term_candidates(cands);
-      sine_candidates(res, cands);
-      oscillation_candidates(res, cands);
-      if (!take_best(cands)) {
+      // No residual run (say nothing), or none of the terms passed: but for a line of few
+      // periods, which the first-order fit takes up without a run (slow_sine_candidate). Only
+      // here, once the ADEV's terms are in: a term not yet in H0 (bias instability's excess at
+      // low frequencies) would pass for the line.
+      std::vector<Cand> slow;
+      if (!have_sine) {
+        slow_sine_candidate(slow);
+      }
+      if (slow.empty() || !take_best(slow)) {
         break;
       }
     }
@@ -4613,6 +4631,127 @@ class Analysis {
     return adev_of(c, gap, ts, lsb);
   }
 
+  // A line of few periods in the record (under kSineCyclesByAdev; a thermal cycle): a GM or a
+  // walk makes a bump at the same taus and a peak in the periodogram's few low bins, which the
+  // ADEV cost cannot tell from a line. The line is proposed only where the record's block means
+  // need it beside the model's stationary terms (its GMs, bias instability, a walk if the
+  // record's likelihood takes one, one more GM of Tb free; test_rrw, the line removed where the
+  // model holds a ramp):
+  // the generalized 2 ln LR of the pair cos, sin at the line's frequency (regressor_lr of one,
+  // then of the other beside it), compared with chi-square(2) at alpha / M, M the frequencies
+  // the periodogram's search window [f_c / 2, 2 f_c] resolves (1.5 f_c T, Bonferroni over the
+  // search). H0's parameters fitted to the record with the line in it take up part of it (a
+  // GM slower and larger): the pair's statistic is also computed under H0's parameters fitted
+  // to the record less the line's least-squares estimate, plus 2 (l(those; means) - l(H0's
+  // maximum; means)) <= 0, and the larger of the two taken. Both are lower bounds of the
+  // generalized likelihood ratio (H1's maximum is at least its value at either parameter set),
+  // so the level holds.
+  bool slow_line_stands(const SineFit& fit, double f_c, double& lr_out, double& thr_out) {
+    ModelParams h = stochastic_part(cur_p);
+    h.k = 0.0;
+    const bool detrend = (terms & kFitRamp) != 0U;
+    const auto null_of = [&](const std::vector<double>& rec) {
+      RrwLikelihoodTest t = test_rrw(rec, ts, h, tb_max, detrend, step_at, kAuxBlocks, true);
+      if (t.ok && t.h1.ok && t.h1.loglik > t.h0.loglik) {
+        t.h0 = t.h1;
+      }
+      // One more GM, Tb free up to kSlowGmTbPerRecord x T: low-frequency power of a shape the
+      // model's terms do not follow (flicker beyond its bank, a slow GM beside a fast one) is
+      // broadband and goes there; a line is one frequency and stays.
+      if (t.ok && t.h0.ok && t.h0.model.n_gm < kMaxGmTerms && t.means.size() > 1) {
+        BlockModel m = t.h0.model;
+        double var = 0.0;
+        for (const double v : t.means) {
+          var += v * v / static_cast<double>(t.means.size());
+        }
+        GmParam& g = m.gm[m.n_gm++];
+        g.tb_s = 0.25 * t_rec;
+        g.sb = 2.0 * 0.1 * var / g.tb_s;  // a tenth of the means' variance
+        const LikelihoodFit f = fit_block_model(t.means, t.block_s, m, m.k > 0.0, t.block_s,
+                                                kSlowGmTbPerRecord * t_rec, t.resets);
+        if (f.ok && f.loglik > t.h0.loglik) {
+          t.h0 = f;
+        }
+      }
+      return t;
+    };
+    const RrwLikelihoodTest t = null_of(fit_record());
+    if (!t.ok || !t.h0.ok || t.means.size() < 64) {
+      return false;
+    }
+    const std::size_t nb = t.means.size();
+    std::vector<double> uc(nb);
+    std::vector<double> us(nb);
+    for (std::size_t k = 0; k < nb; ++k) {
+      const double w = 2.0 * kPi * fit.f_hz * (static_cast<double>(k) + 0.5) * t.block_s;
+      uc[k] = std::cos(w);
+      us[k] = std::sin(w);
+    }
+    remove_mean_and_line(uc, detrend);
+    remove_mean_and_line(us, detrend);
+    const auto pair_lr = [&](const RrwLikelihoodTest& at) {
+      return regressor_lr(at, uc) + regressor_lr(at, us, nullptr, &uc);
+    };
+    double lr = pair_lr(t);
+    const RrwLikelihoodTest without = null_of(minus_sine(fit_record(), ts, fit));
+    if (without.ok && without.h0.ok) {
+      RrwLikelihoodTest at = t;
+      at.h0 = without.h0;
+      const double l_max = block_loglik(t.means, t.block_s, t.h0.model, -1.0, t.resets);
+      const double l_at = block_loglik(t.means, t.block_s, without.h0.model, -1.0, t.resets);
+      if (std::isfinite(l_max) && std::isfinite(l_at)) {
+        lr = std::max(lr, pair_lr(at) + 2.0 * std::min(0.0, l_at - l_max));
+      }
+    }
+    const double m = std::max(1.0, 1.5 * f_c * t_rec);
+    const double thr = chi2_quantile(1.0 - o.alpha / m, 2.0);
+    lr_out = lr;
+    thr_out = thr;
+    if (!(lr > thr)) {
+      out.notes.push_back("not a sinusoid: the line at " + fmt("%.5g", fit.f_hz) + " Hz (" +
+                          fmt("%.1f", fit.f_hz * t_rec) +
+                          " periods in the record) is not needed beside the model's noise on "
+                          "the record's block means (2 ln LR = " +
+                          fmt("%.1f", lr) + " <= " + fmt("%.1f", thr) + ")");
+      return false;
+    }
+    return true;
+  }
+
+  // A line of kMinSineCycles to kSineCyclesByAdev periods in the record (a thermal cycle): its
+  // ADEV bump lies at 0.37 of its period, at or beyond T/10, where the first-order fit's GM
+  // takes it up and no residual run shows; the periodogram's low band proposes it instead
+  // (estimate_sinusoid over [f_c / 2, 2 f_c], f_c = 10 / T), and the record's likelihood
+  // decides (slow_line_stands). Tried once no residual run is left.
+  void slow_sine_candidate(std::vector<Cand>& cands) {
+    const double f_c = std::sqrt(kMinSineCycles * kSineCyclesByAdev) / t_rec;
+    if (f_c >= 0.5 / ts) {
+      return;
+    }
+    constexpr std::size_t kLowBand = static_cast<std::size_t>(-1);  // its sine_cache key
+    auto it = sine_cache.find(kLowBand);
+    if (it == sine_cache.end()) {
+      SineCand sc;
+      sc.fit = estimate_sinusoid(y, ts, f_c, spectrum_of_y);
+      const double cycles = sc.fit.f_hz * t_rec;
+      sc.fit.ok = sc.fit.ok && cycles >= kMinSineCycles && cycles < kSineCyclesByAdev &&
+                  slow_line_stands(sc.fit, f_c, sc.lr, sc.lr_thr);
+      if (sc.fit.ok) {
+        sc.adev = adev_without_sine(y, sc.fit);
+      }
+      it = sine_cache.emplace(kLowBand, std::move(sc)).first;
+    }
+    const SineCand& sc = it->second;
+    if (!sc.fit.ok) {
+      return;
+    }
+    ModelParams sines{};
+    sines.sin_a = sc.fit.amplitude;
+    sines.sin_f0_hz = sc.fit.f_hz;
+    sines.sin_ts_s = ts;
+    add_sine_cand("sinusoid", sc, sines, cands);
+  }
+
   // sine_coherence of the line at f_hz, run once per line (two bumps can lead to the same
   // one); a line that fails it is said in a note, once.
   bool coherent_line(double f_hz) {
@@ -4654,8 +4793,8 @@ class Analysis {
           imin = res.z[i] < res.z[imin] ? i : imin;
         }
         const double f_c = 0.371 / eval[imin].tau_s;
-        if (f_c >= 0.5 / ts || f_c * t_rec < 20.0) {
-          continue;  // not a resolvable sinusoid (above Nyquist or < 20 periods)
+        if (f_c >= 0.5 / ts || f_c * t_rec < kSineCyclesByAdev) {
+          continue;  // not a resolvable sinusoid (above Nyquist or too few periods)
         }
         auto it = sine_cache.find(imin);
         if (it == sine_cache.end()) {
@@ -4794,7 +4933,17 @@ class Analysis {
     if (best != nullptr && !walk_or_flicker(cands, best, beside_line)) {
       return take_best(cands);
     }
-    if (best == nullptr || cur_cost - best->cost <= cost_thr) {
+    // A line of few periods is decided on the record's likelihood (slow_line_stands): the
+    // ADEV's taus up to T/10 hold little of it. It is taken where the ADEV does not get worse.
+    const bool slow_line = best != nullptr && best->sine != nullptr && best->sine->lr_thr > 0.0;
+    if (slow_line && !(cur_cost - best->cost > 0.0)) {
+      out.notes.push_back("not added: a sinusoid at " + fmt("%.5g", best->sine->fit.f_hz) +
+                          " Hz, which the record's likelihood needs (2 ln LR = " +
+                          fmt("%.1f", best->sine->lr) + "), makes the ADEV worse (cost " +
+                          fmt("%.1f", cur_cost) + " -> " + fmt("%.1f", best->cost) + ")");
+      return false;
+    }
+    if (best == nullptr || (!slow_line && cur_cost - best->cost <= cost_thr)) {
       if (best != nullptr) {
         out.notes.push_back("not added: " + best->type + " (cost drop " +
                             fmt("%.1f", cur_cost - best->cost) + " <= " + fmt("%.1f", cost_thr) +
@@ -4807,9 +4956,17 @@ class Analysis {
       e.type = best->type == "sinusoid_harmonic" ? "sinusoid"
                : best->type == "second_gm"       ? "gauss_markov"
                                                  : best->type;
-      e.statistic = cur_cost - best->cost;
-      e.threshold = cost_thr;
+      e.statistic = slow_line ? best->sine->lr : cur_cost - best->cost;
+      e.threshold = slow_line ? best->sine->lr_thr : cost_thr;
       out.effects.push_back(e);
+      if (slow_line) {
+        out.notes.push_back(
+            "sinusoid at " + fmt("%.5g", best->sine->fit.f_hz) + " Hz: " +
+            fmt("%.1f", best->sine->fit.f_hz * t_rec) +
+            " periods in the record, its statistic the record's block-mean likelihood (2 ln LR "
+            "of the line beside the model's noise), the ADEV cost drop " +
+            fmt("%.1f", cur_cost - best->cost));
+      }
     }
     terms = best->terms;
     cur_p = best->p;
