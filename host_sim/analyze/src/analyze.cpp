@@ -4660,13 +4660,9 @@ class Analysis {
       // broadband and goes there; a line is one frequency and stays.
       if (t.ok && t.h0.ok && t.h0.model.n_gm < kMaxGmTerms && t.means.size() > 1) {
         BlockModel m = t.h0.model;
-        double var = 0.0;
-        for (const double v : t.means) {
-          var += v * v / static_cast<double>(t.means.size());
-        }
         GmParam& g = m.gm[m.n_gm++];
         g.tb_s = 0.25 * t_rec;
-        g.sb = 2.0 * 0.1 * var / g.tb_s;  // a tenth of the means' variance
+        g.sb = 2.0 * 0.1 * sample_variance(t.means) / g.tb_s;  // a tenth of the means' variance
         const LikelihoodFit f = fit_block_model(t.means, t.block_s, m, m.k > 0.0, t.block_s,
                                                 kSlowGmTbPerRecord * t_rec, t.resets);
         if (f.ok && f.loglik > t.h0.loglik) {
@@ -4729,19 +4725,35 @@ class Analysis {
       return;
     }
     constexpr std::size_t kLowBand = static_cast<std::size_t>(-1);  // its sine_cache key
-    auto it = sine_cache.find(kLowBand);
+    add_line_cand(line_near(kLowBand, f_c,
+                            [&](SineCand& sc) {
+                              const double cycles = sc.fit.f_hz * t_rec;
+                              return cycles >= kMinSineCycles && cycles < kSineCyclesByAdev &&
+                                     slow_line_stands(sc.fit, f_c, sc.lr, sc.lr_thr);
+                            }),
+                  cands);
+  }
+
+  // The line near f_c (estimate_sinusoid) and, where `stands` takes it, the record's ADEV
+  // without it; cached under `key` (a bump's tau index): each costs passes over the record.
+  template <typename Stands>
+  const SineCand& line_near(std::size_t key, double f_c, Stands stands) {
+    auto it = sine_cache.find(key);
     if (it == sine_cache.end()) {
       SineCand sc;
       sc.fit = estimate_sinusoid(y, ts, f_c, spectrum_of_y);
-      const double cycles = sc.fit.f_hz * t_rec;
-      sc.fit.ok = sc.fit.ok && cycles >= kMinSineCycles && cycles < kSineCyclesByAdev &&
-                  slow_line_stands(sc.fit, f_c, sc.lr, sc.lr_thr);
+      sc.fit.ok = sc.fit.ok && stands(sc);
       if (sc.fit.ok) {
         sc.adev = adev_without_sine(y, sc.fit);
       }
-      it = sine_cache.emplace(kLowBand, std::move(sc)).first;
+      it = sine_cache.emplace(key, std::move(sc)).first;
     }
-    const SineCand& sc = it->second;
+    return it->second;
+  }
+
+  // A line found (line_near) as the candidate `sinusoid`, of the amplitude of the record's
+  // samples.
+  void add_line_cand(const SineCand& sc, std::vector<Cand>& cands) {
     if (!sc.fit.ok) {
       return;
     }
@@ -4796,25 +4808,9 @@ class Analysis {
         if (f_c >= 0.5 / ts || f_c * t_rec < kSineCyclesByAdev) {
           continue;  // not a resolvable sinusoid (above Nyquist or too few periods)
         }
-        auto it = sine_cache.find(imin);
-        if (it == sine_cache.end()) {
-          SineCand sc;
-          sc.fit = estimate_sinusoid(y, ts, f_c, spectrum_of_y);
-          sc.fit.ok = sc.fit.ok && coherent_line(sc.fit.f_hz);
-          if (sc.fit.ok) {
-            sc.adev = adev_without_sine(y, sc.fit);
-          }
-          it = sine_cache.emplace(imin, std::move(sc)).first;
-        }
-        const SineCand& sc = it->second;
-        if (!sc.fit.ok) {
-          continue;
-        }
-        ModelParams sines{};
-        sines.sin_a = sc.fit.amplitude;
-        sines.sin_f0_hz = sc.fit.f_hz;
-        sines.sin_ts_s = ts;  // the amplitude of the record's samples
-        add_sine_cand("sinusoid", sc, sines, cands);
+        add_line_cand(
+            line_near(imin, f_c, [&](const SineCand& sc) { return coherent_line(sc.fit.f_hz); }),
+            cands);
       }
     } else if (!have_sine2) {
       // Harmonics of the sinusoid found (a periodic disturbance that is not a pure tone, e.g.
@@ -4898,6 +4894,35 @@ class Analysis {
     }
   }
 
+  // The test a candidate passes to be taken, said in a note where it fails: the ADEV cost drop
+  // against cost_thr; for a line of few periods, the record's likelihood (slow_line_stands,
+  // its 2 ln LR and level), the ADEV's taus up to T/10 holding little of it, where the ADEV
+  // does not get worse with it.
+  struct CandTest {
+    double statistic = 0.0;
+    double threshold = 0.0;
+    bool passes = false;
+  };
+  CandTest test_of(const Cand& c) {
+    const double drop = cur_cost - c.cost;
+    if (c.sine != nullptr && c.sine->lr_thr > 0.0) {
+      const CandTest t{c.sine->lr, c.sine->lr_thr, drop > 0.0};
+      out.notes.push_back(
+          (t.passes ? "sinusoid at " : "not added: a sinusoid at ") +
+          fmt("%.5g", c.sine->fit.f_hz) + " Hz, " + fmt("%.1f", c.sine->fit.f_hz * t_rec) +
+          " periods in the record: its statistic the record's block-mean likelihood (2 ln LR "
+          "of the line beside the model's noise), the ADEV cost drop " +
+          fmt("%.1f", drop) + (t.passes ? "" : " (the ADEV gets worse with it)"));
+      return t;
+    }
+    const CandTest t{drop, cost_thr, drop > cost_thr};
+    if (!t.passes) {
+      out.notes.push_back("not added: " + c.type + " (cost drop " + fmt("%.1f", drop) +
+                          " <= " + fmt("%.1f", cost_thr) + ")");
+    }
+    return t;
+  }
+
   // The best candidate, checked against its rivals (ramp against a walk, the long-tau family by
   // the record's likelihood, a walk against bias instability), is taken if its cost drop passes
   // the test. Returns false when no candidate is taken (the search ends).
@@ -4933,22 +4958,11 @@ class Analysis {
     if (best != nullptr && !walk_or_flicker(cands, best, beside_line)) {
       return take_best(cands);
     }
-    // A line of few periods is decided on the record's likelihood (slow_line_stands): the
-    // ADEV's taus up to T/10 hold little of it. It is taken where the ADEV does not get worse.
-    const bool slow_line = best != nullptr && best->sine != nullptr && best->sine->lr_thr > 0.0;
-    if (slow_line && !(cur_cost - best->cost > 0.0)) {
-      out.notes.push_back("not added: a sinusoid at " + fmt("%.5g", best->sine->fit.f_hz) +
-                          " Hz, which the record's likelihood needs (2 ln LR = " +
-                          fmt("%.1f", best->sine->lr) + "), makes the ADEV worse (cost " +
-                          fmt("%.1f", cur_cost) + " -> " + fmt("%.1f", best->cost) + ")");
+    if (best == nullptr) {
       return false;
     }
-    if (best == nullptr || (!slow_line && cur_cost - best->cost <= cost_thr)) {
-      if (best != nullptr) {
-        out.notes.push_back("not added: " + best->type + " (cost drop " +
-                            fmt("%.1f", cur_cost - best->cost) + " <= " + fmt("%.1f", cost_thr) +
-                            ")");
-      }
+    const CandTest test = test_of(*best);
+    if (!test.passes) {
       return false;
     }
     {
@@ -4956,17 +4970,9 @@ class Analysis {
       e.type = best->type == "sinusoid_harmonic" ? "sinusoid"
                : best->type == "second_gm"       ? "gauss_markov"
                                                  : best->type;
-      e.statistic = slow_line ? best->sine->lr : cur_cost - best->cost;
-      e.threshold = slow_line ? best->sine->lr_thr : cost_thr;
+      e.statistic = test.statistic;
+      e.threshold = test.threshold;
       out.effects.push_back(e);
-      if (slow_line) {
-        out.notes.push_back(
-            "sinusoid at " + fmt("%.5g", best->sine->fit.f_hz) + " Hz: " +
-            fmt("%.1f", best->sine->fit.f_hz * t_rec) +
-            " periods in the record, its statistic the record's block-mean likelihood (2 ln LR "
-            "of the line beside the model's noise), the ADEV cost drop " +
-            fmt("%.1f", cur_cost - best->cost));
-      }
     }
     terms = best->terms;
     cur_p = best->p;

@@ -78,6 +78,8 @@ Component walk_component(double k, double h, double p0) {
   return c;
 }
 
+}  // namespace
+
 double sample_variance(const std::vector<double>& v) {
   double m = 0.0;
   for (double x : v) {
@@ -90,8 +92,6 @@ double sample_variance(const std::vector<double>& v) {
   }
   return v.size() > 1 ? s / static_cast<double>(v.size() - 1) : 0.0;
 }
-
-}  // namespace
 
 // Nelder-Mead: long_memory.hpp.
 std::vector<double> nelder_mead(const std::function<double(const std::vector<double>&)>& f,

@@ -46,6 +46,9 @@ struct BlockModel {
   double bi_tau_hi_s = 0.0;
 };
 
+/// The unbiased sample variance of v (0 for fewer than two values).
+[[nodiscard]] double sample_variance(const std::vector<double>& v);
+
 /// Means of consecutive blocks of `per_block` samples (a trailing partial block is dropped).
 [[nodiscard]] std::vector<double> block_means(const std::vector<double>& y, std::size_t per_block);
 
