@@ -65,29 +65,44 @@ bool present(const ModelParams& p, TermKind k, std::size_t i) {
 // NOLINTBEGIN(cppcoreguidelines-avoid-c-arrays)
 const TermInfo kTermTable[kTermKinds] = {
     // name, label, AVAR, parameters {key, symbol, unit}, fit basis, kind, states, instances,
-    // instances in the first-order model, deterministic, main parameter, parameters
+    // instances in the first-order model, deterministic, main parameter, parameters,
+    // wire {record, fields, byte offsets per instance, fields}, Kalibr YAML key.
+    // ModelRecord v2: version, channel, n_states, flags, then float32 n 4, q 8, gm_sb[0] 12,
+    // gm_tb_s[0] 16, gm_sb[1] 20, gm_tb_s[1] 24, k 28, bi 32, bi_tau_lo_s 36, bi_tau_hi_s 40,
+    // n_filter_s 44, osc_sigma 48, osc_f0_hz 52, osc_beta_per_s 56, CRC 60. ModelSignalsRecord:
+    // channel, flags, 2 reserved, then ramp_r 4, sin_a[0] 8, sin_a[1] 12, sin_f0_hz[0] 16,
+    // sin_f0_hz[1] 20, memory_s 24, CRC 28.
     {"white", "white noise", "N^2 / tau", {{"n", "N", "u/sqrt(Hz)"}, {"tf_s", "Tf", "s"}, {}},
-     kFitWhite, TermKind::kWhite, 0, 1, 1, false, 0, 2},
+     kFitWhite, TermKind::kWhite, 0, 1, 1, false, 0, 2,
+     {WireRecord::kModel, {"n", "n_filter_s", nullptr}, {{4, 44, 0}, {}}, 2}, "noise_density"},
     {"quantization", "quantization", "3 Q^2 / tau^2", {{"q", "Q", "u s"}, {}, {}},
-     kFitQuantization, TermKind::kQuantization, 0, 1, 0, false, 0, 1},
+     kFitQuantization, TermKind::kQuantization, 0, 1, 0, false, 0, 1,
+     {WireRecord::kModel, {"q", nullptr, nullptr}, {{8, 0, 0}, {}}, 1}, nullptr},
     {"gauss_markov", "Gauss-Markov",
      "(Sb Tb^2 / tau)(1 - (Tb / 2 tau)(3 - 4 e^(-tau/Tb) + e^(-2 tau/Tb))), Sb = 2 sigma^2 / Tb",
      {{"sigma", "sigma", "u"}, {"tb_s", "Tb", "s"}, {}}, kFitGm1, TermKind::kGaussMarkov, 1,
-     kMaxGmTerms, 1, false, 0, 2},
+     kMaxGmTerms, 1, false, 0, 2,
+     {WireRecord::kModel, {"gm_sb", "gm_tb_s", nullptr}, {{12, 16, 0}, {20, 24, 0}}, 2}, nullptr},
     {"rate_random_walk", "rate random walk", "K^2 tau / 3", {{"k", "K", "u/sqrt(s)"}, {}, {}},
-     kFitRrw, TermKind::kRateRandomWalk, 1, 1, 0, false, 0, 1},
+     kFitRrw, TermKind::kRateRandomWalk, 1, 1, 0, false, 0, 1,
+     {WireRecord::kModel, {"k", nullptr, nullptr}, {{28, 0, 0}, {}}, 1}, "random_walk"},
     {"ramp", "ramp", "R^2 tau^2 / 2", {{"r", "R", "u/s"}, {}, {}}, kFitRamp, TermKind::kRamp, 2,
-     1, 0, true, 0, 1},
+     1, 0, true, 0, 1, {WireRecord::kSignals, {"ramp_r", nullptr, nullptr}, {{4, 0, 0}, {}}, 1},
+     nullptr},
     {"sinusoid", "sinusoid", "A^2 sin^4(pi f0 tau) / (pi f0 tau)^2",
      {{"freq_hz", "f0", "Hz"}, {"amplitude", "A", "u"}, {}}, 0, TermKind::kSinusoid, 2, 2, 0, true,
-     1, 2},
+     1, 2, {WireRecord::kSignals, {"sin_f0_hz", "sin_a", nullptr}, {{16, 8, 0}, {20, 12, 0}}, 2},
+     nullptr},
     {"bias_instability", "bias instability", "(2 ln 2 / pi) B^2 over [tau_lo, tau_hi]",
      {{"b", "B", "u"}, {"tau_lo_s", "tau_lo", "s"}, {"tau_hi_s", "tau_hi", "s"}}, kFitFlicker,
-     TermKind::kBiasInstability, 1, 1, 0, false, 0, 3},
+     TermKind::kBiasInstability, 1, 1, 0, false, 0, 3,
+     {WireRecord::kModel, {"bi", "bi_tau_lo_s", "bi_tau_hi_s"}, {{32, 36, 40}, {}}, 3}, nullptr},
     {"oscillation", "narrowband oscillation",
      "sigma^2 Re{2 g(x) / x}, x = (beta - i 2 pi f0) tau",
      {{"freq_hz", "f0", "Hz"}, {"sigma", "sigma", "u"}, {"bandwidth_hz", "beta/pi", "Hz"}},
-     kFitOscillation, TermKind::kOscillation, 2, 1, 0, false, 1, 3},
+     kFitOscillation, TermKind::kOscillation, 2, 1, 0, false, 1, 3,
+     {WireRecord::kModel, {"osc_f0_hz", "osc_sigma", "osc_beta_per_s"}, {{52, 48, 56}, {}}, 3},
+     nullptr},
 };
 // NOLINTEND(cppcoreguidelines-avoid-c-arrays)
 

@@ -1,5 +1,6 @@
 // The term registry: one row per kind of noise term of an IMU channel's error model (its name,
-// parameters with units, states, Allan variance, fit basis), and the accessors that read a
+// parameters with units, states, Allan variance, fit basis, where it travels to the node and
+// its Kalibr YAML key), and the accessors that read a
 // term's instances out of a ModelParams. The model's AVAR (model_avar), the fit's term names,
 // the analysis's effects and its report iterate over this table instead of spelling each term.
 //
@@ -39,6 +40,23 @@ struct TermParamInfo {
   const char* unit;    ///< its unit; u is the channel's unit
 };
 
+/// The record that carries a term to the node (hal/include/imu/hal/codec.hpp): the channel's
+/// ModelRecord (version 2, 64 bytes) or its ModelSignalsRecord (32 bytes); none for none.
+enum class WireRecord : std::uint8_t { kNone = 0, kModel, kSignals };
+inline constexpr std::size_t kMaxWireFields = 3;
+inline constexpr std::size_t kMaxWireInstances = 2;
+
+/// Where a term's instances lie in their record: the record's fields (their names in
+/// codec.hpp), each a little-endian IEEE 754 float32 at a byte offset from the record's first
+/// byte, per instance. The wire carries the node's parameterisation, which is not always the
+/// report's: a GM as its drive Sb and Tb, the oscillation's damping beta in 1/s.
+struct TermWire {
+  WireRecord record;
+  const char* fields[kMaxWireFields];  ///< codec.hpp's member names ("gm_sb", "gm_tb_s")
+  std::uint8_t offset[kMaxWireInstances][kMaxWireFields];  ///< byte offsets (instance, field)
+  std::uint8_t n_fields;
+};
+
 struct TermInfo {
   const char* name;            ///< the term's name in reports and JSON ("rate_random_walk")
   const char* label;           ///< its name for people (plot legends: "rate random walk")
@@ -52,6 +70,10 @@ struct TermInfo {
   bool deterministic;          ///< a signal of the record (a regressor), not a noise process
   std::uint8_t main_param;     ///< index of the parameter that says its size
   std::uint8_t n_params;
+  TermWire wire;               ///< its slot in the node's model records
+  /// Its key in Kalibr's imu.yaml after the sensor's prefix ("accelerometer_" / "gyroscope_"):
+  /// "noise_density" (N), "random_walk" (K); nullptr where Kalibr's model has no such term.
+  const char* yaml;
 };
 
 /// The registry, indexed by TermKind. Every row's kind is its index (test_terms checks it).

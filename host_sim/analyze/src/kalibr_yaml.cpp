@@ -167,6 +167,11 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
           "both sensors): declare them with --acc COLS --gyro COLS";
     return false;
   }
+  // Kalibr's keys: the sensor's prefix and the registry's key of the term.
+  const std::string nd = term_info(TermKind::kWhite).yaml;
+  const std::string rw = term_info(TermKind::kRateRandomWalk).yaml;
+  const std::string acc_key = "accelerometer_";
+  const std::string gyro_key = "gyroscope_";
   yaml = "# IMU noise parameters for Kalibr (github.com/ethz-asl/kalibr/wiki/IMU-Noise-Model),\n"
          "# written by imu-sim analyze from " + imu::cli::term_safe(source) + ".\n"
          "# noise_density: white noise N, continuous time (AVAR N^2/tau); random_walk: bias\n"
@@ -175,22 +180,22 @@ bool kalibr_yaml(const std::vector<Report>& reports, const std::string& source, 
          "# closest to everything the analysis found; K: the named rate_random_walk's K \"(walk:\n"
          "# named)\", else that fit's. One number per sensor: the largest axis (conservative).\n"
          "# Per-axis values and the full models follow as extra keys and comments.\n"
-         "accelerometer_noise_density: " + g(worst(acc, false)) + "  # m/s^2/sqrt(Hz)\n"
-         "accelerometer_random_walk: " + g(worst(acc, true)) + "  # m/s^3/sqrt(Hz)\n"
-         "gyroscope_noise_density: " + g(worst(gyro, false)) + "  # rad/s/sqrt(Hz)\n"
-         "gyroscope_random_walk: " + g(worst(gyro, true)) + "  # rad/s^2/sqrt(Hz)\n"
+         + acc_key + nd + ": " + g(worst(acc, false)) + "  # m/s^2/sqrt(Hz)\n"
+         + acc_key + rw + ": " + g(worst(acc, true)) + "  # m/s^3/sqrt(Hz)\n"
+         + gyro_key + nd + ": " + g(worst(gyro, false)) + "  # rad/s/sqrt(Hz)\n"
+         + gyro_key + rw + ": " + g(worst(gyro, true)) + "  # rad/s^2/sqrt(Hz)\n"
          "update_rate: " + g(fs) + "  # Hz\n"
          "rostopic: /imu0\n"
          "# Extra keys (Kalibr ignores them), per axis in the order of *_axes:\n"
          "accelerometer_axes: [" + names(acc) + "]\n"
-         "accelerometer_noise_density_per_axis: " + list(acc, false) + "\n"
-         "accelerometer_random_walk_per_axis: " + list(acc, true) + "\n"
-         "accelerometer_random_walk_source_per_axis: " + sources(acc) + "\n"
+         + acc_key + nd + "_per_axis: " + list(acc, false) + "\n"
+         + acc_key + rw + "_per_axis: " + list(acc, true) + "\n"
+         + acc_key + rw + "_source_per_axis: " + sources(acc) + "\n"
          "accelerometer_bias_instability_per_axis: " + bis(acc_r) + "  # IEEE 952 B, m/s^2\n"
          "gyroscope_axes: [" + names(gyro) + "]\n"
-         "gyroscope_noise_density_per_axis: " + list(gyro, false) + "\n"
-         "gyroscope_random_walk_per_axis: " + list(gyro, true) + "\n"
-         "gyroscope_random_walk_source_per_axis: " + sources(gyro) + "\n"
+         + gyro_key + nd + "_per_axis: " + list(gyro, false) + "\n"
+         + gyro_key + rw + "_per_axis: " + list(gyro, true) + "\n"
+         + gyro_key + rw + "_source_per_axis: " + sources(gyro) + "\n"
          "gyroscope_bias_instability_per_axis: " + bis(gyro_r) + "  # IEEE 952 B, rad/s\n"
          "# The full models (model_after: GM drive PSD Sb and time Tb, etc.):\n" +
          terms(acc_r) + terms(gyro_r) +
