@@ -151,13 +151,15 @@ TEST(AnalyzeSynthetic, RateRandomWalk) {
   // no GM the ADEV shows (the example's GM peaks at 300 s a tenth below it): a rise without a
   // peak, which the first-order model's own GM with a Tb the record does not bound above
   // explains as well as the walk. The record does not tell a GM slower than it resolves from a
-  // walk, and the base model's GM is no name (slow_gm_for_walk); before, this expected the walk
-  // named with K within 25 % on >= 9 of 10 (10 of 10, within 5 %), the rule that a rise
-  // without a peak is a walk. Target now: the walk's power in the model after on >= 9 of 10: a
-  // walk named with K within 25 %, or none and one GM with Tb's interval open above (the walk,
-  // Tb = infinity, inside it) whose drive sqrt(Sb), the walk's K at tau << Tb, is within 25 %
-  // of K (the GM on 9 of 10, sqrt(Sb) within 5 %; seed 108 names the walk beside the
-  // example's GM, which the ADEV shows there, with K 38 % low).
+  // walk where the record allows a GM that peaks inside T/4, and the base model's GM is no name
+  // then (slow_gm_for_walk); where every GM it allows peaks beyond T/4 the walk is named.
+  // Target: the walk's power in the model after on >= 9 of 10: a walk named with K within
+  // 25 %, or none and one GM with Tb's interval open above (the walk, Tb = infinity, inside
+  // it) whose drive sqrt(Sb), the walk's K at tau << Tb, is within 25 % of K. Now: 9 of 10,
+  // the walk named on 7 (the GM on 101, 107, 110; seed 108 names the walk beside the
+  // example's GM, which the ADEV shows there, with K 38 % low). When the GM always stood in
+  // where the record did not tell them apart: the walk named on 1; before that rule, when a
+  // rise without a peak was always a walk: named on 10 of 10.
   int held = 0;
   int walks = 0;
   int extra = 0;
@@ -1314,10 +1316,11 @@ TEST(AnalyzeSynthetic, NsIntervalBesideTheOutputFilterHoldsIt) {
 // where every parameter is determined. The walk: K inside on at least 7 of the 10 where it is
 // named, and where it is not (a walk beside no GM the ADEV shows is the first-order model's GM
 // slower than the record resolves, slow_gm_for_walk), that GM's Tb interval open above (the
-// walk's Tb, infinity, inside it): at least 7 of 10 in all, 9 here (K inside on 1 of 1 named,
-// the GM on 8). Before, when a rise without a peak was named a walk: K inside on 8 of 9 named,
-// 4 with the ADEV fit's interval alone (its long-tau points count the walk's few increments as
-// independent readings).
+// walk's Tb, infinity, inside it): at least 7 of 10 in all, 8 here (K inside on 5 of 6 named,
+// the GM on 3; with the GM standing in wherever the record did not tell them apart: 9, K on 1
+// of 1 named, the GM on 8). When a rise without a peak was named a walk: K inside on 8 of 9
+// named, 4 with the ADEV fit's interval alone (its long-tau points count the walk's few
+// increments as independent readings).
 TEST(AnalyzeSynthetic, IntervalsHoldTheTrueParameter) {
   for (const char* name : {"quantization", "rate_random_walk"}) {
     SCOPED_TRACE(name);

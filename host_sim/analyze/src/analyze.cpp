@@ -44,6 +44,9 @@ constexpr std::size_t kStepEvents = 64;
 // record lengths: over the record such a GM is the walk (its PSD is the walk's above 1 / (2 pi
 // Tb)), so the walk can beat it only with a GM the ADEV shows beside it.
 constexpr double kSlowGmTbPerRecord = 100.0;
+// A walk the record cannot tell from a slow GM is named where every GM the record allows peaks
+// beyond this fraction of the record (T / 4, 2.5 x the analysis's longest tau T / 10).
+constexpr double kWalkGmPeakPerRecord = 0.25;
 using Adev = OnlineAdev<8, 22>;
 using Points = std::vector<AdevPoint>;
 
@@ -5717,6 +5720,20 @@ class Analysis {
     if (sg.lr_walk > lr_thr) {
       out.notes.push_back("rate_random_walk beside no GM the ADEV shows: " + against + " > " +
                           fmt("%.2f", lr_thr) + ": more than the first-order model holds");
+      return false;
+    }
+    // A record that bounds the GM's Tb from below only, with every GM it allows peaking (at
+    // 1.89 Tb) beyond T / 4: over [Ts, T / 10] each such GM's ADEV stays within 25 % of a +1/2
+    // slope, the walk's (a GM with Tb = inf, inside the set), and the walk is that slope's
+    // one-parameter term (IEEE Std 952). The GM takes the walk's place only where the record
+    // allows a GM that peaks nearer: one that bends inside the analysed taus.
+    if (!std::isfinite(sg.tb_hi_95_s) &&
+        imu::kGmPeakTauFactor * sg.tb_lo_95_s >= kWalkGmPeakPerRecord * t_rec_s) {
+      out.notes.push_back("rate_random_walk beside no GM the ADEV shows: " + against +
+                          " <= " + fmt("%.2f", lr_thr) + ", but the record allows only GMs "
+                          "with Tb " + tb_set_text(sg.tb_lo_95_s, sg.tb_hi_95_s) +
+                          " (95 %), each peaking beyond T/4: over [Ts, T/10] each rises "
+                          "as the walk does, and the walk stays");
       return false;
     }
     // Tb: the block means' own, where the model with it passes (below); else the ADEV's
