@@ -879,21 +879,11 @@ TEST(Codec, EveryKindHasItsOwnIdentifiers) {
 
 namespace {
 
-// A little-endian float32 at `at` of a serialized record.
-float f32_at(const std::uint8_t* b, std::size_t at) {
-  const std::uint32_t u = static_cast<std::uint32_t>(b[at]) |
-                          (static_cast<std::uint32_t>(b[at + 1]) << 8U) |
-                          (static_cast<std::uint32_t>(b[at + 2]) << 16U) |
-                          (static_cast<std::uint32_t>(b[at + 3]) << 24U);
-  float f = 0.0F;
-  std::memcpy(&f, &u, sizeof f);
-  return f;
-}
-
+// A float member of a model record, by its name in codec.hpp and its instance.
 struct Member {
   const char* name;
   std::size_t instance;
-  float value;
+  float* field;
 };
 
 }  // namespace
@@ -906,46 +896,41 @@ TEST(Codec, EveryTermOfTheRegistryTravelsInItsSlot) {
   imu::hal::ModelRecord m{};
   m.version = imu::hal::kModelVersion2;
   m.channel = 2;
-  float next = 1.5F;
-  const auto val = [&next]() { return next += 1.0F; };  // distinct, exact in float
-  m.n = val();
-  m.q = val();
-  m.gm_sb[0] = val();
-  m.gm_tb_s[0] = val();
-  m.gm_sb[1] = val();
-  m.gm_tb_s[1] = val();
-  m.k = val();
-  m.bi = val();
-  m.bi_tau_lo_s = val();
-  m.bi_tau_hi_s = val();
-  m.n_filter_s = val();
-  m.osc_sigma = val();
-  m.osc_f0_hz = val();
-  m.osc_beta_per_s = val();
   imu::hal::ModelSignalsRecord sg{};
   sg.channel = 2;
-  sg.ramp_r = val();
-  sg.sin_a[0] = val();
-  sg.sin_a[1] = val();
-  sg.sin_f0_hz[0] = val();
-  sg.sin_f0_hz[1] = val();
-  sg.memory_s = val();
+  sg.memory_s = 1.5F;
   const std::vector<Member> model = {
-      {"n", 0, m.n},           {"q", 0, m.q},
-      {"gm_sb", 0, m.gm_sb[0]}, {"gm_tb_s", 0, m.gm_tb_s[0]},
-      {"gm_sb", 1, m.gm_sb[1]}, {"gm_tb_s", 1, m.gm_tb_s[1]},
-      {"k", 0, m.k},           {"bi", 0, m.bi},
-      {"bi_tau_lo_s", 0, m.bi_tau_lo_s}, {"bi_tau_hi_s", 0, m.bi_tau_hi_s},
-      {"n_filter_s", 0, m.n_filter_s},   {"osc_sigma", 0, m.osc_sigma},
-      {"osc_f0_hz", 0, m.osc_f0_hz},     {"osc_beta_per_s", 0, m.osc_beta_per_s}};
-  const std::vector<Member> signals = {
-      {"ramp_r", 0, sg.ramp_r},          {"sin_a", 0, sg.sin_a[0]},
-      {"sin_a", 1, sg.sin_a[1]},         {"sin_f0_hz", 0, sg.sin_f0_hz[0]},
-      {"sin_f0_hz", 1, sg.sin_f0_hz[1]}};
+      {"n", 0, &m.n},
+      {"q", 0, &m.q},
+      {"gm_sb", 0, &m.gm_sb[0]},
+      {"gm_tb_s", 0, &m.gm_tb_s[0]},
+      {"gm_sb", 1, &m.gm_sb[1]},
+      {"gm_tb_s", 1, &m.gm_tb_s[1]},
+      {"k", 0, &m.k},
+      {"bi", 0, &m.bi},
+      {"bi_tau_lo_s", 0, &m.bi_tau_lo_s},
+      {"bi_tau_hi_s", 0, &m.bi_tau_hi_s},
+      {"n_filter_s", 0, &m.n_filter_s},
+      {"osc_sigma", 0, &m.osc_sigma},
+      {"osc_f0_hz", 0, &m.osc_f0_hz},
+      {"osc_beta_per_s", 0, &m.osc_beta_per_s}};
+  const std::vector<Member> signals = {{"ramp_r", 0, &sg.ramp_r},
+                                       {"sin_a", 0, &sg.sin_a[0]},
+                                       {"sin_a", 1, &sg.sin_a[1]},
+                                       {"sin_f0_hz", 0, &sg.sin_f0_hz[0]},
+                                       {"sin_f0_hz", 1, &sg.sin_f0_hz[1]}};
+  float next = 2.5F;  // distinct values, exact in float
+  for (const std::vector<Member>* members : {&model, &signals}) {
+    for (const Member& mm : *members) {
+      *mm.field = next;
+      next += 1.0F;
+    }
+  }
   std::uint8_t mb[imu::hal::kModel2Len];
   std::uint8_t sb[imu::hal::kModelSignalsLen];
   imu::hal::serialize(m, mb);
   imu::hal::serialize(sg, sb);
+  constexpr std::size_t kCrcLen = 4;  // crc32c, the record's last bytes
   std::size_t model_slots = 0;
   std::size_t signal_slots = 0;
   std::vector<float> seen;
@@ -964,15 +949,18 @@ TEST(Codec, EveryTermOfTheRegistryTravelsInItsSlot) {
         ASSERT_NE(w.fields[j], nullptr) << t.name;
         const std::size_t at = w.offset[i][j];
         ASSERT_GE(at, 4U) << t.name << " " << w.fields[j];  // after the record's header
-        ASSERT_LE(at + 4U, len - 2U) << t.name << " " << w.fields[j];  // before its CRC
+        ASSERT_LE(at + 4U, len - kCrcLen) << t.name << " " << w.fields[j];  // before its CRC
         const Member* want = nullptr;
         for (const Member& mm : members) {
           want = std::strcmp(mm.name, w.fields[j]) == 0 && mm.instance == i ? &mm : want;
         }
         ASSERT_NE(want, nullptr) << t.name << " names no member " << w.fields[j];
-        EXPECT_EQ(f32_at(bytes, at), want->value) << t.name << " " << w.fields[j] << "[" << i
-                                                  << "] at byte " << at;
-        seen.push_back(want->value);
+        const std::uint32_t u = le32(bytes + at);
+        float got = 0.0F;
+        std::memcpy(&got, &u, sizeof got);
+        EXPECT_EQ(got, *want->field) << t.name << " " << w.fields[j] << "[" << i
+                                     << "] at byte " << at;
+        seen.push_back(*want->field);
         (in_model ? model_slots : signal_slots) += 1;
       }
     }
@@ -982,4 +970,3 @@ TEST(Codec, EveryTermOfTheRegistryTravelsInItsSlot) {
   std::sort(seen.begin(), seen.end());
   EXPECT_EQ(std::adjacent_find(seen.begin(), seen.end()), seen.end());  // each slot once
 }
-
