@@ -5678,6 +5678,69 @@ class Analysis {
     return tf;
   }
 
+  // The one-GM model that takes a walk's place (slow_gm_for_walk): white + one GM and no K,
+  // costing at most cost_thr more than the walk model on the ADEV, and not worse than before
+  // where the walk model was not.
+  [[nodiscard]] static bool slow_gm_passes(const AfterContext& ac, const AfterChoice& walk,
+                                           const AfterChoice& f) {
+    return f.ok && f.p.n_gm == 1 && f.p.gm[0].sb > 0.0 && !(f.p.k > 0.0) &&
+           f.e.cost <= walk.e.cost + ac.cost_thr &&
+           (not_worse(f.e, ac.before) || !not_worse(walk.e, ac.before));
+  }
+
+  // The GM with which slow_gm_for_walk would replace the walk model `walk`, given the block
+  // means' fit sg over a record of t_rec_s (not checked by slow_gm_passes: the caller does).
+  [[nodiscard]] AfterChoice slow_gm_choice(const AfterContext& ac, const AfterChoice& walk,
+                                           const SlowGmFit& sg, double t_rec_s) {
+    // Tb: the block means' own, where the model with it passes (below); else the ADEV's
+    // preferred model (never worse than before first, then the lower cost) over octaves from it
+    // either way inside the block means' 95 % set, up to kSlowGmTbPerRecord T. At each Tb two
+    // models: the ADEV refit with Tb held, and the walk model as it stands with K read as the
+    // GM's drive (Sb = K^2: the same curve where tau << Tb) and its other GMs left out (a
+    // K the block means set, as walk_only_k's, is not the ADEV fit's optimum, and a refit by
+    // the EDF weights can cost more in sum z^2 than the model it replaces).
+    const double tb = sg.fit.model.gm[0].tb_s;
+    const double tb_top = std::min(sg.tb_hi_95_s, kSlowGmTbPerRecord * t_rec_s);
+    std::vector<double> tbs = {tb};
+    for (int i = 1; i < 64 && std::ldexp(tb, -i) >= sg.tb_lo_95_s; ++i) {
+      tbs.push_back(std::ldexp(tb, -i));  // octaves down to the set's lower end
+    }
+    for (int i = 1; i < 64 && std::ldexp(tb, i) <= tb_top; ++i) {
+      tbs.push_back(std::ldexp(tb, i));  // and up to its upper end
+    }
+    const ModelParams& p = walk.p;
+    const std::uint32_t one_gm = (walk.terms & ~(kFitRrw | kFitGm2)) | kFitGm1;
+    AfterChoice ch;
+    for (std::size_t i = 0; i < tbs.size(); ++i) {
+      AfterContext fixed = ac;
+      fixed.gm_tb_fixed_s = tbs[i];
+      AfterChoice read;
+      read.terms = one_gm;
+      read.p = p;
+      read.p.k = 0.0;
+      read.p.n_gm = 1;
+      read.p.gm[0] = GmParam{p.k * p.k, tbs[i]};
+      fill_errors(points_for_model(ac.clean, read.p), read.p, o, ts, tau_max, read.e);
+      read.ok = true;
+      AfterChoice best_here;
+      for (const AfterChoice& f : {fit_after(fixed, one_gm, p, p.sin_a > 0.0), read}) {
+        // (at the block means' own Tb, of those that pass)
+        if (f.ok && f.p.n_gm == 1 && f.p.gm[0].sb > 0.0 &&
+            (i > 0 || slow_gm_passes(ac, walk, f)) && preferred(f, best_here, ac.before)) {
+          best_here = f;
+        }
+      }
+      if (i == 0 && best_here.ok) {  // the block means' own Tb
+        ch = best_here;
+        break;
+      }
+      if (preferred(best_here, ch, ac.before)) {
+        ch = best_here;
+      }
+    }
+    return ch;
+  }
+
   // A walk in the model after beside no GM the ADEV shows (has_visible_gm: the GMs it holds, if
   // any, dominate the model nowhere or peak beyond T/10): the record's only feature beyond the
   // white noise at the long taus is then a rise without a peak, which the first-order model's
@@ -5736,57 +5799,8 @@ class Analysis {
                           "as the walk does, and the walk stays");
       return false;
     }
-    // Tb: the block means' own, where the model with it passes (below); else the ADEV's
-    // preferred model (never worse than before first, then the lower cost) over octaves from it
-    // either way inside the block means' 95 % set, up to kSlowGmTbPerRecord T. At each Tb two
-    // models: the ADEV refit with Tb held, and the walk model as it stands with K read as the
-    // GM's drive (Sb = K^2: the same curve where tau << Tb) and its other GMs left out (a
-    // K the block means set, as walk_only_k's, is not the ADEV fit's optimum, and a refit by
-    // the EDF weights can cost more in sum z^2 than the model it replaces).
-    const double tb = sg.fit.model.gm[0].tb_s;
-    const double tb_top = std::min(sg.tb_hi_95_s, kSlowGmTbPerRecord * t_rec_s);
-    std::vector<double> tbs = {tb};
-    for (int i = 1; i < 64 && std::ldexp(tb, -i) >= sg.tb_lo_95_s; ++i) {
-      tbs.push_back(std::ldexp(tb, -i));  // octaves down to the set's lower end
-    }
-    for (int i = 1; i < 64 && std::ldexp(tb, i) <= tb_top; ++i) {
-      tbs.push_back(std::ldexp(tb, i));  // and up to its upper end
-    }
-    const std::uint32_t one_gm = (choice.terms & ~(kFitRrw | kFitGm2)) | kFitGm1;
-    const auto passes = [&](const AfterChoice& f) {
-      return f.ok && f.p.n_gm == 1 && f.p.gm[0].sb > 0.0 && !(f.p.k > 0.0) &&
-             f.e.cost <= choice.e.cost + ac.cost_thr &&
-             (not_worse(f.e, ac.before) || !not_worse(choice.e, ac.before));
-    };
-    AfterChoice ch;
-    for (std::size_t i = 0; i < tbs.size(); ++i) {
-      AfterContext fixed = ac;
-      fixed.gm_tb_fixed_s = tbs[i];
-      AfterChoice read;
-      read.terms = one_gm;
-      read.p = p;
-      read.p.k = 0.0;
-      read.p.n_gm = 1;
-      read.p.gm[0] = GmParam{p.k * p.k, tbs[i]};
-      fill_errors(points_for_model(ac.clean, read.p), read.p, o, ts, tau_max, read.e);
-      read.ok = true;
-      AfterChoice best_here;
-      for (const AfterChoice& f : {fit_after(fixed, one_gm, p, p.sin_a > 0.0), read}) {
-        // (at the block means' own Tb, of those that pass)
-        if (f.ok && f.p.n_gm == 1 && f.p.gm[0].sb > 0.0 && (i > 0 || passes(f)) &&
-            preferred(f, best_here, ac.before)) {
-          best_here = f;
-        }
-      }
-      if (i == 0 && best_here.ok) {  // the block means' own Tb
-        ch = best_here;
-        break;
-      }
-      if (preferred(best_here, ch, ac.before)) {
-        ch = best_here;
-      }
-    }
-    if (!passes(ch)) {
+    const AfterChoice ch = slow_gm_choice(ac, choice, sg, t_rec_s);
+    if (!slow_gm_passes(ac, choice, ch)) {
       out.notes.push_back(
           "rate_random_walk beside no GM the ADEV shows: " + against + " <= " +
           fmt("%.2f", lr_thr) + ", but that GM (Tb " + tb_set_text(sg.tb_lo_95_s, sg.tb_hi_95_s) +
