@@ -16,10 +16,14 @@
 namespace imu::analyze::test {
 
 inline Report analyse_checked(const std::vector<double>& y, const std::string& name,
-                              std::uint64_t seed) {
+                              std::uint64_t seed, double fs_hz = 0.0) {
   Report r;
   std::string err;
-  EXPECT_TRUE(analyze(y, name, Options{}, r, err)) << err;
+  Options o;
+  if (fs_hz > 0.0) {
+    o.fs_hz = fs_hz;
+  }
+  EXPECT_TRUE(analyze(y, name, o, r, err)) << err;
   std::string why;
   EXPECT_TRUE(report_consistent(r, why)) << name << " seed " << seed << ": " << why;
   return r;

@@ -1916,10 +1916,14 @@ const Cand* long_tau_choice(const LongTauInput& in, const std::vector<Cand>& can
 
 // 2 (l(GMs + B) - l(GMs)) on the record's block means: the evidence for bias instability
 // against the base family (test: the base test already run on the same record). B starts from
-// the data's ADEV near T/100 as the flicker floor. 0 when it cannot be computed.
+// the data's ADEV near T/100 as the flicker floor. 0 when it cannot be computed. with_bi, when
+// given, receives the test whose H0 holds the fitted bias instability. means, when given: the
+// block means test was run on (test_rrw_on_means), instead of y's.
 double bias_instability_lr(const std::vector<double>& y, double ts, const ModelParams& base,
                            double tb_max, const std::vector<std::uint64_t>& step_at,
-                           const AdevSet& adev, const RrwLikelihoodTest& test) {
+                           const AdevSet& adev, const RrwLikelihoodTest& test,
+                           RrwLikelihoodTest* with_bi = nullptr,
+                           const std::vector<double>* means = nullptr) {
   const double t_rec = static_cast<double>(y.size()) * ts;
   double b0 = 0.0;
   for (const auto& pt : adev.by_alpha[2]) {
@@ -1934,8 +1938,15 @@ double bias_instability_lr(const std::vector<double>& y, double ts, const ModelP
   p.bi = b0;
   p.bi_tau_hi_s = 0.1 * t_rec;
   p.bi_tau_lo_s = flicker_tau_lo(ts, p.bi_tau_hi_s, adev.by_alpha[2]);
-  const RrwLikelihoodTest t = test_rrw(y, ts, p, tb_max, false, step_at, kAuxBlocks, false);
-  return t.ok ? std::max(0.0, 2.0 * (t.h0.loglik - test.h0.loglik)) : 0.0;
+  RrwLikelihoodTest t =
+      means != nullptr
+          ? test_rrw_on_means(*means, test.per_block, ts, p, tb_max, step_at, false)
+          : test_rrw(y, ts, p, tb_max, false, step_at, kAuxBlocks, false);
+  const double lr = t.ok ? std::max(0.0, 2.0 * (t.h0.loglik - test.h0.loglik)) : 0.0;
+  if (with_bi != nullptr) {
+    *with_bi = std::move(t);
+  }
+  return lr;
 }
 
 // Keeps the outliers whose after-model innovation also passes the gate (same threshold, the
@@ -4173,22 +4184,38 @@ class Analysis {
   }
   bool step_beats_alternatives(const RrwLikelihoodTest& lt, const ModelParams& b0, double thr,
                                std::size_t margin, StepLikelihood& sl, std::string& why,
-                               bool& unnamed) {
-    const double lr_bi = bias_instability_lr(y, ts, b0, tb_max, step_at, adev_y, lt);
+                               unsigned& unnamed_by) {
+    RrwLikelihoodTest with_bi;
+    const double lr_bi = bias_instability_lr(y, ts, b0, tb_max, step_at, adev_y, lt, &with_bi);
     constexpr double kAicPenalty = 2.0;
     const double lr_alt = std::max(lt.lr, lr_bi) + kAicPenalty;
     const double lr_level = chi2_quantile(1.0 - o.alpha, 1.0);
-    const bool walk_needed = lt.h1.ok && lt.lr > lr_level && lt.lr >= lr_bi;
+    // A rival that made an earlier shift unnamed stays needed: the level reset at that shift
+    // took part of the wander that was its evidence.
+    const bool walk_needed =
+        lt.h1.ok && ((lt.lr > lr_level && lt.lr >= lr_bi) || (shift_rivals & kRivalWalk) != 0U);
+    // Bias instability the record needs on its own is a rival as the walk is: flicker noise's
+    // wander gathers at one place as a walk's does.
+    const bool bi_needed =
+        with_bi.ok && ((lr_bi > lr_level && lr_bi > lt.lr) || (shift_rivals & kRivalBi) != 0U);
+    RrwLikelihoodTest beside_walk = lt;  // the walk in H0
+    beside_walk.h0 = lt.h1;
     if (sl.lr > lr_alt) {
       why = "> a walk's or bias instability's " + fmt("%.1f", lr_alt);
-      unnamed = walk_needed && !step_beside_a_needed_walk(lt, thr, margin, sl, why);
+      if (walk_needed &&
+          !step_beside_needed_rival(beside_walk, "walk", lt.lr, thr, margin, sl, why)) {
+        unnamed_by |= kRivalWalk;
+      }
+      if (bi_needed && !step_beside_needed_rival(with_bi, "bias instability", lr_bi, thr,
+                                                 margin, sl, why)) {
+        unnamed_by |= kRivalBi;
+      }
       return true;
     }
     const std::string at = "a level shift at t = " +
                            fmt("%.1f", static_cast<double>(sl.sample) * ts) +
                            " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but ";
-    RrwLikelihoodTest beside = lt;  // the walk in H0
-    beside.h0 = lt.h1;
+    const RrwLikelihoodTest& beside = beside_walk;
     if (lt.lr >= lr_bi && lt.h1.ok) {
       const StepLikelihood sw = profile_step(beside, margin);
       if (step_stands_beside(sw, sl, thr)) {
@@ -4225,8 +4252,12 @@ class Analysis {
                           fmt("%.1f", lr_at_place) + " > " + fmt("%.2f", lr_level) + ")");
       why = "neither a walk nor bias instability beside it, above";
       if (walk_needed) {  // it does not stand beside the walk (above)
-        unnamed = true;
+        unnamed_by |= kRivalWalk;
         why = "a walk " + fmt("%.1f", lt.lr) + " beside which it is not significant";
+      }
+      if (bi_needed && !step_beside_needed_rival(with_bi, "bias instability", lr_bi, thr, margin,
+                                                 sl, why)) {
+        unnamed_by |= kRivalBi;
       }
       return true;
     }
@@ -4237,7 +4268,8 @@ class Analysis {
     rival_shift = RivalShift{true, sl, lt.block_s,
                              std::string(lt.lr >= lr_bi ? "a walk" : "bias instability") +
                                  " explains the record nearly as well, " +
-                                 fmt("%.1f", std::max(lt.lr, lr_bi))};
+                                 fmt("%.1f", std::max(lt.lr, lr_bi)),
+                             lt.lr >= lr_bi ? kRivalWalk : kRivalBi};
     return false;
   }
 
@@ -4269,25 +4301,25 @@ class Analysis {
     if (!step_stands_beside(sw, rival_shift.sl, step_threshold(lt, sw.positions))) {
       return;
     }
-    UnexplainedRun u = walk_or_step_range(sw, lt.block_s, rival_shift.why);
+    UnexplainedRun u = walk_or_step_range(sw, lt.block_s, rival_shift.why, rival_shift.rivals);
     u.what = u.what.substr(0, u.what.rfind("; the model is fitted without it")) +
              "; the model after holds neither";
     out.unexplained.push_back(u);
     out.notes.push_back("not named: " + u.what);
   }
 
-  // A step sl that beats a walk the record needs on its own (lt.lr above its level): true when
-  // it stands beside the walk (why says so; sl, its estimate against H0, is kept).
-  bool step_beside_a_needed_walk(const RrwLikelihoodTest& lt, double thr, std::size_t margin,
-                                 const StepLikelihood& sl, std::string& why) {
-    RrwLikelihoodTest beside = lt;  // the walk in H0
-    beside.h0 = lt.h1;
+  // A step sl that beats a rival the record needs on its own (a walk or bias instability, its
+  // 2 ln LR lr_rival above its level; beside: the test with the rival in H0): true when it
+  // stands beside the rival (why says so; sl, its estimate against H0, is kept).
+  bool step_beside_needed_rival(const RrwLikelihoodTest& beside, const char* rival,
+                                double lr_rival, double thr, std::size_t margin,
+                                const StepLikelihood& sl, std::string& why) {
     const StepLikelihood sw = profile_step(beside, margin);
     if (step_stands_beside(sw, sl, thr)) {
-      why += "; " + still_significant("walk", sw, thr);
+      why += "; " + still_significant(rival, sw, thr);
       return true;
     }
-    why = "a walk " + fmt("%.1f", lt.lr) + "; beside it the step " +
+    why = std::string("the ") + rival + " " + fmt("%.1f", lr_rival) + "; beside it the step " +
           fmt("%.1f", sw.ok ? sw.lr : 0.0) + " <= " + fmt("%.1f", thr);
     return false;
   }
@@ -4357,7 +4389,7 @@ class Analysis {
   // (step_beats_decay), on the record's likelihood at its block boundary; H0 as in
   // find_steps_by_likelihood. True when the step stands (or cannot be tested).
   bool window_step_beats_decay(std::uint64_t sample) {
-    const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
+    const FitResult b0 = step_search_base();
     if (b0.status != FitStatus::kOk) {
       return true;
     }
@@ -4374,13 +4406,24 @@ class Analysis {
     return step_beats_decay(lt, step_threshold(lt, lt.means.size() - 2 * margin), margin, sl);
   }
 
+  // H0's start for the step search: white + one GM over [Ts, T/10]; where that fit fails (a
+  // record whose quantization bends the short taus), white + quantization + one GM.
+  [[nodiscard]] FitResult step_search_base() const {
+    const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
+    if (b0.status == FitStatus::kOk) {
+      return b0;
+    }
+    return fit_terms(adev_y.by_alpha[2], kFitWhite | kFitQuantization | kFitGm1, ts, tau_max,
+                     tb_max);
+  }
+
   void find_steps_by_likelihood() {
     // ---- bias steps by the record's likelihood: a level shift at the best block boundary
     // (profile over the boundaries) against H0 (white + GMs, tb <= tb_max), taken when it is
     // significant over all the positions tried AND explains the record better than a walk would
     // (a walk also raises the step profile; a step also raises the walk's likelihood).
     while (!shifts_repeat && static_cast<int>(step_at.size()) < o.max_steps) {
-      const FitResult b0 = fit_terms(adev_y.by_alpha[2], kFitWhite | kFitGm1, ts, tau_max, tb_max);
+      const FitResult b0 = step_search_base();
       if (b0.status != FitStatus::kOk) {
         break;
       }
@@ -4406,19 +4449,21 @@ class Analysis {
       // correlation time gave false steps on 2 of 20 controls); level: the ADEV tests' 1 %.
       const double eff_positions = independent_positions(lt, sl.positions);
       const double thr = step_threshold(lt, sl.positions);
-      if (sl.lr <= thr) {
-        break;
-      }
       std::string why;
-      bool unnamed = false;
-      if (!step_beats_alternatives(lt, b0.params, thr, margin, sl, why, unnamed) ||
-          !step_beats_decay(lt, thr, margin, sl)) {
-        break;
+      unsigned unnamed_by = 0;
+      if (!(sl.lr > thr && step_beats_alternatives(lt, b0.params, thr, margin, sl, why, unnamed_by) &&
+            step_beats_decay(lt, thr, margin, sl))) {
+        if (!step_beside_line(lt, b0.params, margin, sl, why)) {
+          break;
+        }
+        unnamed_by = 0;
+        rival_shift = RivalShift{};  // the shift a rival explained is the step beside the line
       }
       step_at.push_back(sl.sample);
-      if (unnamed) {
-        unnamed_shifts.push_back(UnnamedShift{sl, thr, time_ranges.size()});
-        time_ranges.push_back(walk_or_step_range(sl, lt.block_s, why));
+      if (unnamed_by != 0U) {
+        shift_rivals |= unnamed_by;
+        unnamed_shifts.push_back(UnnamedShift{sl, thr, time_ranges.size(), unnamed_by});
+        time_ranges.push_back(walk_or_step_range(sl, lt.block_s, why, unnamed_by));
         out.notes.push_back("not named: " + time_ranges.back().what);
         shift_level(sl.sample, -sl.size);
         refresh_adev();
@@ -4435,6 +4480,62 @@ class Analysis {
     }
   }
 
+  // A ramp and a step together: the step's profile with the record's line fitted beside it in
+  // both hypotheses (profile_step's nuisance). A ramp tilts the plain profile (its best shift
+  // lands mid-ramp, where the line departs most from a level) and a walk explains a line plus
+  // a shift better than either alone. The pair (slope, size, time) is taken when the line is
+  // significant on its own (2 ln LR above the walk test's level), the step beside it over all
+  // positions (thr, the plain search's), together they beat the walk by AIC's 2 for each of
+  // their two parameters more, and neither a walk nor bias instability is needed beside them
+  // (the line removed, the level reset at the step). sl and why then hold the step.
+  bool step_beside_line(const RrwLikelihoodTest& lt, const ModelParams& b0, std::size_t margin,
+                        StepLikelihood& sl, std::string& why) {
+    const double lr_level = chi2_quantile(1.0 - o.alpha, 1.0);
+    const double lr_line = line_lr(lt, false);
+    if (!(lr_line > lr_level)) {
+      return false;
+    }
+    const std::vector<double> line = trend_regressor(lt.means.size(), 1);
+    const StepLikelihood sd = profile_step(lt, margin, kEveryBlock, &line);
+    const double thr = step_threshold(lt, sd.positions);
+    constexpr double kAicTwoMore = 4.0;
+    if (!sd.ok || !std::isfinite(sd.size) || !(sd.lr > thr) ||
+        !(sd.lr + lr_line > lt.lr + kAicTwoMore)) {
+      return false;
+    }
+    for (const std::uint64_t prev : step_at) {
+      if (std::fabs(static_cast<double>(sd.sample) - static_cast<double>(prev)) <=
+          2.0 * static_cast<double>(lt.per_block)) {
+        return false;
+      }
+    }
+    // The block means less the step and the line (both fitted: GLS size, least-squares line).
+    std::vector<double> m = lt.means;
+    for (std::size_t k = sd.sample / lt.per_block; k < m.size(); ++k) {
+      m[k] -= sd.size;
+    }
+    remove_mean_and_line(m, true);
+    const RrwLikelihoodTest lw = test_rrw_on_means(m, lt.per_block, ts, b0, tb_max, step_at);
+    if (!lw.ok) {
+      return false;
+    }
+    const double lr_bi =
+        bias_instability_lr(y, ts, b0, tb_max, step_at, adev_y, lw, nullptr, &m);
+    if (std::max(lw.lr, lr_bi) > lr_level) {
+      return false;
+    }
+    out.notes.push_back("a level shift at t = " +
+                        fmt("%.1f", static_cast<double>(sd.sample) * ts) +
+                        " s beside the record's line: 2 ln LR = " + fmt("%.1f", sd.lr) + " > " +
+                        fmt("%.1f", thr) + ", with the line's " + fmt("%.1f", lr_line) +
+                        " above a walk's " + fmt("%.1f", lt.lr) + " + 4; beside both no walk (" +
+                        fmt("%.1f", lw.lr) + ") or bias instability (" + fmt("%.1f", lr_bi) +
+                        ") <= " + fmt("%.2f", lr_level));
+    sl = sd;
+    why = "beside the record's line, above";
+    return true;
+  }
+
   // The bias step of a profile's best shift sl that passed the threshold thr.
   [[nodiscard]] Effect step_effect(const StepLikelihood& sl, double thr) const {
     Effect e;
@@ -4448,45 +4549,52 @@ class Analysis {
     return e;
   }
 
-  // The walk that made a shift unnamed was tested against H0 = white + GMs before the model's
-  // other terms were found (a sinusoid or ramp the search takes later raises both the walk's
-  // 2 ln LR and the noise the step is measured against). With the model as it ends (without a
-  // walk), on the record with the shift put back: when it needs no walk (2 ln LR <= the walk
-  // test's level), or the shift stands beside the walk (as in step_beats_alternatives, with the
-  // final model's terms in both hypotheses), it is a step and is named; its time range leaves
-  // `unexplained`. (A model that holds a walk keeps the range.)
+  // The rival that made a shift unnamed (a walk, bias instability) was tested against H0 =
+  // white + GMs before the model's other terms were found (a sinusoid or ramp the search takes
+  // later raises both the rival's 2 ln LR and the noise the step is measured against). With the
+  // model as it ends (without that rival), on the record with the shift put back: when it needs
+  // no such rival (2 ln LR <= the walk test's level), or the shift stands beside it (as in
+  // step_beats_alternatives, with the final model's terms in both hypotheses), it is a step and
+  // is named; its time range leaves `unexplained`. (A model that holds the rival keeps the
+  // range.)
   void settle_unnamed_shifts() {
-    if ((terms & kFitRrw) != 0U) {
-      return;
-    }
     for (auto it = unnamed_shifts.rbegin(); it != unnamed_shifts.rend(); ++it) {
       const StepLikelihood& sl = it->sl;
-      std::vector<double> with_shift = fit_record();
-      for (std::size_t i = sl.sample; i < with_shift.size(); ++i) {
-        with_shift[i] += sl.size;
+      const bool walk = (it->rivals & kRivalWalk) != 0U;
+      const bool bi = (it->rivals & kRivalBi) != 0U;
+      if ((walk && (terms & kFitRrw) != 0U) || (bi && (terms & kFitFlicker) != 0U)) {
+        continue;
       }
-      std::vector<std::uint64_t> others;
-      std::copy_if(step_at.begin(), step_at.end(), std::back_inserter(others),
-                   [&sl](std::uint64_t at) { return at != sl.sample; });
+      // Every shift still unnamed is put back: each held part of the rival's evidence.
+      std::vector<double> with_shift = fit_record();
+      std::vector<std::uint64_t> others = step_at;
+      for (const UnnamedShift& u : unnamed_shifts) {
+        if (u.named) {
+          continue;
+        }
+        for (std::size_t i = u.sl.sample; i < with_shift.size(); ++i) {
+          with_shift[i] += u.sl.size;
+        }
+        others.erase(std::remove(others.begin(), others.end(), u.sl.sample), others.end());
+      }
       RrwLikelihoodTest lt = test_rrw(with_shift, ts, cur_p, tb_max, (terms & kFitRamp) != 0U,
                                       others, kAuxBlocks);
       if (!lt.ok) {
         continue;
       }
       std::string why;
-      if (!(lt.lr > lr_thr)) {
-        why = "the record with it needs no walk (2 ln LR = " + fmt("%.1f", lt.lr) + " <= " +
-              fmt("%.2f", lr_thr) + ")";
-      } else {
-        lt.h0 = lt.h1;
-        const std::size_t margin = step_margin(lt);
-        const StepLikelihood sw = profile_step(lt, margin);
-        const double thr = step_threshold(lt, sw.positions);
-        if (!step_stands_beside(sw, sl, thr)) {
+      if (walk && !settled_beside(lt, "walk", lt.lr, sl, why)) {
+        continue;
+      }
+      if (bi) {
+        RrwLikelihoodTest with_bi;
+        const double lr_bi =
+            bias_instability_lr(with_shift, ts, cur_p, tb_max, others, adev_y, lt, &with_bi);
+        if (!with_bi.ok || !settled_beside(with_bi, "bias instability", lr_bi, sl, why)) {
           continue;
         }
-        why = still_significant("walk", sw, thr);
       }
+      it->named = true;
       out.effects.push_back(step_effect(sl, it->thr));
       time_ranges.erase(time_ranges.begin() + static_cast<std::ptrdiff_t>(it->range));
       out.notes.push_back("bias step at t = " + fmt("%.1f", out.effects.back().time_s) +
@@ -4494,10 +4602,31 @@ class Analysis {
     }
   }
 
+  // settle_unnamed_shifts for one rival (lr its 2 ln LR on the record with the shift, rival.h1
+  // the model with it): true when the record needs no such rival or the shift stands beside it;
+  // why gains the reason.
+  bool settled_beside(RrwLikelihoodTest rival, const char* name, double lr,
+                      const StepLikelihood& sl, std::string& why) const {
+    if (!(lr > lr_thr)) {
+      why += std::string(why.empty() ? "" : "; ") + "the record with it needs no " + name +
+             " (2 ln LR = " + fmt("%.1f", lr) + " <= " + fmt("%.2f", lr_thr) + ")";
+      return true;
+    }
+    rival.h0 = rival.h1;
+    const StepLikelihood sw = profile_step(rival, step_margin(rival));
+    const double thr = step_threshold(rival, sw.positions);
+    if (!step_stands_beside(sw, sl, thr)) {
+      return false;
+    }
+    why += std::string(why.empty() ? "" : "; ") + still_significant(name, sw, thr);
+    return true;
+  }
+
   // A level shift no walk rules in or out (step_beats_alternatives' `unnamed`): an unexplained
   // time range over its 95 % set, from the likelihood test's block up to T/10.
   [[nodiscard]] UnexplainedRun walk_or_step_range(const StepLikelihood& sl, double block_s,
-                                                  const std::string& why) const {
+                                                  const std::string& why,
+                                                  unsigned rivals) const {
     UnexplainedRun u;
     u.t_min_s = static_cast<double>(sl.first_sample) * ts;
     u.t_max_s = static_cast<double>(sl.last_sample) * ts;
@@ -4506,8 +4635,12 @@ class Analysis {
     u.max_abs_z = std::sqrt(sl.lr);
     u.what = "a level shift of " + fmt("%.3g", sl.size) + " at t = " +
              fmt("%.1f", static_cast<double>(sl.sample) * ts) + " s (2 ln LR = " +
-             fmt("%.1f", sl.lr) + ", " + why + "): a bias step or a rate random walk's " +
-             "wander, which the record does not tell apart; the model is fitted without it";
+             fmt("%.1f", sl.lr) + ", " + why + "): a bias step or the wander of " +
+             ((rivals & kRivalWalk) != 0U
+                  ? ((rivals & kRivalBi) != 0U ? "a rate random walk or bias instability"
+                                               : "a rate random walk")
+                  : "bias instability") +
+             ", which the record does not tell apart; the model is fitted without it";
     return u;
   }
 
@@ -6311,10 +6444,16 @@ class Analysis {
   bool shifts_repeat = false;                // repeated_shifts: no step is searched
   // Shifts taken out of the record but not named (step_beats_alternatives' `unnamed`): the
   // profile's shift, its threshold, and the index of its range in time_ranges.
+  // The rivals of a level shift (step_beats_alternatives), as bits.
+  static constexpr unsigned kRivalWalk = 1U;
+  static constexpr unsigned kRivalBi = 2U;
+  unsigned shift_rivals = 0;  // the rivals that made a shift so far unnamed
   struct UnnamedShift {
     StepLikelihood sl;
     double thr = 0.0;
     std::size_t range = 0;
+    unsigned rivals = 0;  // beside which it did not stand
+    bool named = false;   // named a step after all (settle_unnamed_shifts)
   };
   std::vector<UnnamedShift> unnamed_shifts;
   // The significant shift that a walk or bias instability explained nearly as well
@@ -6324,6 +6463,7 @@ class Analysis {
     StepLikelihood sl;
     double block_s = 0.0;
     std::string why;
+    unsigned rivals = 0;
   };
   RivalShift rival_shift;
   std::size_t frozen_samples = 0;            // marked missing by mark_frozen_runs

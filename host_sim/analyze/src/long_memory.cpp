@@ -595,8 +595,20 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
   }
   const std::size_t per_block = std::max<std::size_t>(1, y.size() / target_blocks);
   std::vector<double> m = block_means(y, per_block);
-  const double h = static_cast<double>(per_block) * ts_s;
   remove_polynomial(m, detrend ? trend_degree : 0);
+  return test_rrw_on_means(std::move(m), per_block, ts_s, start, tb_max_s, step_samples,
+                           with_walk);
+}
+
+RrwLikelihoodTest test_rrw_on_means(std::vector<double> m, std::size_t per_block, double ts_s,
+                                    const ModelParams& start, double tb_max_s,
+                                    const std::vector<std::uint64_t>& step_samples,
+                                    bool with_walk) {
+  RrwLikelihoodTest out;
+  if (!(ts_s > 0.0) || per_block == 0 || m.size() < 64) {
+    return out;
+  }
+  const double h = static_cast<double>(per_block) * ts_s;
   const double nb = static_cast<double>(m.size());
   // A step inside block b mixes two levels there: the level is reset before b and b + 1.
   std::vector<std::size_t> resets;
@@ -683,14 +695,36 @@ RrwLikelihoodTest test_rrw(const std::vector<double>& y, double ts_s, const Mode
 
 namespace {
 
-// GLS size and lr of a level shift at block b, given the whitened innovations a of the data.
+// v less its least-squares projection on f (Frisch-Waugh-Lovell); false when f is zero.
+bool project_out(const std::vector<double>& f, std::vector<double>& v) {
+  double ff = 0.0;
+  double fv = 0.0;
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    ff += f[k] * f[k];
+    fv += f[k] * v[k];
+  }
+  if (!(ff > 0.0)) {
+    return false;
+  }
+  for (std::size_t k = 0; k < f.size(); ++k) {
+    v[k] -= fv / ff * f[k];
+  }
+  return true;
+}
+
+// GLS size and lr of a level shift at block b, given the whitened innovations a of the data
+// (f, if not empty: a whitened nuisance regressor, already projected out of a).
 bool gls_step(const RrwLikelihoodTest& test, double var, const std::vector<double>& a,
-              std::size_t b, std::vector<double>& u, double& lr, double& size) {
+              const std::vector<double>& f, std::size_t b, std::vector<double>& u, double& lr,
+              double& size) {
   std::fill(u.begin(), u.end(), 0.0);
   std::fill(u.begin() + static_cast<std::ptrdiff_t>(b), u.end(), 1.0);
   std::vector<double> e;
   if (!std::isfinite(loglik_impl(u, var, test.block_s, test.h0.model, -1.0, test.resets, &e))) {
     return false;
+  }
+  if (!f.empty()) {
+    project_out(f, e);
   }
   double ae = 0.0;
   double ee = 0.0;
@@ -709,17 +743,26 @@ bool gls_step(const RrwLikelihoodTest& test, double var, const std::vector<doubl
 }  // namespace
 
 StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_blocks,
-                            std::size_t only_block) {
+                            std::size_t only_block, const std::vector<double>* nuisance) {
   StepLikelihood out;
   const std::vector<double>& m = test.means;
   const std::size_t nb = m.size();
-  if (!test.ok || !test.h0.ok || nb < 2 * margin_blocks + 4) {
+  if (!test.ok || !test.h0.ok || nb < 2 * margin_blocks + 4 ||
+      (nuisance != nullptr && nuisance->size() != nb)) {
     return out;
   }
   const double var = sample_variance(m);
   std::vector<double> a;
   if (!std::isfinite(loglik_impl(m, var, test.block_s, test.h0.model, -1.0, test.resets, &a))) {
     return out;
+  }
+  std::vector<double> f;  // the whitened nuisance, fitted beside the step in both hypotheses
+  if (nuisance != nullptr) {
+    if (!std::isfinite(
+            loglik_impl(*nuisance, var, test.block_s, test.h0.model, -1.0, test.resets, &f)) ||
+        !project_out(f, a)) {
+      return out;
+    }
   }
   std::vector<double> u(nb, 0.0);
   std::vector<double> lr_at(nb, std::numeric_limits<double>::quiet_NaN());
@@ -731,7 +774,7 @@ StepLikelihood profile_step(const RrwLikelihoodTest& test, std::size_t margin_bl
     }
     double lr = 0.0;
     double size = 0.0;
-    if (!gls_step(test, var, a, b, u, lr, size)) {
+    if (!gls_step(test, var, a, f, b, u, lr, size)) {
       continue;
     }
     ++out.positions;

@@ -170,10 +170,13 @@ struct StepLikelihood {
                                   const std::vector<double>* nuisance = nullptr);
 
 /// only_block != kEveryBlock: that boundary alone (the GLS size of a step found elsewhere).
+/// nuisance (if given, one value per block): a regressor fitted beside the step in both
+/// hypotheses (e.g. a ramp's line: the step's partial 2 ln LR).
 inline constexpr std::size_t kEveryBlock = static_cast<std::size_t>(-1);
 [[nodiscard]] StepLikelihood profile_step(const RrwLikelihoodTest& test,
                                           std::size_t margin_blocks,
-                                          std::size_t only_block = kEveryBlock);
+                                          std::size_t only_block = kEveryBlock,
+                                          const std::vector<double>* nuisance = nullptr);
 
 /// Block means the walk's test uses by default (test_rrw's target_blocks).
 inline constexpr std::size_t kRrwTestBlocks = 2048;
@@ -192,6 +195,14 @@ inline constexpr std::size_t kRrwTestBlocks = 2048;
                                          const std::vector<std::uint64_t>& step_samples = {},
                                          std::size_t target_blocks = kRrwTestBlocks,
                                          bool with_walk = true, std::size_t trend_degree = 1);
+
+/// test_rrw on block means already formed (m: per_block samples each, their mean and any trend
+/// removed), e.g. the test's own means less a fitted regressor.
+[[nodiscard]] RrwLikelihoodTest test_rrw_on_means(std::vector<double> m, std::size_t per_block,
+                                                  double ts_s, const ModelParams& start,
+                                                  double tb_max_s,
+                                                  const std::vector<std::uint64_t>& step_samples,
+                                                  bool with_walk = true);
 
 }  // namespace imu::analyze
 
