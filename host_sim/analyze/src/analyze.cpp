@@ -5168,15 +5168,18 @@ class Analysis {
     if (ramp == nullptr || walk == nullptr) {
       return;
     }
-    const RrwLikelihoodTest detrended = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at);
+    const std::vector<double> rec = fit_record();
+    RrwLikelihoodTest detrended = test_rrw(rec, ts, cur_p, tb_max, true, step_at);
+    RrwLikelihoodTest plain = test_rrw(rec, ts, cur_p, tb_max, false, step_at);
+    const std::string decay = without_decay(detrended, plain);
     const double lr_walk = detrended.ok ? detrended.lr : 0.0;
-    const double lr_line =
-        line_lr(test_rrw(fit_record(), ts, cur_p, tb_max, false, step_at), true);
+    const double lr_line = line_lr(plain, true);
     const bool need_walk = lr_walk > lr_thr;
     const bool need_line = lr_line > lr_thr;
-    const std::string why = "(the record's likelihood: the walk beside the line 2 ln LR = " +
-                            fmt("%.1f", lr_walk) + ", the line beside the walk " +
-                            fmt("%.1f", lr_line) + ", level " + fmt("%.2f", lr_thr) + ")";
+    const std::string why = "(the record's likelihood" + decay +
+                            ": the walk beside the line 2 ln LR = " + fmt("%.1f", lr_walk) +
+                            ", the line beside the walk " + fmt("%.1f", lr_line) + ", level " +
+                            fmt("%.2f", lr_thr) + ")";
     if (need_walk == need_line) {
       if (!need_walk) {
         out.notes.push_back(best->type + " kept by the ADEV: the record cannot tell a ramp from "
@@ -5190,6 +5193,52 @@ class Analysis {
     }
     ruled_out.emplace_back(need_walk ? "ramp" : "rate_random_walk");
     best = keep;
+  }
+
+  // A level decaying from the start (a warm-up transient) bends the record as a walk's wander
+  // does, and a line does not: beside a ramp the walk reads the decay. Where the decay is
+  // significant beside the walk (on the detrended record, its 2 ln LR with the walk's model in
+  // H0 above the transient check's level), it is fitted out of both tests' block means (its
+  // GLS size beside the walk, and beside the walk and the line on the plain record) and both are
+  // refitted. Returns the note's clause ("" where nothing was removed).
+  std::string without_decay(RrwLikelihoodTest& detrended, RrwLikelihoodTest& plain) const {
+    if (!detrended.ok || !plain.ok || !detrended.h1.ok || !plain.h1.ok) {
+      return "";
+    }
+    RrwLikelihoodTest walk_d = detrended;
+    walk_d.h0 = detrended.h1;
+    const TransientLr tr = warmup_transient_lr(walk_d, true);
+    if (!(tr.lr > transient_threshold())) {
+      return "";
+    }
+    const std::size_t nb = detrended.means.size();
+    std::vector<double> md = detrended.means;
+    const std::vector<double> ud = decay_regressor(nb, detrended.block_s, tr.tau_s, true);
+    for (std::size_t k = 0; k < nb; ++k) {
+      md[k] -= tr.size * ud[k];
+    }
+    RrwLikelihoodTest walk_p = plain;
+    walk_p.h0 = plain.h1;
+    const std::vector<double> line = trend_regressor(plain.means.size(), 1);
+    const std::vector<double> up =
+        decay_regressor(plain.means.size(), plain.block_s, tr.tau_s, false);
+    double size_p = 0.0;
+    (void)regressor_lr(walk_p, up, &size_p, &line);
+    std::vector<double> mp = plain.means;
+    for (std::size_t k = 0; k < mp.size(); ++k) {
+      mp[k] -= size_p * up[k];
+    }
+    RrwLikelihoodTest d = test_rrw_on_means(std::move(md), detrended.per_block, ts, cur_p,
+                                            tb_max, step_at);
+    RrwLikelihoodTest p = test_rrw_on_means(std::move(mp), plain.per_block, ts, cur_p, tb_max,
+                                            step_at);
+    if (!d.ok || !p.ok) {
+      return "";
+    }
+    detrended = std::move(d);
+    plain = std::move(p);
+    return " less a level decaying from the start (time constant " + fmt("%.3g", tr.tau_s) +
+           " s, 2 ln LR " + fmt("%.1f", tr.lr) + " beside the walk)";
   }
 
   // A walk and bias instability both raise the ADEV at the long taus: over a record that
@@ -5336,8 +5385,8 @@ class Analysis {
   // its steps as level resets), the best of the tau grid above chi-square(1) at
   // alpha / kTransientTaus. A walk or a line the model does not hold bends the record's slow
   // part too: the decay must explain the record better than either (by 2, its tau being a
-  // parameter more), else it is not reported. Not a term: the model is unchanged, [0, 3 tau] is
-  // unexplained. walk_test: rrw_by_likelihood's test of the model as it stands, reused if ok.
+  // parameter more), or be significant beside the walk (with the walk in H0), else it is not
+  // reported. Not a term: the model is unchanged, [0, 3 tau] is unexplained. walk_test: rrw_by_likelihood's test of the model as it stands, reused if ok.
   void warmup_transient_check(const RrwLikelihoodTest& walk_test) {
     for (const auto& u : time_ranges) {
       if (u.t_min_s <= 0.0) {
@@ -5366,6 +5415,22 @@ class Analysis {
     const UnexplainedRun u = transient_range(tr, lt.block_s,
                                              walk ? "the model's likelihood with a rate random walk"
                                                   : "the model's own likelihood");
+    // A decay still significant with the walk in H0 is no walk's wander, whichever explains
+    // the record better on its own.
+    RrwLikelihoodTest beside_walk = lt;
+    beside_walk.h0 = lt.h1;
+    const TransientLr tw = walk_lr_here >= lr_line && lt.h1.ok
+                               ? warmup_transient_lr(beside_walk, ramp)
+                               : TransientLr{};
+    if (!(tr.lr > alt_lr + kAicPenalty) && tw.lr > thr) {
+      time_ranges.push_back(u);
+      out.notes.push_back("warm-up transient: " + u.what + " > " + fmt("%.2f", thr) +
+                          "; a walk the model does not hold explains the record nearly as well (" +
+                          fmt("%.1f", alt_lr) + ") but beside that walk the decay is still "
+                          "significant (2 ln LR " + fmt("%.1f", tw.lr) +
+                          "): reported as unexplained");
+      return;
+    }
     if (!(tr.lr > alt_lr + kAicPenalty)) {
       out.notes.push_back("not reported: " + u.what + " (> " + fmt("%.2f", thr) + "), but " +
                           (walk_lr_here >= lr_line ? "a walk" : "a line") +
@@ -5485,7 +5550,9 @@ class Analysis {
   // raises the block means' likelihood of a walk as much as a walk does. Not needed beside the
   // line: the walk is withdrawn (or not added) and, when the line is needed beside the walk (a
   // walk's increments have no mean; flicker's long excursions look like a line against a model
-  // without either), the ramp is taken in its place. True when the walk is out of the model.
+  // without either), the ramp is taken in its place. A decay from the start that is
+  // significant beside the walk is fitted out of both first (without_decay). True when the walk
+  // is out of the model.
   bool walk_is_a_line(const RrwLikelihoodTest& lt) {
     if ((terms & kFitRamp) != 0U) {
       return false;  // lt is already the walk beside the line
@@ -5494,12 +5561,15 @@ class Analysis {
     // holds the whole rise leaves it near 0. (A walk over a few of its time scales is also
     // partly a line: the test's level alpha would lose walks the record does hold.)
     constexpr double kAicOneParameter = 2.0;
-    const RrwLikelihoodTest detr = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at);
+    RrwLikelihoodTest detr = test_rrw(fit_record(), ts, cur_p, tb_max, true, step_at);
+    RrwLikelihoodTest plain = lt;
+    const std::string decay = without_decay(detr, plain);  // a warm-up the walk would read
     if (!detr.ok || detr.lr > kAicOneParameter) {
       return false;
     }
-    const double lr_line = line_lr(lt, true);
-    const std::string why = "the walk beside a line 2 ln LR = " + fmt("%.1f", detr.lr) +
+    const double lr_line = line_lr(plain, true);
+    const std::string why = "the walk beside a line" + decay + " 2 ln LR = " +
+                            fmt("%.1f", detr.lr) +
                             " <= 2 (AIC's price of its parameter; the line beside the walk " +
                             fmt("%.1f", lr_line) + ")";
     if ((terms & kFitRrw) != 0U) {
