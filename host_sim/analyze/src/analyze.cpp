@@ -4451,8 +4451,10 @@ class Analysis {
       const double thr = step_threshold(lt, sl.positions);
       std::string why;
       unsigned unnamed_by = 0;
-      if (!(sl.lr > thr && step_beats_alternatives(lt, b0.params, thr, margin, sl, why, unnamed_by) &&
-            step_beats_decay(lt, thr, margin, sl))) {
+      const bool plain_step =
+          sl.lr > thr && step_beats_alternatives(lt, b0.params, thr, margin, sl, why, unnamed_by) &&
+          step_beats_decay(lt, thr, margin, sl);
+      if (!plain_step) {
         if (!step_beside_line(lt, b0.params, margin, sl, why)) {
           break;
         }
@@ -4487,7 +4489,7 @@ class Analysis {
   // significant on its own (2 ln LR above the walk test's level), the step beside it over all
   // positions (thr, the plain search's), together they beat the walk by AIC's 2 for each of
   // their two parameters more, and neither a walk nor bias instability is needed beside them
-  // (the line removed, the level reset at the step). sl and why then hold the step.
+  // (on the block means less the line and the step). sl and why then hold the step.
   bool step_beside_line(const RrwLikelihoodTest& lt, const ModelParams& b0, std::size_t margin,
                         StepLikelihood& sl, std::string& why) {
     const double lr_level = chi2_quantile(1.0 - o.alpha, 1.0);
