@@ -4215,9 +4215,8 @@ class Analysis {
     const std::string at = "a level shift at t = " +
                            fmt("%.1f", static_cast<double>(sl.sample) * ts) +
                            " s is significant (2 ln LR = " + fmt("%.1f", sl.lr) + ") but ";
-    const RrwLikelihoodTest& beside = beside_walk;
     if (lt.lr >= lr_bi && lt.h1.ok) {
-      const StepLikelihood sw = profile_step(beside, margin);
+      const StepLikelihood sw = profile_step(beside_walk, margin);
       if (step_stands_beside(sw, sl, thr)) {
         out.notes.push_back(at + "a walk explains the record better (" + fmt("%.1f", lt.lr) +
                             "); " + still_significant("walk", sw, thr));
@@ -4241,8 +4240,9 @@ class Analysis {
         std::max(ls.lr, bias_instability_lr(y, ts, b0, tb_max, with_step, adev_y, ls));
     const double no_sign = chi2_quantile(0.90, 1.0);
     const double lr_at_place =
-        lt.h1.ok ? profile_step(beside, 1, static_cast<std::size_t>(sl.sample / lt.per_block)).lr
-                 : 0.0;
+        lt.h1.ok
+            ? profile_step(beside_walk, 1, static_cast<std::size_t>(sl.sample / lt.per_block)).lr
+            : 0.0;
     if (ls.ok && lr_rival_beside <= no_sign && lr_at_place > lr_level) {
       out.notes.push_back(at + "a walk or bias instability explains the record as well (" +
                           fmt("%.1f", std::max(lt.lr, lr_bi)) + ") only without the step: "

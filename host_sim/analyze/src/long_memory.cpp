@@ -832,19 +832,8 @@ double regressor_lr(const RrwLikelihoodTest& test, const std::vector<double>& u,
             loglik_impl(*nuisance, var, test.block_s, test.h0.model, -1.0, test.resets, &f))) {
       return 0.0;
     }
-    double ff = 0.0;
-    double af = 0.0;
-    double ef = 0.0;
-    for (std::size_t k = 0; k < f.size(); ++k) {
-      ff += f[k] * f[k];
-      af += a[k] * f[k];
-      ef += e[k] * f[k];
-    }
-    if (ff > 0.0) {
-      for (std::size_t k = 0; k < f.size(); ++k) {
-        a[k] -= af / ff * f[k];
-        e[k] -= ef / ff * f[k];
-      }
+    if (project_out(f, a)) {
+      project_out(f, e);
     }
   }
   double ae = 0.0;
