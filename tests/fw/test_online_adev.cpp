@@ -593,6 +593,51 @@ TEST(ExactSquareSum, PortableSquareMatchesInt128) {
   }
 }
 
+// The 32-bit-core form of the 128-bit accumulation (the host build uses unsigned __int128):
+// the same sums and return values, around the 2^31 boundary of its fast path, with carries into
+// the high word and at the saturation limit.
+TEST(ExactSquareSum, PortableAddMatchesInt128Add) {
+  std::mt19937_64 rng(59);
+  const std::int64_t two31 = std::int64_t{1} << 31U;
+  const std::int64_t edges[] = {two31 - 1, two31, -two31, -two31 - 1, 0, -1,
+                                std::numeric_limits<std::int64_t>::min(),
+                                std::numeric_limits<std::int64_t>::max()};
+  for (int i = 0; i < 300000; ++i) {
+    std::int64_t d = 0;
+    if (i < 64) {
+      d = edges[static_cast<std::size_t>(i) % 8U];
+    } else {
+      const auto bits = static_cast<unsigned>(rng() % 64U);
+      d = static_cast<std::int64_t>(rng() >> (63U - bits)) * ((rng() & 1U) != 0U ? -1 : 1);
+    }
+    // Start below a carry into hi, or below the limit, or anywhere.
+    const std::uint64_t starts_lo[] = {~0ULL - (rng() % 1000U), rng(), ~0ULL - (rng() % 1000U)};
+    const std::uint64_t starts_hi[] = {rng() % 4U, rng(), ~0ULL};
+    const std::size_t s = static_cast<std::size_t>(i) % 3U;
+    std::uint64_t lo_a = starts_lo[s];
+    std::uint64_t hi_a = starts_hi[s];
+    std::uint64_t lo_b = lo_a;
+    std::uint64_t hi_b = hi_a;
+    const bool ok_a = imu::add_square_u128(lo_a, hi_a, d);
+    const bool ok_b = imu::add_square_u128_portable(lo_b, hi_b, d);
+    ASSERT_EQ(ok_a, ok_b) << "i " << i << " d " << d;
+    ASSERT_EQ(lo_a, lo_b) << "i " << i << " d " << d;
+    ASSERT_EQ(hi_a, hi_b) << "i " << i << " d " << d;
+  }
+  // A carry that fits, and one that does not.
+  std::uint64_t lo = ~0ULL;
+  std::uint64_t hi = 5;
+  ASSERT_TRUE(imu::add_square_u128_portable(lo, hi, 1));
+  EXPECT_EQ(lo, 0U);
+  EXPECT_EQ(hi, 6U);
+  lo = ~0ULL - 4U;
+  hi = ~0ULL;
+  ASSERT_TRUE(imu::add_square_u128_portable(lo, hi, 2));  // 2^128 - 1
+  EXPECT_FALSE(imu::add_square_u128_portable(lo, hi, 1));
+  EXPECT_EQ(lo, ~0ULL);
+  EXPECT_EQ(hi, ~0ULL);
+}
+
 TEST(ExactSquareSum, SaturatesAt2To128) {
   std::uint64_t lo = 0;
   std::uint64_t hi = 0;

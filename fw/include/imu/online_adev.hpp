@@ -115,11 +115,8 @@ inline void square_u64(std::uint64_t u, std::uint64_t& sq_lo, std::uint64_t& sq_
 #endif
 }
 
-/// (hi, lo) += d^2 as one 128-bit unsigned integer, exactly: no floating point, the same bits
-/// on every target. Saturates at 2^128 - 1 and returns false when the sum would exceed it.
-inline bool add_square_u128(std::uint64_t& lo, std::uint64_t& hi, std::int64_t d) {
-  const std::uint64_t u =
-      d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
+/// (hi, lo) += u^2, u <= 2^63, the general case of add_square_u128 (any u; saturating).
+inline bool add_square_u128_wide(std::uint64_t& lo, std::uint64_t& hi, std::uint64_t u) {
   std::uint64_t sq_lo = 0;
   std::uint64_t sq_hi = 0;
   square_u64(u, sq_lo, sq_hi);
@@ -135,6 +132,44 @@ inline bool add_square_u128(std::uint64_t& lo, std::uint64_t& hi, std::int64_t d
     return false;
   }
   return true;
+}
+
+/// add_square_u128 in the form for cores without a 64 x 64 -> 128-bit multiply (the
+/// Cortex-M4): the usual term, |d| < 2^31, is one signed 32 x 32 -> 64-bit multiply(-accumulate)
+/// and a 64-bit add, the high word touched only on a carry; larger terms take the wide path.
+/// The same sums and return value as the other form (test_online_adev compares them).
+[[gnu::always_inline]] inline bool add_square_u128_portable(std::uint64_t& lo, std::uint64_t& hi,
+                                                            std::int64_t d) {
+  const auto d32 = static_cast<std::int32_t>(d);
+  if (d32 != d) {
+    const std::uint64_t u =
+        d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
+    return add_square_u128_wide(lo, hi, u);
+  }
+  const auto sq = static_cast<std::uint64_t>(static_cast<std::int64_t>(d32) * d32);  // < 2^62
+  lo += sq;
+  if (lo >= sq || ++hi != 0) {  // no carry, or the carry fits in the high word
+    return true;
+  }
+  hi = ~std::uint64_t{0};  // hi wrapped: the sum passed 2^128 - 1
+  lo = ~std::uint64_t{0};
+  return false;
+}
+
+/// (hi, lo) += d^2 as one 128-bit unsigned integer, exactly: no floating point, the same bits
+/// on every target. Saturates at 2^128 - 1 and returns false when the sum would exceed it.
+/// Where the compiler has unsigned __int128 (64-bit hosts) one branch-free 128-bit multiply;
+/// elsewhere add_square_u128_portable (a branch on the term's size, cheaper on a 32-bit core,
+/// dearer on a host fed terms of random size).
+[[gnu::always_inline]] inline bool add_square_u128(std::uint64_t& lo, std::uint64_t& hi,
+                                                   std::int64_t d) {
+#if defined(__SIZEOF_INT128__)
+  const std::uint64_t u =
+      d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
+  return add_square_u128_wide(lo, hi, u);
+#else
+  return add_square_u128_portable(lo, hi, d);
+#endif
 }
 
 /// The 128-bit unsigned (hi, lo) as the nearest double (ties to even): the top 64 significant
@@ -310,19 +345,20 @@ class OnlineAdev {
   template <std::size_t kTaus, std::size_t kMLo>
   void push_point(Level<kTaus, kMLo>& lv, std::uint64_t p, std::uint64_t x) {
     // Taus are in increasing m, so the ones with their three points in the current segment
-    // (2m <= points before this one) are a prefix: stop at the first that is not.
-    for (std::size_t i = 0; i < kTaus; ++i) {
+    // (2m <= points before this one, m <= seg_points / 2) are the first `ready`.
+    const std::uint64_t half = lv.seg_points / 2;
+    const std::size_t ready =
+        half <= kMLo ? 0 : (half - kMLo >= kTaus ? kTaus : static_cast<std::size_t>(half - kMLo));
+    const auto slot = static_cast<std::size_t>(p % kRing);  // 2m <= kRing: no index wraps below 0
+    for (std::size_t i = 0; i < ready; ++i) {
       const std::size_t m = kMLo + 1 + i;
-      if (lv.seg_points < 2 * m) {
-        break;
-      }
-      const std::uint64_t a = lv.ring[(p - m) % kRing];
-      const std::uint64_t b = lv.ring[(p - 2 * m) % kRing];
+      const std::uint64_t a = lv.ring[(slot + kRing - m) % kRing];
+      const std::uint64_t b = lv.ring[(slot + kRing - 2 * m) % kRing];
       if (!add_square_u128(lv.sum_lo[i], lv.sum_hi[i], static_cast<std::int64_t>(x - 2 * a + b))) {
         overflowed_ = true;
       }
     }
-    lv.ring[p % kRing] = x;
+    lv.ring[slot] = x;
     ++lv.seg_points;
   }
 
@@ -347,7 +383,10 @@ class OnlineAdev {
     if (n == 0) {
       return;
     }
-    const auto tz = static_cast<std::size_t>(__builtin_ctzll(n));
+    // Trailing zeros of n in 32-bit halves (a 64-bit count is a library call on 32-bit cores).
+    const auto n_lo = static_cast<std::uint32_t>(n);
+    const auto tz = static_cast<std::size_t>(
+        n_lo != 0 ? __builtin_ctz(n_lo) : 32 + __builtin_ctz(static_cast<std::uint32_t>(n >> 32U)));
     const std::size_t top = tz < L ? tz : L;
     for (std::size_t k = 1; k <= top; ++k) {
       push_point(upper_[k - 1], n >> k, x_);
