@@ -292,11 +292,47 @@ class AveragedKf {
   // Rows of 1-state blocks (the first n1_): each entry needs only its own old value. Rows of a
   // 2-state block (a, a + 1): both rows are computed from their old values before either is
   // stored (the entry (a, a + 1) is in row a + 1).
+  // u_[i] is first written by row i (rows in order; earlier rows only touch u_[j], j < i), so
+  // nothing zeroes it first.
+  // Rows of 1-state blocks go in pairs: a column's D, v, c and u are loaded once for both rows
+  // (the same operations in the same order as one row after the other).
   void predict_and_update(const T (&k)[kMaxProcess], const T (&v)[kMaxProcess]) {
-    for (std::size_t i = 0; i < n_; ++i) {
-      u_[i] = T(0);
+    std::size_t i = 0;
+    for (; i + 1 < n1_; i += 2) {
+      const std::size_t i1 = i + 1;
+      T* r0 = p_ + row_[i];
+      T* r1 = p_ + row_[i1];
+      const T d0 = dd_[i];
+      const T d1 = dd_[i1];
+      const T k0 = k[i];
+      const T k1 = k[i1];
+      const T c0 = c_[i];
+      const T c1 = c_[i1];
+      T acc0 = T(0);
+      T acc1 = T(0);
+      for (std::size_t j = 0; j < i; ++j) {
+        const T dj = dd_[j];
+        const T vj = v[j];
+        const T cj = c_[j];
+        const T p0 = d0 * r0[j] * dj - k0 * vj;
+        const T p1 = d1 * r1[j] * dj - k1 * vj;
+        r0[j] = p0;
+        r1[j] = p1;
+        acc0 += p0 * cj;
+        acc1 += p1 * cj;
+        u_[j] = (u_[j] + p0 * c0) + p1 * c1;
+      }
+      const T p00 = d0 * r0[i] * d0 + qd_[i] - k0 * v[i];
+      const T p10 = d1 * r1[i] * d0 - k1 * v[i];
+      const T p11 = d1 * r1[i1] * d1 + qd_[i1] - k1 * v[i1];
+      r0[i] = p00;
+      r1[i] = p10;
+      r1[i1] = p11;
+      u_[i] = (acc0 + p00 * c0) + p10 * c1;
+      acc1 += p10 * c0;
+      u_[i1] = acc1 + p11 * c1;
     }
-    for (std::size_t i = 0; i < n1_; ++i) {
+    for (; i < n1_; ++i) {
       T* row = p_ + row_[i];
       const T di = dd_[i];
       const T ki = k[i];
@@ -310,7 +346,7 @@ class AveragedKf {
       }
       const T pii = di * row[i] * di + qd_[i] - ki * v[i];
       row[i] = pii;
-      u_[i] += acc + pii * ci;
+      u_[i] = acc + pii * ci;
     }
     T* const ra_new = ra_new_;
     T* const rb_new = rb_new_;
@@ -361,8 +397,8 @@ class AveragedKf {
       ra[a] = new_aa;
       rb[a] = new_ba;
       rb[b] = new_bb;
-      u_[a] += acc_a + new_aa * c_[a] + new_ba * c_[b];
-      u_[b] += acc_b + new_ba * c_[a] + new_bb * c_[b];
+      u_[a] = acc_a + new_aa * c_[a] + new_ba * c_[b];
+      u_[b] = acc_b + new_ba * c_[a] + new_bb * c_[b];
     }
     u_valid_ = true;
   }
