@@ -288,17 +288,27 @@ class AveragedKf {
     }
   }
 
-  // Ppp = D Ppp D^T + Qb - K v^T in place, with the next step's u = Ppp c from the new entries.
-  // Rows of 1-state blocks (the first n1_): each entry needs only its own old value. Rows of a
-  // 2-state block (a, a + 1): both rows are computed from their old values before either is
-  // stored (the entry (a, a + 1) is in row a + 1).
-  // u_[i] is first written by row i (rows in order; earlier rows only touch u_[j], j < i), so
-  // nothing zeroes it first.
-  // Rows of 1-state blocks go in pairs: a column's D, v, c and u are loaded once for both rows
-  // (the same operations in the same order as one row after the other).
+  // Ppp = D Ppp D^T + Qb - K v^T in place, with the next step's u = Ppp c from the new entries,
+  // row by row in order: the rows of 1-state blocks (the first n1_), then those of the 2-state
+  // blocks. u_[i] is first written by row i (earlier rows only touch u_[j], j < i), so nothing
+  // zeroes it first.
   void predict_and_update(const T (&k)[kMaxProcess], const T (&v)[kMaxProcess]) {
-    std::size_t i = 0;
-    for (; i + 1 < n1_; i += 2) {
+    update_one_state_rows(k, v);
+    update_two_state_rows(k, v);
+    u_valid_ = true;
+  }
+
+  // Rows of 1-state blocks: each entry needs only its own old value. They go in pairs: a
+  // column's D, v, c and u are loaded once for both rows (the same operations in the same order
+  // as one row after the other). With n1_ odd, row 0 goes alone first: it is only its diagonal.
+  void update_one_state_rows(const T (&k)[kMaxProcess], const T (&v)[kMaxProcess]) {
+    std::size_t i = n1_ % 2;
+    if (i == 1) {
+      const T p00 = dd_[0] * p_[0] * dd_[0] + qd_[0] - k[0] * v[0];
+      p_[0] = p00;
+      u_[0] = p00 * c_[0];
+    }
+    for (; i < n1_; i += 2) {
       const std::size_t i1 = i + 1;
       T* r0 = p_ + row_[i];
       T* r1 = p_ + row_[i1];
@@ -332,22 +342,11 @@ class AveragedKf {
       acc1 += p10 * c0;
       u_[i1] = acc1 + p11 * c1;
     }
-    for (; i < n1_; ++i) {
-      T* row = p_ + row_[i];
-      const T di = dd_[i];
-      const T ki = k[i];
-      const T ci = c_[i];
-      T acc = T(0);
-      for (std::size_t j = 0; j < i; ++j) {
-        const T pij = di * row[j] * dd_[j] - ki * v[j];
-        row[j] = pij;
-        acc += pij * c_[j];
-        u_[j] += pij * ci;
-      }
-      const T pii = di * row[i] * di + qd_[i] - ki * v[i];
-      row[i] = pii;
-      u_[i] = acc + pii * ci;
-    }
+  }
+
+  // Rows of a 2-state block (a, a + 1): both rows are computed from their old values before
+  // either is stored (the entry (a, a + 1) is in row a + 1).
+  void update_two_state_rows(const T (&k)[kMaxProcess], const T (&v)[kMaxProcess]) {
     T* const ra_new = ra_new_;
     T* const rb_new = rb_new_;
     for (std::size_t a = n1_; a < n_; a += 2) {
@@ -400,7 +399,6 @@ class AveragedKf {
       u_[a] = acc_a + new_aa * c_[a] + new_ba * c_[b];
       u_[b] = acc_b + new_ba * c_[a] + new_bb * c_[b];
     }
-    u_valid_ = true;
   }
 
   // Diagonal floor at 0; a diagonal above p_max scales its row and column (D P D, D > 0

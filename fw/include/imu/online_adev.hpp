@@ -115,6 +115,11 @@ inline void square_u64(std::uint64_t u, std::uint64_t& sq_lo, std::uint64_t& sq_
 #endif
 }
 
+/// |d| as unsigned, exact for every d (2^63 for INT64_MIN).
+inline std::uint64_t magnitude_u64(std::int64_t d) {
+  return d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
+}
+
 /// (hi, lo) += u^2, u <= 2^63, the general case of add_square_u128 (any u; saturating).
 inline bool add_square_u128_wide(std::uint64_t& lo, std::uint64_t& hi, std::uint64_t u) {
   std::uint64_t sq_lo = 0;
@@ -142,9 +147,7 @@ inline bool add_square_u128_wide(std::uint64_t& lo, std::uint64_t& hi, std::uint
                                                             std::int64_t d) {
   const auto d32 = static_cast<std::int32_t>(d);
   if (d32 != d) {
-    const std::uint64_t u =
-        d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
-    return add_square_u128_wide(lo, hi, u);
+    return add_square_u128_wide(lo, hi, magnitude_u64(d));
   }
   const auto sq = static_cast<std::uint64_t>(static_cast<std::int64_t>(d32) * d32);  // < 2^62
   lo += sq;
@@ -164,9 +167,7 @@ inline bool add_square_u128_wide(std::uint64_t& lo, std::uint64_t& hi, std::uint
 [[gnu::always_inline]] inline bool add_square_u128(std::uint64_t& lo, std::uint64_t& hi,
                                                    std::int64_t d) {
 #if defined(__SIZEOF_INT128__)
-  const std::uint64_t u =
-      d < 0 ? std::uint64_t{0} - static_cast<std::uint64_t>(d) : static_cast<std::uint64_t>(d);
-  return add_square_u128_wide(lo, hi, u);
+  return add_square_u128_wide(lo, hi, magnitude_u64(d));
 #else
   return add_square_u128_portable(lo, hi, d);
 #endif
