@@ -137,6 +137,48 @@ TEST(AnalyzeStationarity, ANoiseLevelChangeIsATimeRangeNotOutliers) {
   EXPECT_GE(ok, 9);
 }
 
+// Quantization whose AVAR at Ts is 8 x the white noise's, and from 30 % of the record on the
+// white std 2 x: the white noise's AVAR at Ts grows 4 x, the first differences' std only
+// sqrt(12 / 9) = 1.15 x (the quantization's share does not change). Reported: a time range
+// starting within 2 % of the record of the change, and N's 95 % interval holding the level
+// before it. Seeds 3301..3310.
+TEST(AnalyzeStationarity, AWhiteLevelChangeUnderQuantizationIsFound) {
+  int at_change = 0;
+  int n_in = 0;
+  for (int i = 0; i < kSeeds; ++i) {
+    const std::uint64_t seed = 3301 + static_cast<std::uint64_t>(i);
+    ia::SynthSpec spec = tc::make_case("control", seed);
+    spec.q = std::sqrt(8.0 / 3.0) * spec.n * std::sqrt(1.0 / spec.fs_hz);
+    std::vector<double> y = ia::synthesize(spec);
+    const std::size_t at = y.size() * 3 / 10;
+    const double extra_sd = spec.n * std::sqrt(spec.fs_hz) * std::sqrt(2.0 * 2.0 - 1.0);
+    std::mt19937_64 rng(seed * 7919U);
+    std::normal_distribution<double> g(0.0, extra_sd);
+    for (std::size_t k = at; k < y.size(); ++k) {
+      y[k] += g(rng);
+    }
+    const ia::Report r = analyse(y, "noise_change_quantized", seed);
+    const ia::UnexplainedRun* u = time_range(r);
+    const double t_rec = static_cast<double>(y.size()) / spec.fs_hz;
+    const double t_c = static_cast<double>(at) / spec.fs_hz;
+    const bool found = u != nullptr && std::fabs(u->t_min_s - t_c) < 0.02 * t_rec;
+    bool holds = false;
+    for (const ia::ParamInterval& iv : r.model_after_ci95) {
+      holds = holds || (iv.name == "n" && spec.n >= iv.lo && spec.n <= iv.hi);
+    }
+    at_change += found ? 1 : 0;
+    n_in += holds ? 1 : 0;
+    if (!found || !holds) {
+      std::printf("quantized noise change seed %llu:\n%s", static_cast<unsigned long long>(seed),
+                  ia::to_text(r).c_str());
+    }
+  }
+  std::printf("white std x 2 at 30 %% under quantization: a time range at the change on %d, "
+              "N before it inside N's 95 %% interval on %d of %d\n", at_change, n_in, kSeeds);
+  EXPECT_GE(at_change, 9);
+  EXPECT_GE(n_in, 9);
+}
+
 // A bias decaying from the start, 20 GM sigmas, time constant T / 30: a time range from 0,
 // and no rate random walk named for it.
 TEST(AnalyzeStationarity, AWarmUpTransientIsATimeRangeNotAWalk) {

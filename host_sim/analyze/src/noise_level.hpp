@@ -15,7 +15,10 @@ namespace imu::analyze {
 /// Under a constant level the CUSUM is a Brownian bridge: max |S_k| / (sigma sqrt J) exceeds x
 /// with probability about 2 exp(-2 x^2) (Kolmogorov), sigma from successive blocks' differences
 /// (robust to the change itself). Reported only if that probability is below alpha and the
-/// white std changes by at least `min_ratio` (1.25: a 25 % change) between the two parts.
+/// first differences' std changes by at least `min_ratio` (1.1: a 10 % change) between the two
+/// parts. That std holds the quantization's and the other terms' share as well as the white
+/// noise's: where quantization's AVAR at Ts is 8 x the white noise's, a white std doubling
+/// moves it by 15 %.
 struct NoiseLevelChange {
   bool found = false;
   std::size_t at = 0;       ///< first sample of the second part
@@ -32,7 +35,7 @@ double median_of(std::vector<double> v);
 /// y: the record (gaps marked in `gap`, 1 = missing; may be empty); alpha: the false-alarm rate.
 NoiseLevelChange find_noise_level_change(const std::vector<double>& y,
                                          const std::vector<std::uint8_t>& gap, double alpha,
-                                         double min_ratio = 1.25);
+                                         double min_ratio = 1.1);
 
 }  // namespace imu::analyze
 
