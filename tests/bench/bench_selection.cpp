@@ -35,8 +35,9 @@
 //   noise-level change (from t_c, uniform in [0.2 T, 0.8 T], independent white noise that
 //     multiplies the white std per sample by g, 1.5 to 4: added std white_sd sqrt(g^2 - 1)).
 // A term "dominates" when its ADEV is at least 2 x that of all the other true terms together over
-// an octave of taus inside [Ts, T/10] (a step's AVAR: d^2 tau / (3 (T - 2 tau)); outliers:
-// always); those
+// an octave of taus inside [Ts, T/10] (a step's AVAR: d^2 tau / (3 (T - 2 tau)); outliers,
+// which never move the ADEV that much: spikes of at least 8 x the std per sample of white noise,
+// quantization and oscillation together, see mark_dominant); those
 // are the records where it should be named. The targets (see the README): named in at least
 // 90 % of the records where it dominates, in at most 1 % of the records without it. The records
 // with a transient or a noise change are left out of the "without it" columns (a name there may
@@ -301,7 +302,16 @@ void mark_dominant(Record& r) {
       }
     }
   }
-  r.dominant[kOutliers] = r.has[kOutliers];
+  // A spike adds k s^2 / n to the AVAR at Ts (k spikes of size s in n samples): far below the
+  // white noise's, so the ADEV rule above never holds for it. Outliers "dominate" where each
+  // stands out of its own sample's noise: the spike at least 8 x the std per sample of the
+  // terms that move single samples (white, at its louder level where it changes; quantization,
+  // 2 Q^2 / Ts^2; the oscillation, sigma^2). The gate's threshold is about 6 such stds
+  // (alpha / n at 10^6 samples), so a spike of 8 is found on most draws.
+  const double white_sd = s.n / std::sqrt(ts) * std::max(1.0, r.noise_gain);
+  const double sample_sd = std::sqrt(white_sd * white_sd + 2.0 * s.q * s.q / (ts * ts) +
+                                     s.osc_sigma * s.osc_sigma);
+  r.dominant[kOutliers] = r.has[kOutliers] && s.outlier_size >= 8.0 * sample_sd;
 }
 
 // How far an event stands out of the record's stationary noise, at its known time: the
