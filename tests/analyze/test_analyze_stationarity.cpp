@@ -103,6 +103,20 @@ TEST(AnalyzeStationarity, ARampWithAWarmUpIsNoWalk) {
   EXPECT_EQ(walks, 0);
 }
 
+// spec's record with independent white noise added from sample `at` on, so that the white std
+// per sample is `gain` x spec's from there.
+std::vector<double> with_white_level_change(const ia::SynthSpec& spec, std::size_t at,
+                                            double gain) {
+  std::vector<double> y = ia::synthesize(spec);
+  std::mt19937_64 rng(spec.seed * 7919U);
+  std::normal_distribution<double> g(0.0, spec.n * std::sqrt(spec.fs_hz) *
+                                              std::sqrt(gain * gain - 1.0));
+  for (std::size_t k = at; k < y.size(); ++k) {
+    y[k] += g(rng);
+  }
+  return y;
+}
+
 }  // namespace
 
 // From 40 % of the record on, the white noise's std is 2.5 x (independent white noise added).
@@ -112,14 +126,8 @@ TEST(AnalyzeStationarity, ANoiseLevelChangeIsATimeRangeNotOutliers) {
   for (int i = 0; i < kSeeds; ++i) {
     const std::uint64_t seed = 301 + static_cast<std::uint64_t>(i);
     const ia::SynthSpec spec = tc::make_case("control", seed);
-    std::vector<double> y = ia::synthesize(spec);
-    const std::size_t at = y.size() * 4 / 10;
-    const double extra_sd = spec.n * std::sqrt(spec.fs_hz) * std::sqrt(2.5 * 2.5 - 1.0);
-    std::mt19937_64 rng(seed * 7919U);
-    std::normal_distribution<double> g(0.0, extra_sd);
-    for (std::size_t k = at; k < y.size(); ++k) {
-      y[k] += g(rng);
-    }
+    const std::size_t at = spec.samples * 4 / 10;
+    const std::vector<double> y = with_white_level_change(spec, at, 2.5);
     const ia::Report r = analyse(y, "noise_change", seed);
     const ia::UnexplainedRun* u = time_range(r);
     const double t_rec = static_cast<double>(y.size()) / spec.fs_hz;
@@ -149,14 +157,8 @@ TEST(AnalyzeStationarity, AWhiteLevelChangeUnderQuantizationIsFound) {
     const std::uint64_t seed = 3301 + static_cast<std::uint64_t>(i);
     ia::SynthSpec spec = tc::make_case("control", seed);
     spec.q = std::sqrt(8.0 / 3.0) * spec.n * std::sqrt(1.0 / spec.fs_hz);
-    std::vector<double> y = ia::synthesize(spec);
-    const std::size_t at = y.size() * 3 / 10;
-    const double extra_sd = spec.n * std::sqrt(spec.fs_hz) * std::sqrt(2.0 * 2.0 - 1.0);
-    std::mt19937_64 rng(seed * 7919U);
-    std::normal_distribution<double> g(0.0, extra_sd);
-    for (std::size_t k = at; k < y.size(); ++k) {
-      y[k] += g(rng);
-    }
+    const std::size_t at = spec.samples * 3 / 10;
+    const std::vector<double> y = with_white_level_change(spec, at, 2.0);
     const ia::Report r = analyse(y, "noise_change_quantized", seed);
     const ia::UnexplainedRun* u = time_range(r);
     const double t_rec = static_cast<double>(y.size()) / spec.fs_hz;

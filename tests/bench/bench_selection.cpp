@@ -308,7 +308,7 @@ void mark_dominant(Record& r) {
   // terms that move single samples (white, at its louder level where it changes; quantization,
   // 2 Q^2 / Ts^2; the oscillation, sigma^2). The gate's threshold is about 6 such stds
   // (alpha / n at 10^6 samples), so a spike of 8 is found on most draws.
-  const double white_sd = s.n / std::sqrt(ts) * std::max(1.0, r.noise_gain);
+  const double white_sd = s.n * std::sqrt(s.fs_hz) * std::max(1.0, r.noise_gain);
   const double sample_sd = std::sqrt(white_sd * white_sd + 2.0 * s.q * s.q / (ts * ts) +
                                      s.osc_sigma * s.osc_sigma);
   r.dominant[kOutliers] = r.has[kOutliers] && s.outlier_size >= 8.0 * sample_sd;
