@@ -228,12 +228,12 @@ TEST(AnalyzeWalk, KsIntervalHoldsTheWalkBesideASlowGm) {
       const ia::Report r = analyse(spec, "walk_gm");
       ++records;
       steps += named(r, "bias_step") ? 1 : 0;
-      stand_in += tc::slow_gm_stands_in(r) ? 1 : 0;
+      stand_in += ia::gm_stands_in_for_walk(r) ? 1 : 0;
       std::printf("%.0f h seed %llu: walk %s, GMs %zu (Tb %.4g s), GM in its place %s\n", hours,
                   static_cast<unsigned long long>(seed),
                   named(r, "rate_random_walk") ? "yes" : "no", r.model_after.n_gm,
                   r.model_after.n_gm > 0 ? r.model_after.gm[0].tb_s : 0.0,
-                  tc::slow_gm_stands_in(r) ? "yes" : "no");
+                  ia::gm_stands_in_for_walk(r) ? "yes" : "no");
       for (const ia::Effect& e : r.effects) {
         if (e.type != "rate_random_walk" || e.ci95.empty()) {
           continue;

@@ -128,6 +128,7 @@ struct Outcome {
   double n_lo95 = 0.0;
   double n_hi95 = 0.0;
   bool second_gm = false;
+  bool walk_stand_in = false;  // the first-order GM slower than the record resolves, no walk
   bool output_filter = false;  // the generator's white noise is never filtered: always false
   bool unexplained = false;
   bool consistent = true;
@@ -535,6 +536,7 @@ Outcome analyse(const Record& rec) {
   std::string why;
   out.consistent = ia::report_consistent(r, why);
   out.output_filter = r.model_after.n_filter_s > 0.0;
+  out.walk_stand_in = ia::gm_stands_in_for_walk(r);
   read_effects(r, out);
   out.n_est = r.model_after.n;
   for (const auto& iv : r.model_after_ci95) {
@@ -607,6 +609,29 @@ void print_confusion(const std::vector<Record>& recs, const std::vector<Outcome>
                 pct(false_named, without).c_str(), pct(est_ok, est).c_str(),
                 pct(cov_in, cov).c_str());
   }
+  // Where a walk dominates and is not named, the model after may hold the first-order GM
+  // slower than the record resolves in its place (ia::gm_stands_in_for_walk): the walk's
+  // covariance over the record, not its name. Counted apart, beside records without a walk.
+  std::size_t dom = 0;
+  std::size_t dom_in = 0;
+  std::size_t without = 0;
+  std::size_t without_in = 0;
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    if (!outs[i].ok) {
+      continue;
+    }
+    if (recs[i].has[kRrw] && recs[i].dominant[kRrw]) {
+      ++dom;
+      dom_in += outs[i].walk_stand_in ? 1U : 0U;
+    } else if (!recs[i].has[kRrw] && !beyond_terms(recs[i])) {
+      ++without;
+      without_in += outs[i].walk_stand_in ? 1U : 0U;
+    }
+  }
+  std::printf("\nrate_random_walk not named, the first-order GM with Tb open above in its place: "
+              "%s of the records where a walk dominates, %s of the records without a walk (no "
+              "transient, no noise change)\n",
+              pct(dom_in, dom).c_str(), pct(without_in, without).c_str());
 }
 
 // Per non-stationary kind: what the report said about it; then the terms named that the record

@@ -3170,6 +3170,11 @@ std::vector<Effect> without_type(const std::vector<Effect>& effects, const std::
   return without_types(effects, {type});
 }
 
+bool named_type(const std::vector<Effect>& effects, const std::string& type) {
+  return std::any_of(effects.begin(), effects.end(),
+                     [&](const Effect& e) { return e.type == type; });
+}
+
 // The terms of p beyond the base model (analysis_bit: FitTerm bits, kSineBit) that fewer
 // effects of `effects` name than p holds.
 std::uint32_t unnamed_terms(const ModelParams& p, const std::vector<Effect>& effects) {
@@ -5678,6 +5683,7 @@ class Analysis {
           removed = type;
         }
       }
+      rival_second_gm(ac, choice, gone, dominates_nowhere, best, best_r, removed);
       for (const auto& n : trial.notes) {
         if (n.find("not named: " + removed + " ") == 0) {
           out.notes.push_back(n);
@@ -5686,6 +5692,56 @@ class Analysis {
       out.notes.insert(out.notes.end(), best_r.notes.begin(), best_r.notes.end());
       out.effects = std::move(best_r.effects);
       choice = best;
+    }
+  }
+
+  // Bias instability or a walk that dominates the model ADEV nowhere beside a named second GM
+  // was fitted together with that GM over the same taus, and the GM may be what stands in for
+  // it (a GM's hump over a decade or two reads as flicker's floor or a walk's rise there). The
+  // other removal is tried too: the second GM leaves, the rest is refitted, and the name check
+  // runs on that model. It replaces `best` when the check then names the long-tau term and
+  // the refit costs no more in sum z^2 than the removal chosen by cost (the ADEV cannot prefer
+  // the GM then, and the GM claims no mechanism; the long-tau term does).
+  void rival_second_gm(const AfterContext& ac, const AfterChoice& choice,
+                       const std::vector<std::string>& gone,
+                       const std::vector<std::string>& dominates_nowhere, AfterChoice& best,
+                       Report& best_r, std::string& removed) {
+    const auto listed = [](const std::vector<std::string>& v, const char* type) {
+      return std::find(v.begin(), v.end(), type) != v.end();
+    };
+    if (choice.p.n_gm < 2 || listed(gone, "gauss_markov") ||
+        !named_type(out.effects, "gauss_markov")) {
+      return;
+    }
+    for (const char* type : {"bias_instability", "rate_random_walk"}) {
+      if (!listed(gone, type) || !listed(dominates_nowhere, type)) {
+        continue;
+      }
+      Report r1;
+      r1.effects = without_type(out.effects, "gauss_markov");
+      AfterChoice ch = choice;
+      remove_unnamed_terms(ac, ch, r1);
+      if (!(ch.e.cost <= best.e.cost) || !named_type(r1.effects, type)) {
+        continue;
+      }
+      Report check;
+      check.effects = r1.effects;
+      std::vector<std::string> nowhere;
+      name_check(ac, ch.p,
+                 ramp_checks(fit_record(), ts, ch.p, tb_max, step_at, transient_threshold()),
+                 check, nowhere);
+      if (!named_type(check.effects, type)) {
+        continue;
+      }
+      r1.notes.insert(r1.notes.begin(),
+                      "not named: gauss_markov (a second GM beside " + std::string(type) +
+                          ", which dominates the model ADEV nowhere beside it: without the GM " +
+                          type + " is named and the refit costs " + fmt("%.1f", ch.e.cost) +
+                          " in sum z^2, without " + type + " " + fmt("%.1f", best.e.cost) + ")");
+      best = ch;
+      best_r = std::move(r1);
+      removed = "gauss_markov";
+      return;
     }
   }
 
@@ -6096,6 +6152,43 @@ class Analysis {
     name_terms(acs, choice, withdrawn);
     drop_degenerate_effects(ts, n_d, out);
     remove_unnamed_terms(acs, choice, out);
+    drop_undetermined_sinusoid(acs, choice);
+  }
+
+  // A sinusoid is its period: one whose frequency (or amplitude) the record leaves undetermined
+  // (95 % interval over more than a factor of 100, the report's "not determined" note) names
+  // no period the record holds; it is the fit's use of a periodic shape for a slow wander the
+  // other terms leave (e.g. bias instability's at a few hundred seconds). It leaves the
+  // effects and the model, which is refitted; what it held is then reported as unexplained.
+  // Only a model with one sinusoid: the refit keeps a model's sinusoids together or not at all.
+  void drop_undetermined_sinusoid(const AfterContext& acs, AfterChoice& choice) {
+    if (!(choice.p.sin_a > 0.0) || choice.p.sin2_a > 0.0 || !named_type(out.effects, "sinusoid")) {
+      return;
+    }
+    Report tmp;
+    tmp.samples = out.samples;
+    tmp.effects = out.effects;
+    tmp.model_after = choice.p;
+    attach_intervals(points_for_model(acs.clean, choice.p), o, ts, tau_max, tmp);
+    for (const Effect& e : tmp.effects) {
+      if (e.type != "sinusoid") {
+        continue;
+      }
+      for (const ParamInterval& iv : e.ci95) {
+        const double lo = std::min(std::fabs(iv.lo), std::fabs(iv.hi));
+        const double hi = std::max(std::fabs(iv.lo), std::fabs(iv.hi));
+        if (hi <= 100.0 * lo) {
+          continue;
+        }
+        out.notes.push_back("not named: sinusoid (f = " + fmt("%.4g", e.freq_hz) + " Hz: its " +
+                            iv.name + " is not determined by this record, 95 % interval " +
+                            fmt("%.3g", iv.lo) + " to " + fmt("%.3g", iv.hi) +
+                            "; no period the record holds)");
+        out.effects = without_type(out.effects, "sinusoid");
+        remove_unnamed_terms(acs, choice, out);
+        return;
+      }
+    }
   }
 
   // settle_terms on the model after with the output filter (if it passes output_filter_fit)

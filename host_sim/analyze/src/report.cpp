@@ -259,6 +259,23 @@ std::vector<NamedTerm> terms_beyond_first_order(const ModelParams& m) {
 
 }  // namespace
 
+bool gm_stands_in_for_walk(const Report& r) {
+  if (r.model_after.n_gm != 1 || r.model_after.k > 0.0) {
+    return false;
+  }
+  for (const Effect& e : r.effects) {
+    if (e.type == "rate_random_walk") {
+      return false;
+    }
+  }
+  for (const ParamInterval& iv : r.model_after_ci95) {
+    if (iv.name == "gm_tb_s") {
+      return std::isinf(iv.hi);
+    }
+  }
+  return false;
+}
+
 bool report_consistent(const Report& r, std::string& why) {
   std::vector<NamedTerm> named;
   for (const auto& e : r.effects) {

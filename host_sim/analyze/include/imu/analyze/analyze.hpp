@@ -245,6 +245,12 @@ void merge_full_rate_head(Report& record, Report&& head, std::uint64_t block, co
 /// it does not name, so this holds for every report it writes; tests check it.
 [[nodiscard]] bool report_consistent(const Report& r, std::string& why);
 
+/// The model after holds, in a rate random walk's place, the first-order model's own GM slower
+/// than the record resolves: no walk named, no K, one GM whose Tb's 95 % interval is open above
+/// (the record bounds Tb from below only). Over the record such a GM is a walk of K^2 = Sb; the
+/// record does not tell which (analyze.cpp slow_gm_for_walk; its note gives 2 ln LR).
+[[nodiscard]] bool gm_stands_in_for_walk(const Report& r);
+
 [[nodiscard]] std::string to_json(const Report& r);
 [[nodiscard]] std::string to_text(const Report& r);
 /// CSV always (DIR/STEM_adev.csv), the gnuplot script (DIR/STEM_adev.gp) and, if gnuplot is
