@@ -879,9 +879,18 @@ void gm_intervals(const IntervalSources& c, const ModelParams& m, std::size_t g,
   out.push_back(interval(c, prefix + "tb_s", m.gm[g].tb_s, {{tb, 1.0}}));
 }
 
+// A parameter whose 95 % interval spans more than two decades (in magnitude; or is not finite)
+// is not determined by the record.
+constexpr double kDeterminedSpan = 100.0;
+bool determined(const ParamInterval& iv) {
+  const double lo = std::min(std::fabs(iv.lo), std::fabs(iv.hi));
+  const double hi = std::max(std::fabs(iv.lo), std::fabs(iv.hi));
+  return hi <= kDeterminedSpan * lo;
+}
+
 // Each effect's 95 % intervals and the model after's white noise and first GM (see
-// ParamInterval), from the points the error after is scored on. A parameter whose interval
-// spans more than two decades (or is not determined at all) gets a note.
+// ParamInterval), from the points the error after is scored on. A parameter the record does
+// not determine (determined()) gets a note.
 void attach_intervals(const Points& pts, const Options& o, double ts, double tau_max,
                       Report& out) {
   const ModelParams& m = out.model_after;
@@ -924,9 +933,7 @@ void attach_intervals(const Points& pts, const Options& o, double ts, double tau
       c.push_back(ParamInterval{"time_s", e.time_lo_s, e.time_hi_s});
     }
     for (const ParamInterval& iv : c) {
-      const double lo = std::min(std::fabs(iv.lo), std::fabs(iv.hi));
-      const double hi = std::max(std::fabs(iv.lo), std::fabs(iv.hi));
-      if (e.type != "bias_step" && !(hi <= 100.0 * lo)) {
+      if (e.type != "bias_step" && !determined(iv)) {
         out.notes.push_back(e.type + " " + iv.name + ": not determined by this record (95 % "
                             "interval " + fmt("%.3g", iv.lo) + " to " + fmt("%.3g", iv.hi) +
                             "; a longer record narrows it)");
@@ -5713,36 +5720,44 @@ class Analysis {
         !named_type(out.effects, "gauss_markov")) {
       return;
     }
-    for (const char* type : {"bias_instability", "rate_random_walk"}) {
-      if (!listed(gone, type) || !listed(dominates_nowhere, type)) {
-        continue;
+    std::vector<const char*> hidden;  // the long-tau terms the GM may stand in for
+    for (const char* t : {"bias_instability", "rate_random_walk"}) {
+      if (listed(gone, t) && listed(dominates_nowhere, t)) {
+        hidden.push_back(t);
       }
-      Report r1;
-      r1.effects = without_type(out.effects, "gauss_markov");
-      AfterChoice ch = choice;
-      remove_unnamed_terms(ac, ch, r1);
-      if (!(ch.e.cost <= best.e.cost) || !named_type(r1.effects, type)) {
-        continue;
-      }
-      Report check;
-      check.effects = r1.effects;
-      std::vector<std::string> nowhere;
-      name_check(ac, ch.p,
-                 ramp_checks(fit_record(), ts, ch.p, tb_max, step_at, transient_threshold()),
-                 check, nowhere);
-      if (!named_type(check.effects, type)) {
-        continue;
-      }
-      r1.notes.insert(r1.notes.begin(),
-                      "not named: gauss_markov (a second GM beside " + std::string(type) +
-                          ", which dominates the model ADEV nowhere beside it: without the GM " +
-                          type + " is named and the refit costs " + fmt("%.1f", ch.e.cost) +
-                          " in sum z^2, without " + type + " " + fmt("%.1f", best.e.cost) + ")");
-      best = ch;
-      best_r = std::move(r1);
-      removed = "gauss_markov";
+    }
+    if (hidden.empty()) {
       return;
     }
+    // One refit without the GM and one name check on it serve every such term.
+    Report r1;
+    r1.effects = without_type(out.effects, "gauss_markov");
+    AfterChoice ch = choice;
+    remove_unnamed_terms(ac, ch, r1);
+    if (!(ch.e.cost <= best.e.cost)) {
+      return;
+    }
+    Report check;
+    check.effects = r1.effects;
+    std::vector<std::string> nowhere;
+    name_check(ac, ch.p,
+               ramp_checks(fit_record(), ts, ch.p, tb_max, step_at, transient_threshold()),
+               check, nowhere);
+    const auto named_after = std::find_if(hidden.begin(), hidden.end(), [&](const char* t) {
+      return named_type(r1.effects, t) && named_type(check.effects, t);
+    });
+    if (named_after == hidden.end()) {
+      return;
+    }
+    const std::string type = *named_after;
+    r1.notes.insert(r1.notes.begin(),
+                    "not named: gauss_markov (a second GM beside " + type +
+                        ", which dominates the model ADEV nowhere beside it: without the GM " +
+                        type + " is named and the refit costs " + fmt("%.1f", ch.e.cost) +
+                        " in sum z^2, without " + type + " " + fmt("%.1f", best.e.cost) + ")");
+    best = ch;
+    best_r = std::move(r1);
+    removed = "gauss_markov";
   }
 
   // A term beside larger ones at every tau is still named when the refit cannot do without it:
@@ -6118,7 +6133,7 @@ class Analysis {
         iv.hi = std::numeric_limits<double>::infinity();
       }
     }
-    if (!(slow_gm.tb_hi_s <= 100.0 * slow_gm.tb_lo_s)) {
+    if (!(slow_gm.tb_hi_s <= kDeterminedSpan * slow_gm.tb_lo_s)) {
       out.notes.push_back(std::string("model after, GM ") + (open ? "sigma and tb_s" : "tb_s") +
                           ": not determined by this record (95 % interval of Tb " +
                           tb_set_text(slow_gm.tb_lo_s, slow_gm.tb_hi_s) +
@@ -6156,7 +6171,7 @@ class Analysis {
   }
 
   // A sinusoid is its period: one whose frequency (or amplitude) the record leaves undetermined
-  // (95 % interval over more than a factor of 100, the report's "not determined" note) names
+  // (determined(), the report's "not determined" note) names
   // no period the record holds; it is the fit's use of a periodic shape for a slow wander the
   // other terms leave (e.g. bias instability's at a few hundred seconds). It leaves the
   // effects and the model, which is refitted; what it held is then reported as unexplained.
@@ -6175,9 +6190,7 @@ class Analysis {
         continue;
       }
       for (const ParamInterval& iv : e.ci95) {
-        const double lo = std::min(std::fabs(iv.lo), std::fabs(iv.hi));
-        const double hi = std::max(std::fabs(iv.lo), std::fabs(iv.hi));
-        if (hi <= 100.0 * lo) {
+        if (determined(iv)) {
           continue;
         }
         out.notes.push_back("not named: sinusoid (f = " + fmt("%.4g", e.freq_hz) + " Hz: its " +
